@@ -1,0 +1,17 @@
+# The two commands of the README, plus the pieces they are made of.
+.PHONY: example test build bench clean-cache
+
+example:
+	bash scripts/run_example.sh
+
+test:
+	bash scripts/run_tests.sh
+
+build:
+	bash scripts/build.sh
+
+bench:
+	bash scripts/run_bench.sh
+
+clean-cache:
+	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"

@@ -1,0 +1,76 @@
+// Prints an estimate next to the ground truth of a generated scene: the scale
+// ratio r_s = s_est / s_true (the paper's measure), the error |1 - r_s|, and
+// each view's focus distance error.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw std::runtime_error("cannot read " + path);
+  return nlohmann::json::parse(file);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string truth_path, report_path;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--ground_truth") truth_path = argv[i + 1];
+    if (flag == "--report") report_path = argv[i + 1];
+  }
+  if (truth_path.empty() || report_path.empty()) {
+    std::cerr << "usage: dpsfm_compare_to_truth --ground_truth FILE --report FILE\n";
+    return EXIT_FAILURE;
+  }
+  try {
+    const nlohmann::json truth = ReadJson(truth_path);
+    const nlohmann::json report = ReadJson(report_path);
+    const double s_true = truth.at("scale").get<double>();
+    const double s_est = report.at("scale").get<double>();
+    const double s_lin = report.at("scale_initial").get<double>();
+    std::printf("\n%-28s %12s %12s %10s\n", "", "scale", "ratio r_s", "error");
+    std::printf("%-28s %12.6f\n", "true (metres / model unit)", s_true);
+    std::printf("%-28s %12.6f %12.4f %9.2f%%\n", "linear initial estimate", s_lin,
+                s_lin / s_true, 100 * std::abs(1 - s_lin / s_true));
+    std::printf("%-28s %12.6f %12.4f %9.2f%%\n", "final estimate", s_est,
+                s_est / s_true, 100 * std::abs(1 - s_est / s_true));
+    if (report.contains("scale_ci_low") && report.contains("scale_ci_high")) {
+      std::printf("%-28s [%.6f, %.6f]\n", "confidence interval",
+                  report["scale_ci_low"].get<double>(),
+                  report["scale_ci_high"].get<double>());
+    }
+    std::printf("\n%-16s %14s %14s %8s  %s\n", "view", "focus true m",
+                "focus est m", "error", "used");
+    for (const auto& item : truth.at("views").items()) {
+      const double g_true = item.value().at("focus_distance_m").get<double>();
+      if (!report.at("views").contains(item.key())) {
+        std::printf("%-16s %14.4f %14s\n", item.key().c_str(), g_true, "-");
+        continue;
+      }
+      const auto& view = report["views"][item.key()];
+      const bool used = view.value("used", false);
+      if (view.contains("focus_distance_m") &&
+          view["focus_distance_m"].is_number()) {
+        const double g_est = view["focus_distance_m"].get<double>();
+        std::printf("%-16s %14.4f %14.4f %7.2f%%  %s\n", item.key().c_str(),
+                    g_true, g_est, 100 * std::abs(1 - g_est / g_true),
+                    used ? "yes" : ("no: " + view.value("reason", "")).c_str());
+      } else {
+        std::printf("%-16s %14.4f %14s %8s  %s\n", item.key().c_str(), g_true,
+                    "-", "-", ("no: " + view.value("reason", "")).c_str());
+      }
+    }
+    return EXIT_SUCCESS;
+  } catch (const std::exception& error) {
+    std::cerr << "ERROR: dpsfm_compare_to_truth: " << error.what() << std::endl;
+    return EXIT_FAILURE;
+  }
+}

@@ -1,0 +1,183 @@
+#include "dpsfm/colmap/dp_images.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <boost/filesystem.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace dpsfm {
+namespace {
+
+namespace fs = boost::filesystem;
+
+std::string StripExtension(const std::string& relative) {
+  const fs::path path(relative);
+  return (path.parent_path() / path.stem()).generic_string();
+}
+
+}  // namespace
+
+DPImageIndex::Folder DPImageIndex::Scan(const std::string& root) {
+  Folder folder;
+  folder.root = root;
+  if (root.empty()) {
+    return folder;
+  }
+  for (fs::recursive_directory_iterator it(root), end; it != end; ++it) {
+    if (!fs::is_regular_file(it->path())) {
+      continue;
+    }
+    const std::string relative =
+        fs::relative(it->path(), root).generic_string();
+    folder.by_name[relative] = it->path().string();
+    folder.by_stem[StripExtension(relative)].push_back(it->path().string());
+  }
+  return folder;
+}
+
+DPImageIndex::DPImageIndex(const WorkspaceLayout& layout)
+    : left_(Scan(layout.left_path)),
+      right_(Scan(layout.right_path)),
+      sum_(Scan(layout.sum_path)),
+      has_right_(!layout.right_path.empty()) {}
+
+std::string DPImageIndex::Lookup(const Folder& folder,
+                                 const std::string& name,
+                                 const std::string& what) {
+  const auto exact = folder.by_name.find(name);
+  if (exact != folder.by_name.end()) {
+    return exact->second;
+  }
+  const auto stem = folder.by_stem.find(StripExtension(name));
+  if (stem == folder.by_stem.end() || stem->second.empty()) {
+    throw InputError("no " + what + " DP view for image " + name + " in " +
+                     folder.root);
+  }
+  if (stem->second.size() > 1) {
+    std::ostringstream message;
+    message << "ambiguous " << what << " DP view for image " << name << ": ";
+    for (size_t i = 0; i < stem->second.size(); ++i) {
+      message << (i > 0 ? ", " : "") << stem->second[i];
+    }
+    throw InputError(message.str());
+  }
+  return stem->second.front();
+}
+
+bool DPImageIndex::HasLeft(const std::string& image_name) const {
+  return left_.by_name.count(image_name) > 0 ||
+         left_.by_stem.count(StripExtension(image_name)) > 0;
+}
+
+DPFramePaths DPImageIndex::Find(const std::string& image_name) const {
+  DPFramePaths paths;
+  paths.left = Lookup(left_, image_name, "left");
+  if (has_right_) {
+    paths.right = Lookup(right_, image_name, "right");
+  } else {
+    paths.sum = Lookup(sum_, image_name, "sum");
+  }
+  return paths;
+}
+
+cv::Mat ReadImageAsFloat(const std::string& path) {
+  if (!fs::is_regular_file(path)) {
+    throw InputError("DP view does not exist: " + path);
+  }
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  if (raw.empty()) {
+    throw InputError("cannot read DP view (corrupt or unsupported format): " +
+                     path);
+  }
+  double unit;
+  switch (raw.depth()) {
+    case CV_8U:
+      unit = 255.0;
+      break;
+    case CV_16U:
+      unit = 65535.0;
+      break;
+    default:
+      throw InputError("DP view is neither 8- nor 16-bit: " + path);
+  }
+  cv::Mat image;
+  switch (raw.channels()) {
+    case 1:
+    case 3:
+      image = raw;
+      break;
+    case 4:
+      cv::cvtColor(raw, image, cv::COLOR_BGRA2BGR);
+      break;
+    case 2:
+      // Grey + alpha.
+      cv::extractChannel(raw, image, 0);
+      break;
+    default:
+      throw InputError("DP view has an unsupported channel count: " + path);
+  }
+  cv::Mat result;
+  image.convertTo(result, image.channels() == 1 ? CV_32FC1 : CV_32FC3,
+                  1.0 / unit);
+  return result;
+}
+
+DPFrames LoadDPFrames(const DPFramePaths& paths, bool swap_views) {
+  DPFrames frames;
+  frames.left = ReadImageAsFloat(paths.left);
+  const std::string& other = paths.right.empty() ? paths.sum : paths.right;
+  cv::Mat second = ReadImageAsFloat(other);
+  if (second.size() != frames.left.size() ||
+      second.channels() != frames.left.channels()) {
+    std::ostringstream message;
+    message << "DP views differ in size or channels: " << paths.left << " is "
+            << frames.left.cols << "x" << frames.left.rows << "x"
+            << frames.left.channels() << ", " << other << " is "
+            << second.cols << "x" << second.rows << "x" << second.channels();
+    throw InputError(message.str());
+  }
+  if (paths.right.empty()) {
+    // right = sum - left. A "sum" frame darker than the left view means the
+    // files are not A and A+B.
+    frames.right = second - frames.left;
+    const double mean_right = cv::mean(frames.right)[0];
+    if (mean_right < 0.05 * cv::mean(frames.left)[0]) {
+      throw InputError("sum frame " + paths.sum +
+                       " is not brighter than its left view " + paths.left +
+                       "; expected A+B and A frames in the same units");
+    }
+    cv::max(frames.right, 0.0, frames.right);
+  } else {
+    frames.right = second;
+  }
+  if (swap_views) {
+    std::swap(frames.left, frames.right);
+  }
+  return frames;
+}
+
+int DPFrameDownsampling(const cv::Size& frame_size,
+                        int camera_width,
+                        int camera_height,
+                        const std::string& image_name) {
+  if (frame_size.width > 0 && frame_size.height > 0) {
+    for (int k = 1; k <= 8; ++k) {
+      // Allow rounding either way of an odd camera size.
+      if (std::abs(frame_size.width * k - camera_width) < k &&
+          std::abs(frame_size.height * k - camera_height) < k) {
+        return k;
+      }
+    }
+  }
+  std::ostringstream message;
+  message << "DP views of image " << image_name << " are " << frame_size.width
+          << "x" << frame_size.height << ", but the model's camera is "
+          << camera_width << "x" << camera_height
+          << " (expected the same size or an integer fraction of it)";
+  throw InputError(message.str());
+}
+
+}  // namespace dpsfm

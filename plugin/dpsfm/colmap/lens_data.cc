@@ -1,0 +1,186 @@
+#include "dpsfm/colmap/lens_data.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <FreeImage.h>
+
+#include "dpsfm/colmap/workspace.h"
+
+namespace dpsfm {
+namespace {
+
+std::string Trim(const std::string& text) {
+  const size_t begin = text.find_first_not_of(" \t\r\n");
+  if (begin == std::string::npos) return "";
+  const size_t end = text.find_last_not_of(" \t\r\n");
+  return text.substr(begin, end - begin + 1);
+}
+
+std::vector<std::string> SplitCsvLine(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream stream(line);
+  while (std::getline(stream, cell, ',')) {
+    cells.push_back(Trim(cell));
+  }
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+double ParseCell(const std::string& cell, const std::string& path, int line,
+                 const char* column, bool allow_empty) {
+  if (cell.empty()) {
+    if (allow_empty) return 0;
+    throw InputError(path + ":" + std::to_string(line) + ": " + column +
+                     " is empty");
+  }
+  char* end = nullptr;
+  const double value = std::strtod(cell.c_str(), &end);
+  if (end == cell.c_str() || *end != '\0' || !std::isfinite(value) ||
+      value <= 0) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + column +
+                     " must be a positive number, got '" + cell + "'");
+  }
+  return value;
+}
+
+// EXIF RATIONAL tag value (num/den), 0 if absent or malformed.
+double RationalTag(FIBITMAP* bitmap, const char* key) {
+  FITAG* tag = nullptr;
+  if (!FreeImage_GetMetadata(FIMD_EXIF_EXIF, bitmap, key, &tag) || !tag) {
+    return 0;
+  }
+  if (FreeImage_GetTagType(tag) != FIDT_RATIONAL &&
+      FreeImage_GetTagType(tag) != FIDT_SRATIONAL) {
+    return 0;
+  }
+  if (FreeImage_GetTagCount(tag) < 1) return 0;
+  const auto* value = static_cast<const uint32_t*>(FreeImage_GetTagValue(tag));
+  if (value == nullptr || value[1] == 0) return 0;
+  return static_cast<double>(value[0]) / static_cast<double>(value[1]);
+}
+
+}  // namespace
+
+std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) {
+    throw InputError("cannot read lens file " + path);
+  }
+  std::string line;
+  if (!std::getline(file, line)) {
+    throw InputError("lens file is empty: " + path);
+  }
+  const std::vector<std::string> header = SplitCsvLine(line);
+  const std::vector<std::string> expected = {"name", "focal_length_mm",
+                                             "f_number", "pixel_pitch_um"};
+  if (header != expected) {
+    throw InputError("lens file " + path +
+                     " must start with the header "
+                     "name,focal_length_mm,f_number,pixel_pitch_um");
+  }
+  std::map<std::string, LensCsvRow> rows;
+  int line_number = 1;
+  while (std::getline(file, line)) {
+    ++line_number;
+    if (Trim(line).empty()) continue;
+    const std::vector<std::string> cells = SplitCsvLine(line);
+    if (cells.size() < 3 || cells.size() > 4 || cells[0].empty()) {
+      throw InputError(path + ":" + std::to_string(line_number) +
+                       ": expected name,focal_length_mm,f_number[,"
+                       "pixel_pitch_um]");
+    }
+    LensCsvRow row;
+    row.focal_length_mm =
+        ParseCell(cells[1], path, line_number, "focal_length_mm", false);
+    row.f_number = ParseCell(cells[2], path, line_number, "f_number", false);
+    row.pixel_pitch_um =
+        cells.size() == 4
+            ? ParseCell(cells[3], path, line_number, "pixel_pitch_um", true)
+            : 0;
+    if (!rows.emplace(cells[0], row).second) {
+      throw InputError(path + ":" + std::to_string(line_number) +
+                       ": image " + cells[0] + " is listed twice");
+    }
+  }
+  return rows;
+}
+
+ExifLens ReadExifLens(const std::string& path) {
+  ExifLens exif;
+  const FREE_IMAGE_FORMAT format = FreeImage_GetFileType(path.c_str(), 0);
+  if (format == FIF_UNKNOWN) {
+    return exif;
+  }
+  // Metadata only: decoding the pixels of a large JPEG would cost far more.
+  FIBITMAP* bitmap =
+      FreeImage_Load(format, path.c_str(), FIF_LOAD_NOPIXELS);
+  if (bitmap == nullptr) {
+    return exif;
+  }
+  exif.focal_length_mm = RationalTag(bitmap, "FocalLength");
+  exif.f_number = RationalTag(bitmap, "FNumber");
+  FreeImage_Unload(bitmap);
+  return exif;
+}
+
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const ExifLens* exif,
+                         double camera_focal_px) {
+  ResolvedLens resolved;
+  const auto row = csv.find(image_name);
+  const LensCsvRow* csv_row = row == csv.end() ? nullptr : &row->second;
+
+  auto pick = [&](double csv_value, double flag_value, double exif_value,
+                  double* out, std::string* source) {
+    if (csv_value > 0) {
+      *out = csv_value;
+      *source = "lens.csv";
+    } else if (flag_value > 0) {
+      *out = flag_value;
+      *source = "flag";
+    } else if (exif_value > 0) {
+      *out = exif_value;
+      *source = "EXIF";
+    }
+  };
+  pick(csv_row ? csv_row->focal_length_mm : 0, flags.focal_length_mm,
+       exif ? exif->focal_length_mm : 0, &resolved.lens.focal_length_mm,
+       &resolved.focal_length_source);
+  pick(csv_row ? csv_row->f_number : 0, flags.f_number,
+       exif ? exif->f_number : 0, &resolved.lens.f_number,
+       &resolved.f_number_source);
+  pick(csv_row ? csv_row->pixel_pitch_um : 0, flags.pixel_pitch_um, 0,
+       &resolved.lens.pixel_pitch_um, &resolved.pixel_pitch_source);
+
+  const char* kHowTo =
+      " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "
+      "the EXIF of the original image under --image_path)";
+  char how[256];
+  if (resolved.lens.focal_length_mm <= 0) {
+    std::snprintf(how, sizeof(how), kHowTo, "focal_length_mm");
+    throw InputError("no focal length for image " + image_name + how);
+  }
+  if (resolved.lens.f_number <= 0) {
+    std::snprintf(how, sizeof(how), kHowTo, "f_number");
+    throw InputError("no f-number for image " + image_name + how);
+  }
+  if (resolved.lens.pixel_pitch_um <= 0) {
+    if (!(camera_focal_px > 0)) {
+      throw InputError("no pixel pitch for image " + image_name +
+                       " and its camera has no focal length to derive it from");
+    }
+    // f_mm / f_px is the physical size of one model camera pixel.
+    resolved.lens.pixel_pitch_um =
+        1000.0 * resolved.lens.focal_length_mm / camera_focal_px;
+    resolved.pixel_pitch_source = "derived f_mm/f_px";
+  }
+  return resolved;
+}
+
+}  // namespace dpsfm

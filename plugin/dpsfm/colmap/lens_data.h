@@ -1,0 +1,57 @@
+// Per-image lens data (focal length, f-number, pixel pitch) with the
+// contract's precedence: lens.csv row > explicit flag > EXIF of the original
+// image > derived (pitch only, f_mm / f_px of the calibrated camera).
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "dpsfm/core/lens_model.h"
+
+namespace dpsfm {
+
+// One row of lens.csv; zero means "empty cell".
+struct LensCsvRow {
+  double focal_length_mm = 0;
+  double f_number = 0;
+  double pixel_pitch_um = 0;
+};
+
+// Reads lens.csv (header `name,focal_length_mm,f_number,pixel_pitch_um`; the
+// last column may be empty). Throws InputError naming the file and line.
+std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
+
+// EXIF FocalLength and FNumber of an image file, read as exact rationals.
+// Zero where a tag is absent or the file has no EXIF.
+struct ExifLens {
+  double focal_length_mm = 0;
+  double f_number = 0;
+};
+ExifLens ReadExifLens(const std::string& path);
+
+// Lens data of one image and where each number came from ("lens.csv",
+// "flag", "EXIF", "derived"), for the log and the report.
+struct ResolvedLens {
+  DPLensData lens;  // pitch is of the MODEL camera's pixels
+  std::string focal_length_source;
+  std::string f_number_source;
+  std::string pixel_pitch_source;
+};
+
+struct LensFlags {
+  double focal_length_mm = 0;
+  double f_number = 0;
+  double pixel_pitch_um = 0;
+};
+
+// Applies the precedence for one image. `exif` may be null (no original
+// image); `camera_focal_px` is the calibrated focal length in pixels (used to
+// derive the pitch). Throws InputError naming the image and the three ways
+// to supply a missing focal length or f-number.
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const ExifLens* exif,
+                         double camera_focal_px);
+
+}  // namespace dpsfm

@@ -1,0 +1,170 @@
+#include "dpsfm/colmap/report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+
+#include <boost/filesystem.hpp>
+
+namespace dpsfm {
+namespace {
+
+// JSON has no NaN or infinity: unknown numbers become null.
+nlohmann::json Number(double value) {
+  if (std::isfinite(value)) return value;
+  return nullptr;
+}
+
+nlohmann::json Interval(double low, double high) {
+  return nlohmann::json::array({Number(low), Number(high)});
+}
+
+}  // namespace
+
+std::string DPSFMVersion() {
+#ifdef DPSFM_VERSION
+  return DPSFM_VERSION;
+#else
+  return "unknown";
+#endif
+}
+
+nlohmann::json MakeReport(const DPScaleResult& result,
+                          const std::vector<ViewSource>& sources,
+                          const std::vector<DPViewSummary>& summaries,
+                          const RunTimings& timings) {
+  nlohmann::json report;
+  report["tool"] = "dp-sfm " + DPSFMVersion();
+  report["success"] = result.success;
+  if (!result.success) {
+    report["reason"] = result.failure_reason;
+  }
+  report["scale"] = result.success ? Number(result.scale) : nullptr;
+  report["scale_initial"] = Number(result.scale_initial);
+  report["scale_ci_low"] = Number(result.scale_ci_low);
+  report["scale_ci_high"] = Number(result.scale_ci_high);
+  report["scale_initial_ci"] =
+      Interval(result.scale_initial_ci_low, result.scale_initial_ci_high);
+  report["units"] = "scale: metres per model unit (metric = scale * model)";
+
+  nlohmann::json intensity;
+  intensity["used"] = result.intensity_used;
+  intensity["status"] = result.intensity_status;
+  intensity["scale"] = Number(result.scale_intensity);
+  intensity["ci"] = Interval(result.intensity_ci_low, result.intensity_ci_high);
+  intensity["loss"] = result.intensity_loss;
+  nlohmann::json curve = nlohmann::json::array();
+  for (size_t i = 0; i < result.candidate_scales.size() &&
+                     i < result.candidate_losses.size();
+       ++i) {
+    curve.push_back({Number(result.candidate_scales[i]),
+                     Number(result.candidate_losses[i])});
+  }
+  intensity["loss_curve"] = curve;
+  report["intensity"] = intensity;
+
+  std::map<std::string, const ViewSource*> source_by_name;
+  for (const ViewSource& source : sources) {
+    source_by_name[source.image_name] = &source;
+  }
+  std::map<std::string, const DPViewSummary*> summary_by_name;
+  for (const DPViewSummary& summary : summaries) {
+    summary_by_name[summary.name] = &summary;
+  }
+
+  nlohmann::json views = nlohmann::json::object();
+  for (const DPViewResult& view : result.views) {
+    nlohmann::json entry;
+    entry["used"] = view.used;
+    entry["reason"] = view.reason;
+    entry["focus_distance_m"] =
+        result.success ? Number(view.focus_distance_m) : nullptr;
+    entry["focus_distance_model"] = Number(view.focus_distance_model);
+    entry["single_view_scale"] = Number(view.single_view_scale);
+    entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);
+    entry["median_abs_residual_px"] = Number(view.median_abs_residual_px);
+    entry["patches"] = {{"tried", view.patches_tried},
+                        {"valid", view.patches_valid},
+                        {"selected", view.patches_selected}};
+    entry["lens"] = {{"focal_length_mm", view.lens.focal_length_mm},
+                     {"f_number", view.lens.f_number},
+                     {"dp_pixel_pitch_um", view.lens.pixel_pitch_um}};
+    const auto source = source_by_name.find(view.name);
+    if (source != source_by_name.end()) {
+      const ViewSource& s = *source->second;
+      entry["lens"]["sources"] = {
+          {"focal_length_mm", s.lens.focal_length_source},
+          {"f_number", s.lens.f_number_source},
+          {"pixel_pitch_um", s.lens.pixel_pitch_source}};
+      entry["dp_left"] = s.dp.left;
+      entry[s.dp.right.empty() ? "dp_sum" : "dp_right"] =
+          s.dp.right.empty() ? s.dp.sum : s.dp.right;
+      entry["depth_source"] = s.depth_source;
+    }
+    const auto summary = summary_by_name.find(view.name);
+    if (summary != summary_by_name.end()) {
+      const DPViewSummary& s = *summary->second;
+      entry["blur_seconds"] = s.seconds;
+      entry["working_size"] = {s.working_size.width, s.working_size.height};
+      entry["patch_size"] = s.patch_size;
+      entry["max_radius_px"] = s.max_radius_px;
+      nlohmann::json rejections = nlohmann::json::object();
+      for (const auto& rejection : s.rejections) {
+        rejections[rejection.first] = rejection.second;
+      }
+      entry["patch_rejections"] = rejections;
+    }
+    views[view.name] = entry;
+  }
+  report["views"] = views;
+  report["num_patches"] = result.num_patches;
+  report["num_views_used"] = result.num_views_used;
+  report["linear_median_abs_residual_px"] =
+      Number(result.linear_median_abs_residual_px);
+
+  nlohmann::json patches = nlohmann::json::array();
+  for (const PatchSample& patch : result.patches) {
+    if (!patch.selected) continue;
+    patches.push_back({{"view", result.views.at(patch.view).name},
+                       {"x", patch.x},
+                       {"y", patch.y},
+                       {"depth_model", patch.depth},
+                       {"radius_px", Number(patch.radius_px)},
+                       {"predicted_radius_px", Number(patch.predicted_radius_px)},
+                       {"confidence", Number(patch.confidence)},
+                       {"used", patch.used}});
+  }
+  report["patches"] = patches;
+
+  report["seconds"] = timings.total;
+  report["timings"] = {{"read", timings.read},
+                       {"blur", timings.blur},
+                       {"linear", timings.linear},
+                       {"intensity", timings.intensity},
+                       {"rescale", timings.rescale},
+                       {"total", timings.total}};
+  return report;
+}
+
+void WriteJsonFile(const std::string& path, const nlohmann::json& json) {
+  const std::string temporary = path + ".tmp";
+  {
+    std::ofstream file(temporary);
+    if (!file) {
+      throw InputError("cannot write " + path);
+    }
+    file << json.dump(2) << "\n";
+    if (!file) {
+      throw InputError("cannot write " + path);
+    }
+  }
+  boost::system::error_code error;
+  boost::filesystem::rename(temporary, path, error);
+  if (error) {
+    boost::filesystem::remove(temporary, error);
+    throw InputError("cannot write " + path);
+  }
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,115 @@
+// Multiplying every model-unit quantity of a COLMAP workspace by a scale s
+// (metric = s * model units), one file at a time, changing nothing else.
+//
+// Every artefact is patched in its own bytes rather than re-serialised:
+// COLMAP's writers reorder images (MVS numbers images by their position in
+// images.bin, and fused.ply.vis / consistency graphs store those numbers),
+// drop PLY normals and change text formatting. So binary files keep every
+// byte except the scaled numbers, and text files keep every character except
+// the scaled numeric fields.
+//
+// Nothing here writes an original: results go to a path the caller names
+// (the transaction in transaction.h stages them and commits all at once).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace dpsfm {
+
+// The kinds of files that hold model-unit quantities.
+enum class ArtefactType {
+  kImagesBinary,    // images.bin: cam_from_world translations (tx, ty, tz)
+  kPoints3DBinary,  // points3D.bin: xyz
+  kImagesText,      // images.txt: TX TY TZ of each image line
+  kPoints3DText,    // points3D.txt: X Y Z of each point line
+  kDepthMap,        // stereo/depth_maps/*.{geometric,photometric}.bin
+  kPly,             // fused.ply, meshed-*.ply: vertex x y z
+};
+
+// "images.bin", "depth map", ... for messages.
+const char* ArtefactTypeName(ArtefactType type);
+
+struct Artefact {
+  ArtefactType type = ArtefactType::kImagesBinary;
+  std::string path;
+};
+
+// Every file that must be rescaled, in a deterministic (sorted) order:
+//  - model files (images.{bin,txt}, points3D.{bin,txt}; cameras are not
+//    metric) of `workspace_root` itself if it holds a model (a sparse model
+//    given alone), of `workspace_root`/sparse and of its direct
+//    sub-folders (sparse/0, ...), and of every folder in `extra_model_dirs`;
+//    each model's .bin and .txt files both when both exist;
+//  - stereo/depth_maps/**/*.geometric.bin and *.photometric.bin;
+//  - fused.ply and meshed-*.ply at the workspace root.
+// Not listed because they are not metric: cameras.*, normal maps,
+// consistency graphs, *.cfg, fused.ply.vis, images. A model folder reached
+// twice (an extra dir that is also sparse/) is listed once.
+// Throws InputError if the root is not a directory or an extra dir holds no
+// model.
+std::vector<Artefact> ListArtefactsToRescale(
+    const std::string& workspace_root,
+    const std::vector<std::string>& extra_model_dirs =
+        std::vector<std::string>());
+
+// Throws InputError unless scale is finite and > 0.
+void CheckScale(double scale);
+
+// In-memory rescaling of one file's whole contents. `path` only names the
+// file in errors. Each validates the complete structure first (sizes,
+// counts, terminators, numbers) and throws InputError naming the file if it
+// is truncated, corrupt or holds non-finite values; `contents` is unchanged
+// then.
+//
+// Binary models: t of each image / xyz of each point multiplied in place,
+// all other bytes (and the order of records) identical.
+void RescaleImagesBinary(double scale, const std::string& path,
+                         std::string* contents);
+void RescalePoints3DBinary(double scale, const std::string& path,
+                           std::string* contents);
+// Text models: only the TX TY TZ / X Y Z fields are rewritten, with %.17g
+// (round-trip precision); comments, blank lines, whitespace, line endings
+// and all other fields stay character for character.
+void RescaleImagesText(double scale, const std::string& path,
+                       std::string* contents);
+void RescalePoints3DText(double scale, const std::string& path,
+                         std::string* contents);
+// COLMAP depth map ("W&H&C&" + W*H*C float32 LE): values > 0 are multiplied
+// (as float(double(d) * s)); values <= 0 mean "invalid" and stay, as does
+// the header.
+void RescaleDepthMap(double scale, const std::string& path,
+                     std::string* contents);
+// PLY (binary_little_endian or ascii; big endian is refused): the x, y, z
+// properties (float or double) of the "vertex" element are multiplied;
+// every other property, element, list and the header stay identical. ASCII
+// values are written with round-trip precision of their type (%.9g float,
+// %.17g double).
+void RescalePly(double scale, const std::string& path, std::string* contents);
+
+// Dispatches on type.
+void RescaleContents(ArtefactType type, double scale, const std::string& path,
+                     std::string* contents);
+
+// Reads artefact.path, rescales it and writes the result to `output_path`
+// (created or truncated, fsync'd, with the original's permission bits).
+// The original is never written. Throws InputError for a bad input file and
+// std::runtime_error if `output_path` cannot be written.
+void WriteRescaledArtefact(const Artefact& artefact, double scale,
+                           const std::string& output_path);
+
+// Small file helpers shared with transaction.cc.
+namespace internal {
+// Whole file; InputError naming the file if it cannot be read.
+std::string ReadFileBytes(const std::string& path);
+// Creates/truncates `path`, writes `contents`, fsyncs and closes; `mode` are
+// the permission bits. std::runtime_error naming the file on failure.
+void WriteFileDurably(const std::string& path, const std::string& contents,
+                      unsigned int mode = 0644);
+// fsync of a directory, so renames/creations in it survive a power loss.
+void FsyncDirectory(const std::string& dir);
+// Permission bits of an existing file (0644 if they cannot be read).
+unsigned int FileMode(const std::string& path);
+}  // namespace internal
+
+}  // namespace dpsfm

@@ -1,0 +1,149 @@
+#include "dpsfm/colmap/workspace.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <boost/filesystem.hpp>
+
+namespace dpsfm {
+namespace {
+
+namespace fs = boost::filesystem;
+
+std::string Join(const std::string& a, const std::string& b) {
+  return (fs::path(a) / b).string();
+}
+
+void RequireDir(const std::string& path, const std::string& what) {
+  if (!fs::exists(path)) {
+    throw InputError(what + " does not exist: " + path);
+  }
+  if (!fs::is_directory(path)) {
+    throw InputError(what + " is not a directory: " + path);
+  }
+}
+
+void RequireFile(const std::string& path, const std::string& what) {
+  if (!fs::exists(path)) {
+    throw InputError(what + " does not exist: " + path);
+  }
+  if (!fs::is_regular_file(path)) {
+    throw InputError(what + " is not a regular file: " + path);
+  }
+}
+
+void CheckOptionalPositive(const char* name, double value) {
+  // 0 means "not given"; anything else must be a finite positive number.
+  if (value != 0.0 && !(std::isfinite(value) && value > 0.0)) {
+    std::ostringstream message;
+    message << "--DPScaleEstimator." << name
+            << " must be a positive number, got " << value;
+    throw InputError(message.str());
+  }
+}
+
+}  // namespace
+
+void DPScaleEstimatorOptions::Check() const {
+  if (workspace_path.empty() == input_path.empty()) {
+    throw InputError(
+        "give exactly one of --workspace_path (dense workspace) and "
+        "--input_path (sparse model)");
+  }
+  if (dp_image_path.empty()) {
+    throw InputError("--dp_image_path is required");
+  }
+  if (input_type != "geometric" && input_type != "photometric") {
+    throw InputError("--input_type must be geometric or photometric, got '" +
+                     input_type + "'");
+  }
+  CheckOptionalPositive("focal_length_mm", focal_length_mm);
+  CheckOptionalPositive("f_number", f_number);
+  CheckOptionalPositive("pixel_pitch_um", pixel_pitch_um);
+  if (!output_path.empty()) {
+    const std::string input =
+        workspace_path.empty() ? input_path : workspace_path;
+    if (fs::exists(output_path) && fs::exists(input) &&
+        fs::equivalent(output_path, input)) {
+      throw InputError(
+          "--output_path is the input itself; leave it out to rescale in "
+          "place: " +
+          output_path);
+    }
+  }
+}
+
+bool IsModelDir(const std::string& dir) {
+  for (const char* ext : {".bin", ".txt"}) {
+    if (fs::is_regular_file(Join(dir, std::string("cameras") + ext)) &&
+        fs::is_regular_file(Join(dir, std::string("images") + ext)) &&
+        fs::is_regular_file(Join(dir, std::string("points3D") + ext))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options) {
+  options.Check();
+  WorkspaceLayout layout;
+  if (!options.workspace_path.empty()) {
+    layout.dense = true;
+    RequireDir(options.workspace_path, "--workspace_path");
+    layout.model_path = Join(options.workspace_path, "sparse");
+    RequireDir(layout.model_path, "the dense workspace's sparse model");
+    if (!IsModelDir(layout.model_path)) {
+      throw InputError(
+          "the dense workspace has no model (cameras, images, points3D as "
+          ".bin or .txt) in " +
+          layout.model_path);
+    }
+    layout.depth_maps_path =
+        Join(Join(options.workspace_path, "stereo"), "depth_maps");
+    RequireDir(layout.depth_maps_path, "the dense workspace's depth maps");
+  } else {
+    RequireDir(options.input_path, "--input_path");
+    layout.model_path = options.input_path;
+    if (!IsModelDir(layout.model_path)) {
+      throw InputError(
+          "--input_path has no model (cameras, images, points3D as .bin or "
+          ".txt): " +
+          options.input_path);
+    }
+  }
+
+  RequireDir(options.dp_image_path, "--dp_image_path");
+  layout.left_path = Join(options.dp_image_path, "left");
+  RequireDir(layout.left_path, "the left DP views folder");
+  const std::string right = Join(options.dp_image_path, "right");
+  const std::string sum = Join(options.dp_image_path, "sum");
+  if (fs::is_directory(right)) {
+    layout.right_path = right;
+  } else if (fs::is_directory(sum)) {
+    layout.sum_path = sum;
+  } else {
+    throw InputError("--dp_image_path has neither right/ nor sum/: " +
+                     options.dp_image_path);
+  }
+
+  if (!options.image_path.empty()) {
+    RequireDir(options.image_path, "--image_path");
+  }
+  if (!options.database_path.empty()) {
+    // Opening a missing database would silently create an empty one.
+    RequireFile(options.database_path, "--database_path");
+  }
+  if (!options.lens_path.empty()) {
+    RequireFile(options.lens_path, "--lens_path");
+  }
+  if (!options.report_path.empty()) {
+    const fs::path parent = fs::path(options.report_path).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent)) {
+      throw InputError("the folder of --report_path does not exist: " +
+                       parent.string());
+    }
+  }
+  return layout;
+}
+
+}  // namespace dpsfm

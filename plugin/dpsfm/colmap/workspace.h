@@ -1,0 +1,81 @@
+// What `colmap dp_scale_estimator` reads: the command's paths and settings,
+// checked against what is on disk before anything is read or written.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace dpsfm {
+
+// A problem with the user's input (paths, workspace contents, option values).
+// The command prints its message as one line and exits non-zero.
+class InputError : public std::runtime_error {
+ public:
+  explicit InputError(const std::string& message)
+      : std::runtime_error(message) {}
+};
+
+// Paths and settings of one run, as given on the command line (see
+// shared cli-contract). Empty strings and zero values mean "not given".
+struct DPScaleEstimatorOptions {
+  // COLMAP dense workspace (sparse/, stereo/depth_maps/, fused.ply, ...).
+  std::string workspace_path;
+  // A sparse model directory, used instead of workspace_path (depths from
+  // the model's triangulated points).
+  std::string input_path;
+  // DP views: <dp_image_path>/left/<name> with right/<name> or sum/<name>.
+  std::string dp_image_path;
+  // Original images, for EXIF FocalLength and FNumber.
+  std::string image_path;
+  // The project database; opened read-only, never created.
+  std::string database_path;
+  // Per-image lens data (name,focal_length_mm,f_number,pixel_pitch_um).
+  std::string lens_path;
+  // Which depth maps to read: "geometric" (falls back to photometric) or
+  // "photometric".
+  std::string input_type = "geometric";
+  std::string report_path;
+  // Write a rescaled copy here instead of rescaling in place.
+  std::string output_path;
+  // Comma-separated sparse model folders in the same frame, rescaled along
+  // with the workspace.
+  std::string extra_model_paths;
+  bool dry_run = false;
+  // Consent to rescale a workspace that was already rescaled.
+  bool force = false;
+
+  // Lens flags; 0 means "not given" (lens.csv and EXIF may supply them).
+  double focal_length_mm = 0.0;
+  double f_number = 0.0;
+  double pixel_pitch_um = 0.0;
+  bool swap_dp_views = false;
+
+  // Throws InputError naming the option and the value.
+  void Check() const;
+};
+
+// Where each piece of the input lives on disk.
+struct WorkspaceLayout {
+  // True for a dense workspace (--workspace_path), false for a sparse
+  // model alone (--input_path).
+  bool dense = false;
+  // The model the estimate is made from (dense/sparse or --input_path).
+  std::string model_path;
+  // stereo/depth_maps of a dense workspace; empty in sparse mode.
+  std::string depth_maps_path;
+  // DP view folders; exactly one of right_path and sum_path is set.
+  std::string left_path;
+  std::string right_path;
+  std::string sum_path;
+};
+
+// True if `dir` holds a COLMAP model (cameras, images, points3D as .bin or
+// .txt).
+bool IsModelDir(const std::string& dir);
+
+// Checks that every path exists and has the pieces the run needs, and says
+// which one is missing otherwise (InputError).
+WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options);
+
+}  // namespace dpsfm

@@ -1,0 +1,230 @@
+#include "dpsfm/colmap/workspace_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <boost/filesystem.hpp>
+
+namespace dpsfm {
+namespace {
+
+namespace fs = boost::filesystem;
+
+// Parses one "N&" field of the depth map header.
+bool ReadHeaderField(std::istream* stream, long long* value) {
+  std::string digits;
+  char c;
+  while (stream->get(c)) {
+    if (c == '&') break;
+    if (c < '0' || c > '9' || digits.size() > 9) return false;
+    digits.push_back(c);
+  }
+  if (c != '&' || digits.empty()) return false;
+  *value = std::stoll(digits);
+  return true;
+}
+
+}  // namespace
+
+cv::Mat ReadColmapDepthMap(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    throw InputError("cannot read depth map " + path);
+  }
+  long long width = 0, height = 0, channels = 0;
+  if (!ReadHeaderField(&file, &width) || !ReadHeaderField(&file, &height) ||
+      !ReadHeaderField(&file, &channels) || width <= 0 || height <= 0 ||
+      channels <= 0) {
+    throw InputError("depth map has a malformed header (expected W&H&C&): " +
+                     path);
+  }
+  if (channels != 1) {
+    throw InputError("depth map has " + std::to_string(channels) +
+                     " channels, expected 1: " + path);
+  }
+  const std::streamoff header_end = file.tellg();
+  file.seekg(0, std::ios::end);
+  const std::streamoff payload = file.tellg() - header_end;
+  const std::streamoff expected =
+      static_cast<std::streamoff>(width) * height * sizeof(float);
+  if (payload != expected) {
+    std::ostringstream message;
+    message << "depth map is " << (payload < expected ? "truncated" : "too long")
+            << " (" << payload << " data bytes for " << width << "x" << height
+            << ", expected " << expected << "): " << path;
+    throw InputError(message.str());
+  }
+  file.seekg(header_end);
+  // Row-major, width varying fastest (mvs::Mat<T>: data[row * width + col]).
+  cv::Mat depth(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
+  file.read(reinterpret_cast<char*>(depth.data), expected);
+  if (!file) {
+    throw InputError("cannot read depth map data: " + path);
+  }
+  for (int r = 0; r < depth.rows; ++r) {
+    const float* row = depth.ptr<float>(r);
+    for (int c = 0; c < depth.cols; ++c) {
+      if (!std::isfinite(row[c])) {
+        std::ostringstream message;
+        message << "depth map has a non-finite value at column " << c
+                << ", row " << r << ": " << path;
+        throw InputError(message.str());
+      }
+    }
+  }
+  return depth;
+}
+
+WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
+                                 const WorkspaceLayout& layout)
+    : options_(options), layout_(layout) {
+  try {
+    reconstruction_.Read(layout_.model_path);
+  } catch (const std::exception& error) {
+    throw InputError("cannot read the model in " + layout_.model_path + ": " +
+                     error.what());
+  }
+  std::vector<colmap::image_t> image_ids = reconstruction_.RegImageIds();
+  if (image_ids.empty()) {
+    throw InputError("the model has no registered images: " +
+                     layout_.model_path);
+  }
+  // Name order: deterministic logs and reports whatever the file order.
+  std::sort(image_ids.begin(), image_ids.end(),
+            [this](colmap::image_t a, colmap::image_t b) {
+              return reconstruction_.Image(a).Name() <
+                     reconstruction_.Image(b).Name();
+            });
+
+  dp_index_.reset(new DPImageIndex(layout_));
+  std::vector<std::string> missing;
+  for (const colmap::image_t image_id : image_ids) {
+    if (!dp_index_->HasLeft(reconstruction_.Image(image_id).Name())) {
+      missing.push_back(reconstruction_.Image(image_id).Name());
+    }
+  }
+  if (!missing.empty()) {
+    std::ostringstream message;
+    message << missing.size() << " of " << image_ids.size()
+            << " images have no DP view in " << layout_.left_path << ": ";
+    for (size_t i = 0; i < missing.size() && i < 5; ++i) {
+      message << (i > 0 ? ", " : "") << missing[i];
+    }
+    if (missing.size() > 5) message << ", ...";
+    throw InputError(message.str());
+  }
+
+  std::map<std::string, LensCsvRow> lens_csv;
+  if (!options_.lens_path.empty()) {
+    lens_csv = ReadLensCsv(options_.lens_path);
+  }
+  LensFlags flags;
+  flags.focal_length_mm = options_.focal_length_mm;
+  flags.f_number = options_.f_number;
+  flags.pixel_pitch_um = options_.pixel_pitch_um;
+
+  for (const colmap::image_t image_id : image_ids) {
+    const colmap::Image& image = reconstruction_.Image(image_id);
+    const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
+    ViewSource source;
+    source.image_name = image.Name();
+    source.image_id = image_id;
+    source.dp = dp_index_->Find(image.Name());
+
+    ExifLens exif;
+    const ExifLens* exif_ptr = nullptr;
+    if (!options_.image_path.empty()) {
+      const std::string original =
+          (fs::path(options_.image_path) / image.Name()).string();
+      if (fs::is_regular_file(original)) {
+        exif = ReadExifLens(original);
+        exif_ptr = &exif;
+      }
+    }
+    source.lens = ResolveLens(image.Name(), lens_csv, flags, exif_ptr,
+                              camera.MeanFocalLength());
+
+    if (layout_.dense) {
+      source.depth_source = DepthMapPath(image.Name());
+    } else {
+      source.depth_source =
+          std::to_string(image.NumPoints3D()) + " triangulated points";
+    }
+    sources_.push_back(source);
+  }
+}
+
+std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
+  const fs::path base = fs::path(layout_.depth_maps_path) / image_name;
+  const std::string preferred = base.string() + "." + options_.input_type + ".bin";
+  if (fs::is_regular_file(preferred)) {
+    return preferred;
+  }
+  // geometric falls back to photometric (the contract's default).
+  if (options_.input_type == "geometric") {
+    const std::string photometric = base.string() + ".photometric.bin";
+    if (fs::is_regular_file(photometric)) {
+      return photometric;
+    }
+  }
+  throw InputError("no " + options_.input_type + " depth map for image " +
+                   image_name + " (expected " + preferred + ")");
+}
+
+DPView WorkspaceReader::LoadView(size_t index) const {
+  const ViewSource& source = sources_.at(index);
+  const colmap::Image& image = reconstruction_.Image(source.image_id);
+  const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
+
+  const DPFrames frames = LoadDPFrames(source.dp, options_.swap_dp_views);
+  const int k = DPFrameDownsampling(frames.left.size(),
+                                    static_cast<int>(camera.width),
+                                    static_cast<int>(camera.height),
+                                    source.image_name);
+  DPView view;
+  view.name = source.image_name;
+  view.left = frames.left;
+  view.right = frames.right;
+  view.lens = source.lens.lens;
+  // A DP-frame pixel covers k x k model camera pixels.
+  view.lens.pixel_pitch_um *= k;
+
+  if (layout_.dense) {
+    view.depth = ReadColmapDepthMap(source.depth_source);
+    // The depth map covers the camera's field at its own resolution; it
+    // must keep the camera's aspect (PatchMatch scales both sides alike).
+    const double aspect_camera =
+        static_cast<double>(camera.width) / camera.height;
+    const double aspect_depth =
+        static_cast<double>(view.depth.cols) / view.depth.rows;
+    if (std::abs(aspect_camera - aspect_depth) > 0.02 * aspect_camera) {
+      std::ostringstream message;
+      message << "depth map is " << view.depth.cols << "x" << view.depth.rows
+              << " but image " << source.image_name << " is " << camera.width
+              << "x" << camera.height << " (different aspect): "
+              << source.depth_source;
+      throw InputError(message.str());
+    }
+  } else {
+    const Eigen::Matrix3x4d cam_from_world = image.CamFromWorld().ToMatrix();
+    for (const colmap::Point2D& point2D : image.Points2D()) {
+      if (!point2D.HasPoint3D()) continue;
+      const Eigen::Vector3d xyz =
+          reconstruction_.Point3D(point2D.point3D_id).xyz;
+      const double depth = cam_from_world.row(2).dot(xyz.homogeneous());
+      if (!(depth > 0) || !std::isfinite(depth)) continue;
+      DepthPoint sample;
+      // COLMAP's 2D points put the top-left pixel centre at (0.5, 0.5); the
+      // core puts it at (0, 0), in DP-frame pixels.
+      sample.x = (point2D.xy.x() - 0.5) / k;
+      sample.y = (point2D.xy.y() - 0.5) / k;
+      sample.depth = depth;
+      view.depth_points.push_back(sample);
+    }
+  }
+  return view;
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,58 @@
+// Turns a COLMAP workspace (model, depth maps or tracks, DP views, lens data)
+// into the core's per-view inputs. All cheap checks run in the constructor,
+// so a missing DP view or lens value is reported before any heavy work.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/dp_images.h"
+#include "dpsfm/colmap/lens_data.h"
+#include "dpsfm/colmap/workspace.h"
+#include "dpsfm/core/dp_scale_estimator.h"
+
+namespace dpsfm {
+
+// Reads a COLMAP depth map (ASCII header "W&H&C&", then float32 LE) as
+// CV_32FC1. Throws InputError naming the file if it is missing, malformed,
+// truncated, multi-channel or holds non-finite values.
+cv::Mat ReadColmapDepthMap(const std::string& path);
+
+// Where one view's inputs come from, for the log and the report.
+struct ViewSource {
+  std::string image_name;
+  colmap::image_t image_id = 0;
+  DPFramePaths dp;
+  ResolvedLens lens;         // pitch of the model camera's pixels
+  std::string depth_source;  // depth map path, or "N triangulated points"
+};
+
+class WorkspaceReader {
+ public:
+  WorkspaceReader(const DPScaleEstimatorOptions& options,
+                  const WorkspaceLayout& layout);
+
+  const colmap::Reconstruction& reconstruction() const {
+    return reconstruction_;
+  }
+  size_t NumViews() const { return sources_.size(); }
+  const ViewSource& Source(size_t index) const { return sources_[index]; }
+
+  // Loads the DP frames, depth and lens data of one view. Throws InputError
+  // naming the file for unreadable or inconsistent data.
+  DPView LoadView(size_t index) const;
+
+ private:
+  std::string DepthMapPath(const std::string& image_name) const;
+
+  DPScaleEstimatorOptions options_;
+  WorkspaceLayout layout_;
+  colmap::Reconstruction reconstruction_;
+  std::unique_ptr<DPImageIndex> dp_index_;
+  std::vector<ViewSource> sources_;
+};
+
+}  // namespace dpsfm

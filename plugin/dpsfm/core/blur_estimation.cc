@@ -1,0 +1,841 @@
+#include "dpsfm/core/blur_estimation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <utility>
+
+#include <Eigen/Core>
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/check.h"
+
+namespace dpsfm {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Places a centred kernel into a zero matrix of `size` with its centre at
+// (0, 0) and negative offsets wrapped around, so that the DFT product with a
+// zero-padded image is the (circular) true convolution.
+cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
+  cv::Mat wrapped = cv::Mat::zeros(size, CV_32FC1);
+  const int cy = kernel.rows / 2;
+  const int cx = kernel.cols / 2;
+  for (int i = 0; i < kernel.rows; ++i) {
+    const int y = ((i - cy) % size.height + size.height) % size.height;
+    for (int j = 0; j < kernel.cols; ++j) {
+      const int x = ((j - cx) % size.width + size.width) % size.width;
+      wrapped.at<float>(y, x) += kernel.at<float>(i, j);
+    }
+  }
+  return wrapped;
+}
+
+// Embeds a centred kernel in a (2 half + 1)^2 frame (for inner products of
+// kernels of different sizes).
+cv::Mat EmbedKernel(const cv::Mat& kernel, int half) {
+  cv::Mat frame = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
+  const int oy = half - kernel.rows / 2;
+  const int ox = half - kernel.cols / 2;
+  kernel.copyTo(frame(cv::Rect(ox, oy, kernel.cols, kernel.rows)));
+  return frame;
+}
+
+// 1-D Tukey window: 1 inside, a raised-cosine taper over `taper` samples at
+// both ends. Tapering the border band (where the exact loss is not evaluated
+// anyway) suppresses the patch-edge discontinuity of the circular model.
+std::vector<float> TukeyWindow(int length, int taper) {
+  std::vector<float> window(length, 1.0f);
+  taper = std::min(taper, length / 2);
+  for (int i = 0; i < taper; ++i) {
+    const float w =
+        static_cast<float>(0.5 * (1.0 - std::cos(M_PI * (i + 0.5) / taper)));
+    window[i] = w;
+    window[length - 1 - i] = w;
+  }
+  return window;
+}
+
+bool AllFinite(const cv::Mat& image) {
+  for (int y = 0; y < image.rows; ++y) {
+    const float* row = image.ptr<float>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      if (!std::isfinite(row[x])) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// Sum over `rect` of (image * kernel) (true convolution), from the integral
+// image of `image`: sum_d kernel(d) * (sum of image over rect - d). Every
+// shifted rect must lie inside the image.
+double BlurredSum(const cv::Mat& integral, const cv::Mat& kernel,
+                  const cv::Rect& rect) {
+  const int cy = kernel.rows / 2;
+  const int cx = kernel.cols / 2;
+  double total = 0;
+  for (int i = 0; i < kernel.rows; ++i) {
+    const float* k = kernel.ptr<float>(i);
+    const int y0 = rect.y - (i - cy);
+    const int y1 = y0 + rect.height;
+    const double* top = integral.ptr<double>(y0);
+    const double* bottom = integral.ptr<double>(y1);
+    for (int j = 0; j < kernel.cols; ++j) {
+      if (k[j] == 0) continue;
+      const int x0 = rect.x - (j - cx);
+      const int x1 = x0 + rect.width;
+      total += k[j] * (bottom[x1] - bottom[x0] - top[x1] + top[x0]);
+    }
+  }
+  return total;
+}
+
+double Dot(const std::vector<float>& a, const std::vector<float>& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    sum += static_cast<double>(a[i]) * b[i];
+  }
+  return sum;
+}
+
+}  // namespace
+
+bool BlurEstimationOptions::Check() const {
+  const double eps = 1e-9;
+  if (!(std::isfinite(max_radius_px) && max_radius_px >= 1)) return false;
+  if (!(std::isfinite(grid_step_px) && grid_step_px > 0 &&
+        grid_step_px <= 1)) {
+    return false;
+  }
+  if (!(std::isfinite(coarse_step_px) && coarse_step_px >= grid_step_px &&
+        coarse_step_px <= max_radius_px)) {
+    return false;
+  }
+  const double ratio = coarse_step_px / grid_step_px;
+  if (std::abs(ratio - std::round(ratio)) > eps * ratio) return false;
+  if (!(coarse_band > 0 && coarse_band <= 1)) return false;
+  if (!(min_texture >= 0) || !std::isfinite(min_texture)) return false;
+  if (!(min_fit_quality >= 0 && min_fit_quality <= 1)) return false;
+  if (!(fit_quality_offset_px > 0 &&
+        fit_quality_offset_px < max_radius_px)) {
+    return false;
+  }
+  if (max_refinement_evaluations < 3) return false;
+  return true;
+}
+
+// Everything that depends only on (psf, options, patch size).
+struct PatchBlurEstimator::Tables {
+  BlurEstimationOptions options;
+  cv::Size patch_size;
+  cv::Size dft_size;
+  int border = 0;
+  cv::Rect interior;
+  int num_interior = 0;
+
+  // Kernel grid: node n <-> r = (n - half_nodes) * step.
+  double step = 0;
+  int half_nodes = 0;
+  int num_nodes = 0;
+  double bound = 0;  // half_nodes * step
+  // CCS-packed spectra of the wrapped kernels.
+  std::vector<cv::Mat> left_spectra;
+  std::vector<cv::Mat> right_spectra;
+  // Spatial kernels (for the interior means of the blurred views).
+  std::vector<cv::Mat> left_kernels;
+  std::vector<cv::Mat> right_kernels;
+  // Noise gain |h_l|^2 + |h_r|^2 per node, and <h_l(n), h_l(n+1)> +
+  // <h_r(n), h_r(n+1)> per interval, for the noise floor of interpolated
+  // kernels.
+  std::vector<double> noise_gain;
+  std::vector<double> noise_cross;
+
+  // Coarse search.
+  std::vector<int> coarse_nodes;
+  std::vector<int> band_rows;  // row index in the full complex spectrum
+  std::vector<int> band_cols;  // column index, 0..dft_size.width / 2
+  // Row per coarse node, 4 entries per band frequency:
+  // (w |H_r|^2, w |H_l|^2, w Re K, w Im K), K = H_r conj(H_l), w = Hermitian
+  // multiplicity of the frequency.
+  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>
+      coarse_table;
+  // Noise gain of the coarse loss per coarse node: the band's share of
+  // |H_l|^2 + |H_r|^2 (the coarse loss sees only the band's noise).
+  std::vector<double> coarse_noise_gain;
+  std::vector<float> window_x;
+  std::vector<float> window_y;
+  double coarse_normaliser = 1;  // 1 / (N_total * sum w^2)
+
+  double Radius(int node) const { return (node - half_nodes) * step; }
+};
+
+PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
+                                       const BlurEstimationOptions& options,
+                                       const cv::Size& patch_size) {
+  DPSFM_CHECK(options.Check()) << "invalid BlurEstimationOptions";
+  std::unique_ptr<Tables> t(new Tables);
+  t->options = options;
+  t->patch_size = patch_size;
+  t->step = options.grid_step_px;
+  // The bound is rounded up to a multiple of the grid step.
+  t->half_nodes =
+      static_cast<int>(std::ceil(options.max_radius_px / t->step - 1e-9));
+  t->num_nodes = 2 * t->half_nodes + 1;
+  t->bound = t->half_nodes * t->step;
+  t->border = psf.KernelRadius(t->bound);
+  DPSFM_CHECK(patch_size.width >= 2 * t->border + 8 &&
+              patch_size.height >= 2 * t->border + 8)
+      << "patch " << patch_size.width << "x" << patch_size.height
+      << " too small for |r| <= " << t->bound << " (border " << t->border
+      << " px each side, interior >= 8 px needed)";
+  t->interior = cv::Rect(t->border, t->border,
+                         patch_size.width - 2 * t->border,
+                         patch_size.height - 2 * t->border);
+  t->num_interior = t->interior.area();
+  // Exact valid-region residuals need a DFT size >= the patch only: every
+  // interior output reads inputs within `border` of itself, inside the patch,
+  // so circular wrap-around never reaches it.
+  t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
+                         cv::getOptimalDFTSize(patch_size.height));
+  const int nr = t->dft_size.height;
+  const int nc = t->dft_size.width;
+
+  // Frequencies of the coarse band, on the half spectrum u = 0..nc/2.
+  const double band = options.coarse_band;
+  std::vector<float> multiplicity;
+  for (int v = 0; v < nr; ++v) {
+    const int fv = v <= nr / 2 ? v : v - nr;
+    if (std::abs(fv) > band * nr / 2.0 + 1e-9) continue;
+    for (int u = 0; u <= nc / 2; ++u) {
+      if (u > band * nc / 2.0 + 1e-9) continue;
+      t->band_rows.push_back(v);
+      t->band_cols.push_back(u);
+      multiplicity.push_back(u == 0 || (nc % 2 == 0 && u == nc / 2) ? 1.f
+                                                                    : 2.f);
+    }
+  }
+  const int num_band = static_cast<int>(t->band_rows.size());
+
+  const int coarse_stride = static_cast<int>(
+      std::round(options.coarse_step_px / options.grid_step_px));
+  for (int n = t->half_nodes % coarse_stride; n < t->num_nodes;
+       n += coarse_stride) {
+    t->coarse_nodes.push_back(n);
+  }
+  if (t->coarse_nodes.front() != 0) {
+    t->coarse_nodes.insert(t->coarse_nodes.begin(), 0);
+  }
+  if (t->coarse_nodes.back() != t->num_nodes - 1) {
+    t->coarse_nodes.push_back(t->num_nodes - 1);
+  }
+  std::vector<int> coarse_row(t->num_nodes, -1);
+  for (size_t i = 0; i < t->coarse_nodes.size(); ++i) {
+    coarse_row[t->coarse_nodes[i]] = static_cast<int>(i);
+  }
+  t->coarse_table.resize(t->coarse_nodes.size(), 4 * num_band);
+
+  t->left_kernels.resize(t->num_nodes);
+  t->right_kernels.resize(t->num_nodes);
+  t->left_spectra.resize(t->num_nodes);
+  t->right_spectra.resize(t->num_nodes);
+  t->noise_gain.resize(t->num_nodes);
+  t->noise_cross.resize(t->num_nodes - 1);
+  cv::Mat previous_left, previous_right;
+  for (int n = 0; n < t->num_nodes; ++n) {
+    const DPKernels kernels = psf.Kernels(t->Radius(n));
+    DPSFM_CHECK(kernels.left.type() == CV_32FC1 &&
+                kernels.right.type() == CV_32FC1 &&
+                kernels.left.size() == kernels.right.size() &&
+                kernels.left.rows % 2 == 1 && kernels.left.cols % 2 == 1)
+        << psf.Name() << ": kernels must be CV_32FC1, odd, of equal size";
+    DPSFM_CHECK(kernels.left.rows <= 2 * t->border + 1 &&
+                kernels.left.cols <= 2 * t->border + 1)
+        << psf.Name() << ": kernel at r = " << t->Radius(n)
+        << " exceeds KernelRadius(" << t->bound << ")";
+    const cv::Mat left = EmbedKernel(kernels.left, t->border);
+    const cv::Mat right = EmbedKernel(kernels.right, t->border);
+    t->noise_gain[n] = left.dot(left) + right.dot(right);
+    if (n > 0) {
+      t->noise_cross[n - 1] =
+          left.dot(previous_left) + right.dot(previous_right);
+    }
+    previous_left = left;
+    previous_right = right;
+
+    t->left_kernels[n] = kernels.left;
+    t->right_kernels[n] = kernels.right;
+    const cv::Mat wrapped_left = WrapKernel(kernels.left, t->dft_size);
+    const cv::Mat wrapped_right = WrapKernel(kernels.right, t->dft_size);
+    cv::dft(wrapped_left, t->left_spectra[n]);
+    cv::dft(wrapped_right, t->right_spectra[n]);
+    if (coarse_row[n] >= 0) {
+      cv::Mat hl, hr;
+      cv::dft(wrapped_left, hl, cv::DFT_COMPLEX_OUTPUT);
+      cv::dft(wrapped_right, hr, cv::DFT_COMPLEX_OUTPUT);
+      float* row = t->coarse_table.row(coarse_row[n]).data();
+      for (int k = 0; k < num_band; ++k) {
+        const cv::Vec2f l = hl.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+        const cv::Vec2f r = hr.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+        const float w = multiplicity[k];
+        row[4 * k + 0] = w * (r[0] * r[0] + r[1] * r[1]);
+        row[4 * k + 1] = w * (l[0] * l[0] + l[1] * l[1]);
+        // K = H_r conj(H_l).
+        row[4 * k + 2] = w * (r[0] * l[0] + r[1] * l[1]);
+        row[4 * k + 3] = w * (r[1] * l[0] - r[0] * l[1]);
+      }
+    }
+  }
+
+  t->coarse_noise_gain.resize(t->coarse_nodes.size());
+  for (size_t i = 0; i < t->coarse_nodes.size(); ++i) {
+    double gain = 0;
+    for (int k = 0; k < num_band; ++k) {
+      gain += t->coarse_table(i, 4 * k) + t->coarse_table(i, 4 * k + 1);
+    }
+    t->coarse_noise_gain[i] = gain / (static_cast<double>(nr) * nc);
+  }
+  t->window_x = TukeyWindow(patch_size.width, t->border);
+  t->window_y = TukeyWindow(patch_size.height, t->border);
+  double sum_x = 0, sum_y = 0;
+  for (const float w : t->window_x) sum_x += w * w;
+  for (const float w : t->window_y) sum_y += w * w;
+  t->coarse_normaliser = 1.0 / (static_cast<double>(nr) * nc * sum_x * sum_y);
+  tables_ = std::move(t);
+}
+
+PatchBlurEstimator::~PatchBlurEstimator() = default;
+
+int PatchBlurEstimator::Border() const { return tables_->border; }
+const cv::Size& PatchBlurEstimator::PatchSize() const {
+  return tables_->patch_size;
+}
+const BlurEstimationOptions& PatchBlurEstimator::Options() const {
+  return tables_->options;
+}
+
+PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
+                                               const cv::Mat& right) const {
+  const Tables& t = *tables_;
+  const BlurEstimationOptions& options = t.options;
+  DPSFM_CHECK(left.type() == CV_32FC1 && right.type() == CV_32FC1)
+      << "DP patches must be CV_32FC1";
+  DPSFM_CHECK(left.size() == t.patch_size && right.size() == t.patch_size)
+      << "DP patches must be " << t.patch_size.width << "x"
+      << t.patch_size.height << ", got " << left.cols << "x" << left.rows
+      << " and " << right.cols << "x" << right.rows;
+
+  PatchBlurEstimate result;
+  result.opposite_sign_loss = kInf;
+  if (!AllFinite(left) || !AllFinite(right)) {
+    result.reject_reason = "non-finite pixels";
+    return result;
+  }
+  {
+    cv::Mat sum;
+    cv::add(left, right, sum);
+    result.texture = HorizontalTexture(sum);
+  }
+  if (!(result.texture > options.min_texture) || result.texture <= 0) {
+    result.reject_reason = "no horizontal texture";
+    return result;
+  }
+
+  // Gain equalisation: scale both views to their common mean, then remove
+  // it. The residual is unchanged by the mean removal (both kernels of a pair
+  // pass the same DC), and float precision improves.
+  const double mean_left = cv::mean(left)[0];
+  const double mean_right = cv::mean(right)[0];
+  double gain_left = 1, gain_right = 1;
+  if (options.normalize_gain) {
+    if (!(mean_left > 1e-6 && mean_right > 1e-6)) {
+      result.reject_reason = "view too dark for gain equalisation";
+      return result;
+    }
+    const double common = 0.5 * (mean_left + mean_right);
+    gain_left = common / mean_left;
+    gain_right = common / mean_right;
+  }
+  const double offset = 0.5 * (mean_left * gain_left + mean_right * gain_right);
+  cv::Mat gl, gr;
+  left.convertTo(gl, CV_32FC1, gain_left, -offset);
+  right.convertTo(gr, CV_32FC1, gain_right, -offset);
+
+  // Noise: the Laplacian-mask estimate of each view is inflated by texture,
+  // that of the difference of the views by DP disparity; take the smaller.
+  // The refinement tightens it further with the fit itself.
+  double sigma2_hp = kInf;
+  if (options.subtract_noise_floor) {
+    const double sl = EstimateNoiseSigma(gl);
+    const double sr = EstimateNoiseSigma(gr);
+    cv::Mat diff = gl - gr;
+    const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
+    sigma2_hp = std::min(0.5 * (sl * sl + sr * sr), sd * sd);
+  }
+
+  const int height = t.patch_size.height;
+  const int width = t.patch_size.width;
+
+  // ---- Coarse global search (windowed, frequency domain). ----
+  const int num_band = static_cast<int>(t.band_rows.size());
+  Eigen::VectorXf data(4 * num_band);
+  {
+    cv::Mat wl = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    cv::Mat wr = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    for (int y = 0; y < height; ++y) {
+      const float* l = gl.ptr<float>(y);
+      const float* r = gr.ptr<float>(y);
+      float* ol = wl.ptr<float>(y);
+      float* orr = wr.ptr<float>(y);
+      const float wy = t.window_y[y];
+      for (int x = 0; x < width; ++x) {
+        const float w = wy * t.window_x[x];
+        ol[x] = w * l[x];
+        orr[x] = w * r[x];
+      }
+    }
+    cv::Mat fl, fr;
+    cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
+    cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
+    for (int k = 0; k < num_band; ++k) {
+      const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+      const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+      // D = G_l conj(G_r); loss_k = |G_l|^2 |H_r|^2 + |G_r|^2 |H_l|^2
+      //                            - 2 Re(D K).
+      data[4 * k + 0] = a[0] * a[0] + a[1] * a[1];
+      data[4 * k + 1] = b[0] * b[0] + b[1] * b[1];
+      data[4 * k + 2] = -2.f * (a[0] * b[0] + a[1] * b[1]);
+      data[4 * k + 3] = 2.f * (a[1] * b[0] - a[0] * b[1]);
+    }
+  }
+  const Eigen::VectorXf coarse_raw_f = t.coarse_table * data;
+  const int num_coarse = static_cast<int>(t.coarse_nodes.size());
+  std::vector<double> coarse_raw(num_coarse);
+  double sigma2_coarse = sigma2_hp;
+  for (int i = 0; i < num_coarse; ++i) {
+    coarse_raw[i] = std::max(0.0, coarse_raw_f[i] * t.coarse_normaliser);
+    sigma2_coarse =
+        std::min(sigma2_coarse, coarse_raw[i] / t.coarse_noise_gain[i]);
+  }
+  if (!options.subtract_noise_floor) sigma2_coarse = 0;
+  std::vector<double> coarse(num_coarse);
+  for (int i = 0; i < num_coarse; ++i) {
+    coarse[i] = coarse_raw[i] - sigma2_coarse * t.coarse_noise_gain[i];
+  }
+  // Local minima of the coarse curve, best first; ties prefer small |r|
+  // (blurs inside the in-focus threshold are indistinguishable).
+  std::vector<int> minima;
+  for (int i = 0; i < num_coarse; ++i) {
+    const bool left_ok = i == 0 || coarse[i] <= coarse[i - 1];
+    const bool right_ok = i == num_coarse - 1 || coarse[i] <= coarse[i + 1];
+    if (left_ok && right_ok) minima.push_back(i);
+  }
+  std::sort(minima.begin(), minima.end(), [&](int a, int b) {
+    if (coarse[a] != coarse[b]) return coarse[a] < coarse[b];
+    return std::abs(t.Radius(t.coarse_nodes[a])) <
+           std::abs(t.Radius(t.coarse_nodes[b]));
+  });
+  const double coarse_min = coarse[minima.front()];
+  const double coarse_max = *std::max_element(coarse.begin(), coarse.end());
+
+  // ---- Exact refinement (spatial valid-region loss via inverse FFT). ----
+  cv::Mat spec_left, spec_right;
+  auto transform_views = [&](const cv::Mat& l, const cv::Mat& r) {
+    cv::Mat pl = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    cv::Mat pr = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    l.copyTo(pl(cv::Rect(0, 0, width, height)));
+    r.copyTo(pr(cv::Rect(0, 0, width, height)));
+    cv::dft(pl, spec_left, 0, height);
+    cv::dft(pr, spec_right, 0, height);
+  };
+  transform_views(gl, gr);
+  struct NodeEval {
+    bool done = false;
+    std::vector<float> residual;
+    double energy = 0;       // |e|^2
+    double next_dot = kInf;  // <e(n), e(n+1)>, once both are known
+  };
+  std::vector<NodeEval> evals(t.num_nodes);
+  int num_evaluations = 0;
+  cv::Mat product_left, product_right, residual_image;
+  const double inv_m = 1.0 / t.num_interior;
+  auto evaluate = [&](int n) {
+    NodeEval& e = evals[n];
+    if (e.done) return;
+    ++num_evaluations;
+    // Residual G_l * H_r - G_r * H_l.
+    cv::mulSpectrums(spec_left, t.right_spectra[n], product_left, 0);
+    cv::mulSpectrums(spec_right, t.left_spectra[n], product_right, 0);
+    product_left -= product_right;
+    cv::dft(product_left, residual_image,
+            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
+            t.interior.y + t.interior.height);
+    e.residual.resize(t.num_interior);
+    float* out = e.residual.data();
+    for (int y = 0; y < t.interior.height; ++y) {
+      const float* row =
+          residual_image.ptr<float>(t.interior.y + y) + t.interior.x;
+      std::copy(row, row + t.interior.width, out);
+      out += t.interior.width;
+    }
+    e.energy = Dot(e.residual, e.residual);
+    e.done = true;
+    if (n > 0 && evals[n - 1].done) {
+      evals[n - 1].next_dot = Dot(evals[n - 1].residual, e.residual);
+    }
+    if (n + 1 < t.num_nodes && evals[n + 1].done) {
+      e.next_dot = Dot(e.residual, evals[n + 1].residual);
+    }
+  };
+  auto raw_loss = [&](int n) { return evals[n].energy * inv_m; };
+
+  // Noise variance: the patch estimate, tightened by the fit: E[L(r)] =
+  // S(r) + sigma^2 a(r) with S >= 0, so every L(r) / a(r) bounds sigma^2
+  // from above (up to noise).
+  auto current_sigma2 = [&]() {
+    if (!options.subtract_noise_floor) return 0.0;
+    double s2 = sigma2_hp;
+    for (int n = 0; n < t.num_nodes; ++n) {
+      if (evals[n].done) s2 = std::min(s2, raw_loss(n) / t.noise_gain[n]);
+    }
+    return s2;
+  };
+
+  struct Minimum {
+    double radius = 0;
+    double corrected = kInf;
+    double raw = kInf;
+    int lo = 0, hi = 0;  // evaluated node range
+  };
+  // Minimum of the corrected loss over the evaluated nodes [lo, hi] with
+  // linearly interpolated kernels inside each interval.
+  auto minimise = [&](int lo, int hi, double sigma2) {
+    Minimum best;
+    best.lo = lo;
+    best.hi = hi;
+    auto consider = [&](double radius, double corrected, double raw) {
+      const double tol = 1e-9 * std::abs(raw) + 1e-300;
+      if (corrected < best.corrected - tol ||
+          (corrected <= best.corrected + tol &&
+           std::abs(radius) < std::abs(best.radius))) {
+        best.radius = radius;
+        best.corrected = corrected;
+        best.raw = raw;
+      }
+    };
+    for (int n = lo; n <= hi; ++n) {
+      consider(t.Radius(n), raw_loss(n) - sigma2 * t.noise_gain[n],
+               raw_loss(n));
+    }
+    for (int n = lo; n < hi; ++n) {
+      // L(t) = alpha (1-t)^2 + 2 beta t (1-t) + gamma t^2 (raw and noise
+      // floor are both quadratic forms in the interpolated kernels).
+      const double ra = raw_loss(n);
+      const double rb = evals[n].next_dot * inv_m;
+      const double rc = raw_loss(n + 1);
+      const double alpha = ra - sigma2 * t.noise_gain[n];
+      const double beta = rb - sigma2 * t.noise_cross[n];
+      const double gamma = rc - sigma2 * t.noise_gain[n + 1];
+      const double curvature = alpha - 2 * beta + gamma;
+      if (curvature <= 0) continue;  // minimum at an end node
+      const double s = (alpha - beta) / curvature;
+      if (s <= 0 || s >= 1) continue;
+      const double corrected =
+          alpha * (1 - s) * (1 - s) + 2 * beta * s * (1 - s) + gamma * s * s;
+      const double raw =
+          ra * (1 - s) * (1 - s) + 2 * rb * s * (1 - s) + rc * s * s;
+      consider(t.Radius(n) + s * t.step, corrected, raw);
+    }
+    return best;
+  };
+
+  // Walks downhill from a coarse node until the minimum is enclosed.
+  auto refine = [&](int start) {
+    int lo = std::max(0, start - 1);
+    int hi = std::min(t.num_nodes - 1, start + 1);
+    for (int n = lo; n <= hi; ++n) evaluate(n);
+    int budget = options.max_refinement_evaluations - (hi - lo + 1);
+    while (true) {
+      const double sigma2 = current_sigma2();
+      const Minimum m = minimise(lo, hi, sigma2);
+      // Extend while an end node is (tied for) the minimum: the loss may
+      // still fall beyond it, or a plateau (in-focus deltas) may continue.
+      const double tol = 1e-9 * std::abs(m.raw);
+      const bool at_lo =
+          raw_loss(lo) - sigma2 * t.noise_gain[lo] <= m.corrected + tol;
+      const bool at_hi =
+          raw_loss(hi) - sigma2 * t.noise_gain[hi] <= m.corrected + tol;
+      if (at_lo && lo > 0 && budget > 0) {
+        evaluate(--lo);
+        --budget;
+      } else if (at_hi && hi < t.num_nodes - 1 && budget > 0) {
+        evaluate(++hi);
+        --budget;
+      } else {
+        return m;
+      }
+    }
+  };
+
+  // Gain, second stage. The whole-patch means of the two views differ not
+  // only by gain but also because the views are shifted against each other
+  // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
+  // alone moves the estimate by ~0.2 px. The right comparison is the
+  // interior means of the two blurred cross views at the blur, which agree
+  // exactly for equal gains; it is evaluated at the coarse estimate (and
+  // again at the refined one if that moved).
+  cv::Mat left_positive = gl + offset;
+  cv::Mat right_positive = gr + offset;
+  auto NearestNode = [&](double radius) {
+    return std::max(0, std::min(t.num_nodes - 1,
+                                static_cast<int>(std::round(radius / t.step)) +
+                                    t.half_nodes));
+  };
+  auto equalise_gain = [&](double radius) {
+    cv::Mat integral_left, integral_right;
+    cv::integral(left_positive, integral_left, CV_64F);
+    cv::integral(right_positive, integral_right, CV_64F);
+    // Interior sums are linear in the kernels: interpolate like them.
+    const double pos = std::max(
+        0.0, std::min(t.num_nodes - 1.0, radius / t.step + t.half_nodes));
+    const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
+    const double s = pos - n0;
+    double a = 0, b = 0;
+    for (const int n : {n0, n0 + 1}) {
+      const double w = n == n0 ? 1 - s : s;
+      a += w * BlurredSum(integral_left, t.right_kernels[n], t.interior);
+      b += w * BlurredSum(integral_right, t.left_kernels[n], t.interior);
+    }
+    if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
+    const double half_log_ratio = 0.5 * std::log(a / b);
+    left_positive *= std::exp(-half_log_ratio);
+    right_positive *= std::exp(half_log_ratio);
+    left_positive.convertTo(gl, CV_32FC1, 1.0, -offset);
+    right_positive.convertTo(gr, CV_32FC1, 1.0, -offset);
+    transform_views(gl, gr);
+  };
+  double gain_radius = t.Radius(t.coarse_nodes[minima.front()]);
+  if (options.normalize_gain) equalise_gain(gain_radius);
+
+  Minimum best = refine(t.coarse_nodes[minima.front()]);
+  // A second basin of similar coarse loss (e.g. the other sign) is refined
+  // too: the windowed coarse loss is only an approximation.
+  for (size_t i = 1; i < minima.size() && i < 3; ++i) {
+    const double r = t.Radius(t.coarse_nodes[minima[i]]);
+    if (r >= t.Radius(best.lo) - 1 && r <= t.Radius(best.hi) + 1) continue;
+    if (coarse[minima[i]] - coarse_min > 0.1 * (coarse_max - coarse_min)) {
+      break;
+    }
+    const Minimum other = refine(t.coarse_nodes[minima[i]]);  // same gain
+    if (other.corrected < best.corrected) best = other;
+    break;
+  }
+  // Gain at the refined estimate if it moved much from where the gain was
+  // computed.
+  for (int round = 0; round < 3 && options.normalize_gain &&
+                      std::abs(best.radius - gain_radius) > 0.1;
+       ++round) {
+    gain_radius = best.radius;
+    equalise_gain(gain_radius);
+    evals.assign(t.num_nodes, NodeEval());
+    best = refine(NearestNode(gain_radius));
+  }
+  // Final values with the final noise estimate.
+  const double sigma2 = current_sigma2();
+  best = minimise(best.lo, best.hi, sigma2);
+
+  // In focus unless the data say otherwise. Blurs near focus change the
+  // kernels little, so the loss is flat there (exactly flat inside the
+  // disk's in-focus threshold) and noise alone picks a minimum somewhere on
+  // or just beyond the plateau. Keep r = 0 unless the improvement over it
+  // exceeds 3 standard deviations of what noise alone gives: the loss
+  // difference between kernels h and h0 = h(0) has a noise term
+  // 2 <e(0), n * (h - h0)> / M with std ~ 2 sigma^2 sqrt(a(0) D / M),
+  // D = |h_l - h0_l|^2 + |h_r - h0_r|^2.
+  if (best.radius != 0 && std::isfinite(sigma2) && sigma2 > 0) {
+    const int zero = t.half_nodes;
+    evaluate(zero);
+    const double zero_corrected =
+        raw_loss(zero) - sigma2 * t.noise_gain[zero];
+    const double pos = best.radius / t.step + t.half_nodes;
+    const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
+    const double s = pos - n0;
+    const int half = t.border;
+    cv::Mat dl = (1 - s) * EmbedKernel(t.left_kernels[n0], half) +
+                 s * EmbedKernel(t.left_kernels[n0 + 1], half) -
+                 EmbedKernel(t.left_kernels[zero], half);
+    cv::Mat dr = (1 - s) * EmbedKernel(t.right_kernels[n0], half) +
+                 s * EmbedKernel(t.right_kernels[n0 + 1], half) -
+                 EmbedKernel(t.right_kernels[zero], half);
+    const double d = dl.dot(dl) + dr.dot(dr);
+    const double threshold =
+        3 * 2 * sigma2 * std::sqrt(t.noise_gain[zero] * d * inv_m);
+    if (zero_corrected - best.corrected <= threshold) {
+      best.radius = 0;
+      best.corrected = zero_corrected;
+      best.raw = raw_loss(zero);
+    }
+  }
+
+  result.radius_px = best.radius;
+  result.loss = best.raw;
+  result.corrected_loss = best.corrected;
+  result.noise_sigma =
+      std::isfinite(sigma2_hp) ? std::sqrt(sigma2_hp) : std::sqrt(sigma2);
+
+  // Fit quality: rise of the exact corrected loss fit_quality_offset_px away
+  // (weaker side), against the residual at the minimum.
+  const int offset_nodes = std::max(
+      1, static_cast<int>(std::round(options.fit_quality_offset_px / t.step)));
+  const double node_pos = best.radius / t.step + t.half_nodes;
+  double rise = kInf;
+  for (const int side : {-1, 1}) {
+    const int n = static_cast<int>(std::round(node_pos)) + side * offset_nodes;
+    if (n < 0 || n >= t.num_nodes) continue;
+    evaluate(n);
+    rise = std::min(rise, raw_loss(n) - sigma2 * t.noise_gain[n] -
+                              best.corrected);
+  }
+  // Sign ambiguity: the best coarse loss on the other sign, against the
+  // coarse loss at the estimate.
+  if (best.radius != 0) {
+    double opposite = kInf;
+    double here = kInf;
+    for (int i = 0; i < num_coarse; ++i) {
+      const double r = t.Radius(t.coarse_nodes[i]);
+      if (r * best.radius < 0) opposite = std::min(opposite, coarse[i]);
+      if (std::abs(r - best.radius) <= 0.5 * options.coarse_step_px + 1e-9) {
+        here = std::min(here, coarse[i]);
+      }
+    }
+    result.opposite_sign_loss = opposite;
+    if (std::isfinite(opposite) && std::isfinite(here)) {
+      rise = std::min(rise, opposite - here);
+    }
+  }
+  const double residual = std::max(best.raw, 1e-300);
+  result.fit_quality =
+      std::isfinite(rise) && rise > 0 ? rise / (rise + residual) : 0.0;
+  result.fit_quality = std::min(1.0, std::max(1e-6, result.fit_quality));
+
+  result.at_bound = std::abs(best.radius) > t.bound - 0.5 * t.step;
+  if (result.at_bound) {
+    result.reject_reason = "blur at the search bound";
+    return result;
+  }
+  if (result.fit_quality < options.min_fit_quality) {
+    result.reject_reason = "fit quality below threshold";
+    return result;
+  }
+  result.valid = true;
+  return result;
+}
+
+PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left, const cv::Mat& right,
+                                    const DPPsfModel& psf,
+                                    const BlurEstimationOptions& options) {
+  DPSFM_CHECK(options.Check()) << "invalid BlurEstimationOptions";
+  DPSFM_CHECK(left.size() == right.size())
+      << "left and right patches differ in size";
+  std::ostringstream key;
+  key << std::setprecision(17) << psf.Name() << '|' << left.cols << 'x'
+      << left.rows << '|' << options.max_radius_px << '|'
+      << options.grid_step_px << '|' << options.coarse_step_px << '|'
+      << options.coarse_band << '|' << options.normalize_gain << '|'
+      << options.subtract_noise_floor << '|' << options.min_texture << '|'
+      << options.min_fit_quality << '|' << options.fit_quality_offset_px
+      << '|' << options.max_refinement_evaluations;
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const PatchBlurEstimator>>
+      cache;
+  std::shared_ptr<const PatchBlurEstimator> estimator;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = cache.find(key.str());
+    if (it == cache.end()) {
+      if (cache.size() >= 8) cache.clear();  // in-use ones stay alive
+      it = cache
+               .emplace(key.str(), std::make_shared<PatchBlurEstimator>(
+                                       psf, options, left.size()))
+               .first;
+    }
+    estimator = it->second;
+  }
+  return estimator->Estimate(left, right);
+}
+
+double HorizontalTexture(const cv::Mat& gray_patch) {
+  DPSFM_CHECK(gray_patch.type() == CV_32FC1 && !gray_patch.empty())
+      << "HorizontalTexture needs a non-empty CV_32FC1 patch";
+  cv::Mat gx;
+  cv::Sobel(gray_patch, gx, CV_32F, 1, 0, 3, 1, 0, cv::BORDER_REFLECT_101);
+  return cv::mean(cv::abs(gx))[0];
+}
+
+double EstimateNoiseSigma(const cv::Mat& gray_patch) {
+  DPSFM_CHECK(gray_patch.type() == CV_32FC1 && gray_patch.rows >= 3 &&
+              gray_patch.cols >= 3)
+      << "EstimateNoiseSigma needs a CV_32FC1 patch of at least 3x3";
+  std::vector<float> responses;
+  responses.reserve((gray_patch.rows - 2) * (gray_patch.cols - 2));
+  for (int y = 1; y + 1 < gray_patch.rows; ++y) {
+    const float* a = gray_patch.ptr<float>(y - 1);
+    const float* b = gray_patch.ptr<float>(y);
+    const float* c = gray_patch.ptr<float>(y + 1);
+    for (int x = 1; x + 1 < gray_patch.cols; ++x) {
+      const float v = (a[x - 1] - 2 * a[x] + a[x + 1]) -
+                      2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
+                      (c[x - 1] - 2 * c[x] + c[x + 1]);
+      responses.push_back(std::abs(v));
+    }
+  }
+  const size_t mid = responses.size() / 2;
+  std::nth_element(responses.begin(), responses.begin() + mid,
+                   responses.end());
+  // |N(0, 36 sigma^2)| has median 0.6745 * 6 sigma.
+  return responses[mid] / (0.67449 * 6.0);
+}
+
+PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size) {
+  DPSFM_CHECK(frame_size.width > 0 && frame_size.height > 0)
+      << "empty frame size";
+  const int short_side = std::min(frame_size.width, frame_size.height);
+  const int k = std::max(1, static_cast<int>(std::ceil(short_side / 2800.0)));
+  return DefaultPatchGeometry(frame_size, 1.0 / k);
+}
+
+PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size,
+                                   double resize_factor) {
+  DPSFM_CHECK(frame_size.width > 0 && frame_size.height > 0)
+      << "empty frame size";
+  DPSFM_CHECK(resize_factor > 0 && resize_factor <= 1)
+      << "resize factor must be in (0, 1], got " << resize_factor;
+  const double short_side =
+      std::min(frame_size.width, frame_size.height) * resize_factor;
+  // Anchors: phone (1512 px, |r| <= 10), DSLR at 0.5 (2240 px, |r| <= 20).
+  double max_radius;
+  if (short_side <= 1512) {
+    max_radius = 10.0 * short_side / 1512;
+  } else if (short_side <= 2240) {
+    max_radius = 10.0 + (short_side - 1512) * 10.0 / (2240 - 1512);
+  } else {
+    max_radius = 20.0 * short_side / 2240;
+  }
+  // Half-pixel steps keep the bound on the blur estimator's kernel grid.
+  max_radius = std::max(3.0, std::round(2 * max_radius) / 2);
+  PatchGeometry geometry;
+  geometry.max_radius_px = max_radius;
+  const double patch = std::max(6 * max_radius - 9, 2 * max_radius + 21);
+  geometry.patch_size = 2 * static_cast<int>(std::round((patch - 1) / 2)) + 1;
+  geometry.stride = static_cast<int>(std::round(2 * max_radius + 7));
+  geometry.resize_factor = resize_factor;
+  return geometry;
+}
+
+}  // namespace dpsfm

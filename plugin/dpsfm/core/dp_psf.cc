@@ -1,0 +1,157 @@
+#include "dpsfm/core/dp_psf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/check.h"
+
+namespace dpsfm {
+namespace {
+
+// Pixel-area integral of the translating-disk profile whose mass leans
+// towards +x: weight(x, y) = x + sqrt(R^2 - y^2) inside the disk of radius R.
+// Row i of the kernel covers y in [i - 0.5, i + 0.5], column j covers x in
+// [j - 0.5, j + 0.5] (kernel coordinates, centre = 0). Along x the integral is
+// exact; along y a midpoint rule with `subsamples` rows per pixel. Every
+// sample depends continuously on R, so the kernel does too. Normalised to sum
+// `total`.
+cv::Mat IntegrateTranslatingDisk(double radius, int half_size, int subsamples,
+                                 double total) {
+  const int side = 2 * half_size + 1;
+  std::vector<double> weights(side * side, 0.0);
+  const double r2 = radius * radius;
+  const double dy = 1.0 / subsamples;
+  // The profile is symmetric in y: integrate rows i >= 0 and mirror them, so
+  // the kernel is exactly symmetric.
+  for (int i = 0; i <= half_size; ++i) {
+    double* row = &weights[(i + half_size) * side];
+    for (int s = 0; s < subsamples; ++s) {
+      const double y = i - 0.5 + (s + 0.5) * dy;
+      const double y2 = y * y;
+      if (y2 >= r2) {
+        continue;
+      }
+      const double a = std::sqrt(r2 - y2);  // half chord
+      const int j_begin = std::max(-half_size, static_cast<int>(std::floor(-a + 0.5)));
+      const int j_end = std::min(half_size, static_cast<int>(std::ceil(a - 0.5)));
+      for (int j = j_begin; j <= j_end; ++j) {
+        const double lo = std::max(j - 0.5, -a);
+        const double hi = std::min(j + 0.5, a);
+        if (hi <= lo) {
+          continue;
+        }
+        // Integral of (x + a) dx over [lo, hi].
+        row[j + half_size] += (0.5 * (hi * hi - lo * lo) + a * (hi - lo)) * dy;
+      }
+    }
+  }
+  for (int i = 1; i <= half_size; ++i) {
+    std::copy(weights.begin() + (half_size + i) * side,
+              weights.begin() + (half_size + i + 1) * side,
+              weights.begin() + (half_size - i) * side);
+  }
+  double sum = 0;
+  for (const double w : weights) {
+    sum += w;
+  }
+  cv::Mat kernel(side, side, CV_32FC1);
+  if (sum <= 0) {
+    // Only reachable for a vanishing disk; the limit is a delta.
+    kernel.setTo(0);
+    kernel.at<float>(half_size, half_size) = static_cast<float>(total);
+    return kernel;
+  }
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      kernel.at<float>(i, j) =
+          static_cast<float>(weights[i * side + j] * total / sum);
+    }
+  }
+  return kernel;
+}
+
+}  // namespace
+
+TranslatingDiskPsf::TranslatingDiskPsf(int subsamples_per_pixel)
+    : subsamples_per_pixel_(subsamples_per_pixel) {
+  DPSFM_CHECK_GE(subsamples_per_pixel, 1)
+      << "subsamples_per_pixel must be positive";
+}
+
+std::string TranslatingDiskPsf::Name() const {
+  std::ostringstream name;
+  name << "translating_disk(subsamples=" << subsamples_per_pixel_ << ")";
+  return name.str();
+}
+
+double TranslatingDiskPsf::CentroidOffsetPerRadius() {
+  return 3.0 * M_PI / 32.0;
+}
+
+int TranslatingDiskPsf::KernelRadius(double signed_radius_px) const {
+  DPSFM_CHECK(std::isfinite(signed_radius_px))
+      << "blur radius must be finite, got " << signed_radius_px;
+  // Column j has weight iff j - 0.5 < R, i.e. j <= ceil(R + 0.5) - 1.
+  const double radius = std::abs(signed_radius_px);
+  return std::max(0, static_cast<int>(std::ceil(radius + 0.5)) - 1);
+}
+
+DPKernels TranslatingDiskPsf::Kernels(double signed_radius_px) const {
+  const int half_size = KernelRadius(signed_radius_px);
+  const double radius = std::abs(signed_radius_px);
+  // Mass towards +x. Near (r < 0): that is the left view (cli contract).
+  const cv::Mat towards_plus_x =
+      IntegrateTranslatingDisk(radius, half_size, subsamples_per_pixel_, 0.5);
+  cv::Mat towards_minus_x;
+  cv::flip(towards_plus_x, towards_minus_x, 1);
+  DPKernels kernels;
+  if (signed_radius_px < 0) {
+    kernels.left = towards_plus_x;
+    kernels.right = towards_minus_x;
+  } else {
+    kernels.left = towards_minus_x;
+    kernels.right = towards_plus_x;
+  }
+  return kernels;
+}
+
+cv::Mat ConvolvePsf(const cv::Mat& image, const cv::Mat& psf) {
+  DPSFM_CHECK(image.type() == CV_32FC1 || image.type() == CV_32FC3)
+      << "ConvolvePsf needs a CV_32FC1 or CV_32FC3 image";
+  DPSFM_CHECK(!image.empty()) << "ConvolvePsf needs a non-empty image";
+  DPSFM_CHECK_EQ(psf.type(), CV_32FC1) << "the PSF must be CV_32FC1";
+  DPSFM_CHECK(psf.rows % 2 == 1 && psf.cols % 2 == 1)
+      << "the PSF must have odd sides, got " << psf.cols << "x" << psf.rows;
+  // filter2D correlates; correlating with the point-reflected kernel about its
+  // centre is convolution.
+  cv::Mat flipped;
+  cv::flip(psf, flipped, -1);
+  cv::Mat result;
+  cv::filter2D(image, result, -1, flipped, cv::Point(-1, -1), 0,
+               cv::BORDER_REFLECT_101);
+  return result;
+}
+
+cv::Point2d KernelCentroid(const cv::Mat& kernel) {
+  DPSFM_CHECK(!kernel.empty() && kernel.type() == CV_32FC1)
+      << "KernelCentroid needs a non-empty CV_32FC1 kernel";
+  double sum = 0, sx = 0, sy = 0;
+  const double cx = (kernel.cols - 1) / 2.0;
+  const double cy = (kernel.rows - 1) / 2.0;
+  for (int i = 0; i < kernel.rows; ++i) {
+    for (int j = 0; j < kernel.cols; ++j) {
+      const double w = kernel.at<float>(i, j);
+      sum += w;
+      sx += w * (j - cx);
+      sy += w * (i - cy);
+    }
+  }
+  DPSFM_CHECK(sum != 0) << "kernel sums to zero";
+  return cv::Point2d(sx / sum, sy / sum);
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,105 @@
+// Dual-pixel point-spread functions.
+//
+// A DP sensor splits every pixel into a left and a right photodiode, so one
+// exposure gives two views of the scene blurred by two different PSFs whose
+// sum is the ordinary defocus disk. Everything in the core that needs those
+// PSFs (the per-patch blur search, the intensity search, reports) gets them
+// through DPPsfModel only, because real DP profiles depend on the lens, the
+// aperture and the position in the frame and must stay replaceable (notes,
+// section 5).
+//
+// Conventions (docs/cli-contract.md, "Conventions"):
+// - Signed blur radius r = b / (2 p) in pixels of the DP frame, r > 0 for a
+//   point farther than the focal plane, r < 0 for a nearer one.
+// - A point NEARER than the focal plane (r < 0) images in the LEFT view towards
+//   +x (larger column) relative to the RIGHT view; a farther one towards -x.
+//   Kernels are PSFs: a point at the origin images to the kernel, and they are
+//   applied by true convolution (ConvolvePsf), so the left kernel's centroid
+//   lies at larger x than the right one's when r < 0.
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace dpsfm {
+
+// Left and right DP point-spread functions for one signed blur radius.
+struct DPKernels {
+  // CV_32FC1, odd square size, centre pixel = origin. A point at the origin
+  // images to this kernel; apply it by true convolution.
+  cv::Mat left;
+  // Same size. For the symmetric models right == flip_x(left);
+  // left.sum() + right.sum() == 1.
+  cv::Mat right;
+};
+
+// The replaceable DP PSF profile.
+class DPPsfModel {
+ public:
+  virtual ~DPPsfModel() = default;
+
+  // Identifies the profile INCLUDING its parameters: kernel caches (e.g. the
+  // blur estimator's spectra) are keyed by it, so two models that return
+  // different kernels must return different names.
+  virtual std::string Name() const = 0;
+
+  // signed_radius_px: r = b / (2 p) in pixels of the DP frame; r > 0 farther
+  // than the focal plane, r < 0 nearer. Convention: for r < 0 the LEFT
+  // kernel's centroid lies at larger x than the RIGHT one's; for r > 0 at
+  // smaller x. |r| below the model's in-focus threshold (<= 0.5 px for the
+  // disk) gives delta kernels of weight 0.5 each.
+  virtual DPKernels Kernels(double signed_radius_px) const = 0;
+
+  // Half-size of the kernels for |r| (kernel side = 2 * KernelRadius + 1), so
+  // callers can size borders. Non-decreasing in |r|.
+  virtual int KernelRadius(double signed_radius_px) const = 0;
+};
+
+// The ICCP 2020 / paper "translating disk", in its continuous form: a disk of
+// radius R = |r| whose weight at (x, y) is the distance from the far end of
+// its chord, x + sqrt(R^2 - y^2) (mirrored in x by the sign of r and between
+// the views), integrated over the area of every pixel. The continuous
+// profile's centroid sits at 3 pi / 32 R ~= 0.2945 R for every R. Sampled
+// per pixel area, the kernel's centroid (taken at pixel centres) is off by
+// +10 % at R = 1, +1.6 % at R = 2 and < 0.3 % from R = 4 on (disk edges cut
+// pixels non-linearly; only a tent-shaped footprint would make it exact);
+// the reference code's inclusive cumulative sum is far worse (0.24 R at
+// R = 1, 0.26 R at R = 4), which reads small blurs too large.
+//
+// Continuity: the kernels are continuous in r everywhere. Pixel-area
+// integration makes them exact deltas for |r| <= 0.5 (the disk then lies
+// inside the centre pixel), so the in-focus threshold is 0.5 px and the step
+// to a delta is continuous too; the unavoidable price is that blurs within
+// half a pixel of focus are indistinguishable from focus. The kernel side
+// grows by 2 when |r| + 0.5 crosses an integer, but the new outer pixels start
+// at zero weight.
+class TranslatingDiskPsf : public DPPsfModel {
+ public:
+  // `subsamples_per_pixel`: rows of the pixel-area integration per pixel row
+  // (the integral along x is exact). 64 keeps the centroid within 1e-4 R of
+  // 3 pi / 32 R at R >= 1 and costs well under a millisecond at R = 20.
+  explicit TranslatingDiskPsf(int subsamples_per_pixel = 64);
+
+  std::string Name() const override;
+  DPKernels Kernels(double signed_radius_px) const override;
+  int KernelRadius(double signed_radius_px) const override;
+
+  // 3 pi / 32: centroid offset of each view's continuous profile from the
+  // origin, in units of R (the pixel kernels approach it from R ~ 4 on).
+  static double CentroidOffsetPerRadius();
+
+ private:
+  int subsamples_per_pixel_;
+};
+
+// True 2-D convolution (not correlation) of a CV_32FC1 or CV_32FC3 image with
+// a PSF (CV_32FC1, odd width and height, centre = origin); output has the
+// image's size and type, borders BORDER_REFLECT_101.
+cv::Mat ConvolvePsf(const cv::Mat& image, const cv::Mat& psf);
+
+// Centroid (x, y) of a kernel relative to its centre pixel, in pixels; x grows
+// with the column. Throws for an empty or zero-sum kernel.
+cv::Point2d KernelCentroid(const cv::Mat& kernel);
+
+}  // namespace dpsfm

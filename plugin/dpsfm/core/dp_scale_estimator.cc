@@ -1,0 +1,602 @@
+#include "dpsfm/core/dp_scale_estimator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "dpsfm/core/check.h"
+
+namespace dpsfm {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+cv::Mat Luma(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat gray;
+  // Rec. 601 weights; channel order as given (the loss is symmetric in it).
+  cv::transform(image, gray, cv::Matx13f(0.299f, 0.587f, 0.114f));
+  return gray;
+}
+
+cv::Mat ToU16(const cv::Mat& image) {
+  cv::Mat out;
+  image.convertTo(out, CV_MAKETYPE(CV_16U, image.channels()), 65535.0);
+  return out;
+}
+
+struct DepthStats {
+  bool ok = false;
+  double median = 0;
+  double relative_spread = 0;    // (p90 - p10) / median
+  double relative_variance = 0;  // var(z) / median^2
+};
+
+DepthStats StatsOf(std::vector<float>* values) {
+  DepthStats stats;
+  if (values->empty()) return stats;
+  std::vector<float>& v = *values;
+  const size_t n = v.size();
+  std::nth_element(v.begin(), v.begin() + n / 2, v.end());
+  stats.median = v[n / 2];
+  std::nth_element(v.begin(), v.begin() + n / 10, v.end());
+  const double p10 = v[n / 10];
+  std::nth_element(v.begin(), v.begin() + (9 * n) / 10, v.end());
+  const double p90 = v[std::min(n - 1, (9 * n) / 10)];
+  double mean = 0, sq = 0;
+  for (float z : v) mean += z;
+  mean /= n;
+  for (float z : v) sq += (z - mean) * (z - mean);
+  stats.relative_spread = (p90 - p10) / stats.median;
+  stats.relative_variance = sq / n / (stats.median * stats.median);
+  stats.ok = stats.median > 0 && std::isfinite(stats.median);
+  return stats;
+}
+
+// Texture against what noise alone gives: for i.i.d. noise of std sigma per
+// view, the horizontal Sobel of left + right has std sqrt(24) sigma and mean
+// absolute value sqrt(2 / pi) sqrt(24) sigma = 3.91 sigma.
+double TextureSnr(const PatchBlurEstimate& e) {
+  const double noise_texture = 3.91 * std::max(e.noise_sigma, 1e-6);
+  return e.texture / noise_texture;
+}
+
+std::string CountsToString(
+    const std::vector<std::pair<std::string, int>>& counts) {
+  std::ostringstream s;
+  bool first = true;
+  for (const auto& c : counts) {
+    s << (first ? "" : ", ") << c.second << " " << c.first;
+    first = false;
+  }
+  return s.str();
+}
+
+}  // namespace
+
+bool DPScaleOptions::Check() const {
+  DPSFM_CHECK_GE(patch_size, 0);
+  DPSFM_CHECK_GE(stride, 0);
+  DPSFM_CHECK_GE(max_radius_px, 0);
+  DPSFM_CHECK(resize_factor >= 0 && resize_factor <= 1)
+      << "resize_factor must be in (0, 1] or 0 (auto), got " << resize_factor;
+  DPSFM_CHECK(top_patch_fraction > 0 && top_patch_fraction <= 1);
+  DPSFM_CHECK_GE(min_patches_per_view, 0);
+  DPSFM_CHECK_GE(depth_strata, 1);
+  DPSFM_CHECK_GE(max_stored_patches_per_view, 0);
+  DPSFM_CHECK(min_depth_coverage > 0 && min_depth_coverage <= 1);
+  DPSFM_CHECK_GE(min_depth_points_per_patch, 1);
+  DPSFM_CHECK_GT(max_relative_depth_spread, 0);
+  DPSFM_CHECK_GE(min_texture_snr, 0);
+  DPSFM_CHECK_GT(max_intensity_ci_relative_width, 0);
+  DPSFM_CHECK(min_intensity_bootstrap_support >= 0 &&
+              min_intensity_bootstrap_support <= 1);
+  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  blur.Check();
+  linear.Check();
+  intensity.Check();
+  return true;
+}
+
+struct DPScaleEstimator::ViewData {
+  DPViewSummary summary;
+  DPLensData lens;
+  double working_pitch_mm = 0;
+  std::vector<PatchSample> samples;  // valid patches only
+  struct Stored {
+    int sample = -1;
+    cv::Mat left, right;  // CV_16UC1/3 crops with border
+    int border = 0;
+  };
+  std::vector<Stored> stored;
+};
+
+DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
+                                   std::shared_ptr<const DPPsfModel> psf)
+    : options_(options), psf_(std::move(psf)) {
+  options_.Check();
+  DPSFM_CHECK(psf_ != nullptr) << "a DP PSF model is required";
+}
+
+DPScaleEstimator::~DPScaleEstimator() = default;
+
+int DPScaleEstimator::NumViews() const {
+  return static_cast<int>(views_.size());
+}
+
+DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string& name = view.name;
+  DPSFM_CHECK(!view.left.empty() && !view.right.empty())
+      << "view '" << name << "': empty DP image";
+  DPSFM_CHECK(view.left.size() == view.right.size() &&
+              view.left.type() == view.right.type())
+      << "view '" << name << "': left and right differ in size or type";
+  DPSFM_CHECK(view.left.type() == CV_32FC1 || view.left.type() == CV_32FC3)
+      << "view '" << name << "': DP images must be CV_32FC1 or CV_32FC3";
+  DPSFM_CHECK(view.lens.Check()) << "view '" << name << "': invalid lens data ("
+                                 << view.lens.ToString() << ")";
+  DPSFM_CHECK(!view.depth.empty() || !view.depth_points.empty())
+      << "view '" << name << "': neither a depth map nor depth points";
+  DPSFM_CHECK(view.depth.empty() || view.depth.type() == CV_32FC1)
+      << "view '" << name << "': depth map must be CV_32FC1";
+
+  std::unique_ptr<ViewData> data(new ViewData);
+  DPViewSummary& summary = data->summary;
+  summary.name = name;
+  summary.index = static_cast<int>(views_.size());
+  summary.frame_size = view.left.size();
+  data->lens = view.lens;
+
+  // Geometry: reference defaults for the frame size, then explicit options.
+  PatchGeometry geometry =
+      options_.resize_factor > 0
+          ? DefaultPatchGeometry(view.left.size(), options_.resize_factor)
+          : DefaultPatchGeometry(view.left.size());
+  if (options_.patch_size > 0) geometry.patch_size = options_.patch_size;
+  if (options_.stride > 0) geometry.stride = options_.stride;
+  if (options_.max_radius_px > 0)
+    geometry.max_radius_px = options_.max_radius_px;
+  const double rf = geometry.resize_factor;
+  summary.resize_factor = rf;
+  summary.patch_size = geometry.patch_size;
+  summary.stride = geometry.stride;
+  summary.max_radius_px = geometry.max_radius_px;
+  data->working_pitch_mm = view.lens.PixelPitchMm() / rf;
+
+  cv::Mat left = view.left, right = view.right;
+  if (rf < 1) {
+    // Area averaging is the anti-aliased resize the reference code uses.
+    const cv::Size size(
+        std::max(1, static_cast<int>(std::round(view.left.cols * rf))),
+        std::max(1, static_cast<int>(std::round(view.left.rows * rf))));
+    cv::resize(view.left, left, size, 0, 0, cv::INTER_AREA);
+    cv::resize(view.right, right, size, 0, 0, cv::INTER_AREA);
+  }
+  summary.working_size = left.size();
+  // Frame <-> working scale per axis (exact for the rounded size).
+  const double sx = static_cast<double>(left.cols) / view.left.cols;
+  const double sy = static_cast<double>(left.rows) / view.left.rows;
+  const cv::Mat gray_left = Luma(left), gray_right = Luma(right);
+
+  BlurEstimationOptions blur = options_.blur;
+  blur.max_radius_px = geometry.max_radius_px;
+  const int border = psf_->KernelRadius(geometry.max_radius_px);
+  const int p = geometry.patch_size;
+  const int crop = p + 2 * border;
+
+  // Patch grid (interior top-left corners) in working pixels.
+  struct Candidate {
+    cv::Rect interior;
+    DepthStats depth;
+    std::string reject;
+  };
+  std::vector<Candidate> candidates;
+  for (int y = border; y + p + border <= left.rows; y += geometry.stride) {
+    for (int x = border; x + p + border <= left.cols; x += geometry.stride) {
+      Candidate c;
+      c.interior = cv::Rect(x, y, p, p);
+      candidates.push_back(c);
+    }
+  }
+  summary.patches_tried = static_cast<int>(candidates.size());
+
+  // Depth per patch. Interior edges in frame pixels: [x / sx, (x + p) / sx).
+  const bool dense = !view.depth.empty();
+  const double dw = dense ? view.depth.cols : 0,
+               dh = dense ? view.depth.rows : 0;
+  for (Candidate& c : candidates) {
+    std::vector<float> values;
+    const double fx0 = c.interior.x / sx, fx1 = (c.interior.x + p) / sx;
+    const double fy0 = c.interior.y / sy, fy1 = (c.interior.y + p) / sy;
+    int total = 0;
+    if (dense) {
+      const double kx = dw / view.left.cols, ky = dh / view.left.rows;
+      // Depth pixels whose centres fall inside the patch's frame area.
+      const int i0 = std::max(0, static_cast<int>(std::ceil(fx0 * kx - 0.5)));
+      const int i1 = std::min(static_cast<int>(dw) - 1,
+                              static_cast<int>(std::ceil(fx1 * kx - 0.5)) - 1);
+      const int j0 = std::max(0, static_cast<int>(std::ceil(fy0 * ky - 0.5)));
+      const int j1 = std::min(static_cast<int>(dh) - 1,
+                              static_cast<int>(std::ceil(fy1 * ky - 0.5)) - 1);
+      for (int j = j0; j <= j1; ++j) {
+        const float* row = view.depth.ptr<float>(j);
+        for (int i = i0; i <= i1; ++i) {
+          ++total;
+          if (std::isfinite(row[i]) && row[i] > 0) values.push_back(row[i]);
+        }
+      }
+      if (total == 0 || values.size() < options_.min_depth_coverage * total) {
+        c.reject = "without depth";
+        continue;
+      }
+    } else {
+      // Pixel centres at integer frame coordinates: the area
+      // [fx0, fx1) in edge coordinates holds centres x + 0.5 in it.
+      for (const DepthPoint& point : view.depth_points) {
+        const double ex = point.x + 0.5, ey = point.y + 0.5;
+        if (ex >= fx0 && ex < fx1 && ey >= fy0 && ey < fy1 &&
+            std::isfinite(point.depth) && point.depth > 0) {
+          values.push_back(static_cast<float>(point.depth));
+        }
+      }
+      if (static_cast<int>(values.size()) <
+          options_.min_depth_points_per_patch) {
+        c.reject = "without depth";
+        continue;
+      }
+    }
+    c.depth = StatsOf(&values);
+    if (!c.depth.ok) {
+      c.reject = "without depth";
+    } else if (c.depth.relative_spread > options_.max_relative_depth_spread) {
+      c.reject = "across a depth edge";
+    }
+  }
+
+  // Blur per patch (the expensive part), in parallel.
+  const int num = static_cast<int>(candidates.size());
+  std::vector<PatchBlurEstimate> estimates(num);
+  int with_depth = 0;
+  for (const Candidate& c : candidates) with_depth += c.reject.empty();
+  summary.patches_with_depth = with_depth;
+  if (with_depth > 0) {
+    const PatchBlurEstimator estimator(*psf_, blur, cv::Size(crop, crop));
+    const int crop_border = estimator.Border();
+#ifdef _OPENMP
+    const int threads =
+        options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+    for (int k = 0; k < num; ++k) {
+      if (!candidates[k].reject.empty()) continue;
+      const cv::Rect r(candidates[k].interior.x - crop_border,
+                       candidates[k].interior.y - crop_border,
+                       p + 2 * crop_border,
+                       p + 2 * crop_border);
+      try {
+        estimates[k] =
+            estimator.Estimate(gray_left(r).clone(), gray_right(r).clone());
+      } catch (const std::exception& e) {
+        estimates[k].valid = false;
+        estimates[k].reject_reason = e.what();
+      }
+    }
+  }
+
+  std::map<std::string, int> rejections;
+  for (int k = 0; k < num; ++k) {
+    const Candidate& c = candidates[k];
+    if (!c.reject.empty()) {
+      rejections[c.reject]++;
+      continue;
+    }
+    const PatchBlurEstimate& e = estimates[k];
+    if (!e.valid || e.at_bound || !std::isfinite(e.radius_px)) {
+      rejections[e.reject_reason.empty() ? std::string("with no blur estimate")
+                                         : e.reject_reason]++;
+      continue;
+    }
+    const double texture_snr = TextureSnr(e);
+    if (!(texture_snr >= options_.min_texture_snr)) {
+      rejections["with texture too weak for the noise"]++;
+      continue;
+    }
+    PatchSample s;
+    s.view = summary.index;
+    const double cx = c.interior.x + 0.5 * (p - 1);
+    const double cy = c.interior.y + 0.5 * (p - 1);
+    s.x = (cx + 0.5) / sx - 0.5;
+    s.y = (cy + 0.5) / sy - 0.5;
+    s.depth = c.depth.median;
+    s.radius_px = e.radius_px;
+    s.radius_frame_px = e.radius_px / rf;
+    s.fit_quality = e.fit_quality;
+    s.texture = e.texture;
+    s.texture_snr = texture_snr;
+    // Reference confidence sobel * exp(-1e6 loss) / (var(depth) + 1e-10),
+    // with the blur estimator's fit quality in place of exp(-1e6 loss) (which
+    // underflows at real noise levels) and the RELATIVE depth variance (scale
+    // free) floored at 1 % std, so that depth noise below that level does not
+    // decide the ranking.
+    s.confidence = std::max(e.texture, 0.0) * std::max(e.fit_quality, 0.0) /
+                   (c.depth.relative_variance + 1e-4);
+    s.predicted_radius_px = kNaN;
+    data->samples.push_back(s);
+  }
+  summary.patches_valid = static_cast<int>(data->samples.size());
+  for (const auto& r : rejections) summary.rejections.emplace_back(r);
+
+  // Top-T_c selection, then crops of the best ones for the intensity stage.
+  std::vector<double> confidence, inverse_depth;
+  for (const PatchSample& s : data->samples) {
+    confidence.push_back(s.confidence);
+    inverse_depth.push_back(1.0 / s.depth);
+  }
+  const std::vector<int> top =
+      SelectTopFractionStratified(confidence,
+                                  inverse_depth,
+                                  options_.top_patch_fraction,
+                                  options_.min_patches_per_view,
+                                  options_.depth_strata);
+  for (int i : top) data->samples[i].selected = true;
+  summary.patches_kept = static_cast<int>(top.size());
+  std::vector<int> by_confidence = top;
+  std::stable_sort(by_confidence.begin(),
+                   by_confidence.end(),
+                   [&](int a, int b) { return confidence[a] > confidence[b]; });
+  if (static_cast<int>(by_confidence.size()) >
+      options_.max_stored_patches_per_view) {
+    by_confidence.resize(options_.max_stored_patches_per_view);
+  }
+  // Map samples back to their grid rectangles.
+  std::vector<int> sample_candidate;
+  for (int k = 0; k < num; ++k) {
+    if (candidates[k].reject.empty() && estimates[k].valid &&
+        !estimates[k].at_bound && std::isfinite(estimates[k].radius_px) &&
+        TextureSnr(estimates[k]) >= options_.min_texture_snr) {
+      sample_candidate.push_back(k);
+    }
+  }
+  for (int i : by_confidence) {
+    const cv::Rect interior = candidates[sample_candidate[i]].interior;
+    const cv::Rect r(interior.x - border, interior.y - border, crop, crop);
+    ViewData::Stored stored;
+    stored.sample = i;
+    stored.left = ToU16(left(r));
+    stored.right = ToU16(right(r));
+    stored.border = border;
+    data->stored.push_back(stored);
+  }
+
+  summary.seconds = SecondsSince(start);
+  views_.push_back(std::move(data));
+  return summary;
+}
+
+DPScaleResult DPScaleEstimator::Estimate() const {
+  DPScaleResult result;
+  const int num_views = static_cast<int>(views_.size());
+  for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
+  if (num_views == 0) {
+    result.failure_reason = "no DP views were given";
+    return result;
+  }
+
+  // --- Linear stage. ---
+  auto start = std::chrono::steady_clock::now();
+  std::vector<LinearViewData> linear_views(num_views);
+  for (int i = 0; i < num_views; ++i) {
+    const ViewData& v = *views_[i];
+    linear_views[i].name = v.summary.name;
+    linear_views[i].lens = v.lens;
+    linear_views[i].pixel_pitch_mm = v.working_pitch_mm;
+    for (const PatchSample& s : v.samples) {
+      if (s.selected) linear_views[i].samples.push_back({s.depth, s.radius_px});
+    }
+  }
+  LinearEstimatorOptions linear_options = options_.linear;
+  linear_options.seed = options_.seed;
+  LinearEstimate linear;
+  try {
+    linear = EstimateScaleLinear(linear_views, linear_options);
+  } catch (const std::exception& e) {
+    result.failure_reason = std::string("linear stage failed: ") + e.what();
+    return result;
+  }
+  result.seconds_linear = SecondsSince(start);
+
+  result.views.resize(num_views);
+  for (int i = 0; i < num_views; ++i) {
+    const ViewData& v = *views_[i];
+    const LinearViewResult& lv = linear.views[i];
+    DPViewResult& out = result.views[i];
+    out.name = v.summary.name;
+    out.lens = v.lens;
+    out.used = lv.used;
+    out.reason = lv.reason;
+    if (lv.rejection == ViewRejection::kTooFewPatches) {
+      std::ostringstream s;
+      s << v.summary.patches_valid << " usable patches of "
+        << v.summary.patches_tried;
+      if (!v.summary.rejections.empty()) {
+        s << " (" << CountsToString(v.summary.rejections) << ")";
+      }
+      s << "; need " << options_.linear.min_samples_per_view;
+      out.reason = s.str();
+    }
+    out.focus_distance_model = lv.focus_model;
+    out.single_view_scale = lv.single_solved ? lv.single_scale : kNaN;
+    out.predicted_blur_range_px = lv.predicted_blur_range_px;
+    out.median_abs_residual_px = lv.median_abs_residual_px;
+    out.patches_tried = v.summary.patches_tried;
+    out.patches_valid = v.summary.patches_valid;
+    out.patches_selected = v.summary.patches_kept;
+    out.focus_distance_m = kNaN;
+    for (const PatchSample& s : v.samples) {
+      PatchSample copy = s;
+      copy.used = s.selected && lv.used;
+      result.patches.push_back(copy);
+    }
+  }
+  if (!linear.success) {
+    // Say where the patches went, summed over views.
+    std::map<std::string, int> rejections;
+    int tried = 0, valid = 0;
+    for (const auto& v : views_) {
+      tried += v->summary.patches_tried;
+      valid += v->summary.patches_valid;
+      for (const auto& r : v->summary.rejections)
+        rejections[r.first] += r.second;
+    }
+    std::ostringstream s;
+    s << linear.failure_reason << " (patches over all views: " << tried
+      << " tried, " << valid << " usable";
+    if (!rejections.empty()) {
+      s << "; "
+        << CountsToString(std::vector<std::pair<std::string, int>>(
+               rejections.begin(), rejections.end()));
+    }
+    s << ")";
+    result.failure_reason = s.str();
+    return result;
+  }
+  result.scale_initial = linear.scale;
+  result.scale_initial_ci_low = linear.scale_ci_low;
+  result.scale_initial_ci_high = linear.scale_ci_high;
+  result.linear_median_abs_residual_px = linear.median_abs_residual_px;
+  result.scale = linear.scale;
+  result.scale_ci_low = linear.scale_ci_low;
+  result.scale_ci_high = linear.scale_ci_high;
+  result.num_views_used = static_cast<int>(linear.selected_views.size());
+  result.num_patches = linear.num_rows;
+
+  // --- Intensity stage on the selected views and their stored patches. ---
+  start = std::chrono::steady_clock::now();
+  result.intensity_loss = IntensityLossName(options_.intensity.loss);
+  if (!options_.intensity_refinement) {
+    result.intensity_status = "disabled; linear estimate kept";
+  } else {
+    std::vector<IntensityView> iviews;
+    std::vector<IntensityPatch> ipatches;
+    for (int i : linear.selected_views) {
+      const ViewData& v = *views_[i];
+      IntensityView iv;
+      iv.lens = v.lens;
+      iv.pixel_pitch_mm = v.working_pitch_mm;
+      iv.focus_distance_model = linear.views[i].focus_model;
+      const int index = static_cast<int>(iviews.size());
+      iviews.push_back(iv);
+      for (const ViewData::Stored& st : v.stored) {
+        IntensityPatch ip;
+        ip.view = index;
+        ip.depth = v.samples[st.sample].depth;
+        ip.left = st.left;
+        ip.right = st.right;
+        ip.border = st.border;
+        ipatches.push_back(ip);
+      }
+    }
+    IntensitySearchOptions search = options_.intensity;
+    search.seed = options_.seed;
+    search.num_threads = options_.num_threads;
+    // Clamp radii to the blur search's bound of each view (the crops' border
+    // supports exactly that).
+    double max_r = 0;
+    for (int i : linear.selected_views) {
+      max_r = std::max(max_r, views_[i]->summary.max_radius_px);
+    }
+    search.max_radius_px = max_r;
+    IntensitySearchResult intensity;
+    try {
+      intensity =
+          SearchScaleByIntensity(iviews, ipatches, linear.scale, *psf_, search);
+    } catch (const std::exception& e) {
+      intensity.success = false;
+      intensity.failure_reason = e.what();
+    }
+    result.candidate_scales = intensity.candidate_scales;
+    result.candidate_losses = intensity.candidate_losses;
+    std::ostringstream status;
+    if (!intensity.success) {
+      status << "failed (" << intensity.failure_reason
+             << "); linear estimate kept";
+    } else {
+      result.scale_intensity = intensity.scale;
+      result.intensity_ci_low = intensity.scale_ci_low;
+      result.intensity_ci_high = intensity.scale_ci_high;
+      result.intensity_bootstrap_support = intensity.bootstrap_support;
+      const double width =
+          (intensity.scale_ci_high - intensity.scale_ci_low) / intensity.scale;
+      if (intensity.at_boundary) {
+        status << "loss minimum at the edge of the searched range (s* x (1 +- "
+               << search.relative_range
+               << ")): the linear and intensity cues disagree; linear "
+                  "estimate kept";
+      } else if (search.num_bootstrap > 0 &&
+                 width > options_.max_intensity_ci_relative_width) {
+        status << "loss curve too flat ("
+               << std::lround(100 * search.confidence_level) << " % interval "
+               << std::fixed << std::setprecision(1) << width * 100
+               << " % of the scale); linear estimate kept";
+      } else if (search.num_bootstrap > 0 &&
+                 intensity.bootstrap_support <
+                     options_.min_intensity_bootstrap_support) {
+        status << "minimum not stable under resampling (support "
+               << intensity.bootstrap_support << "); linear estimate kept";
+      } else {
+        status << "used (moved the scale by " << std::showpos << std::fixed
+               << std::setprecision(2)
+               << 100 * (intensity.scale / linear.scale - 1) << std::noshowpos
+               << " % from the linear estimate)";
+        result.intensity_used = true;
+        result.scale = intensity.scale;
+        result.scale_ci_low = intensity.scale_ci_low;
+        result.scale_ci_high = intensity.scale_ci_high;
+        result.num_patches = intensity.num_patches;
+      }
+    }
+    result.intensity_status = status.str();
+  }
+  result.seconds_intensity = SecondsSince(start);
+
+  // Focus distances and predicted blur under the final scale. g_i' is the
+  // linear stage's (the intensity stage keeps it fixed), so the focus in
+  // metres is s * g_i'.
+  for (int i = 0; i < num_views; ++i) {
+    DPViewResult& out = result.views[i];
+    out.focus_distance_m = std::isfinite(out.focus_distance_model)
+                               ? result.scale * out.focus_distance_model
+                               : kNaN;
+  }
+  for (PatchSample& s : result.patches) {
+    const DPViewResult& v = result.views[s.view];
+    s.predicted_radius_px =
+        std::isfinite(v.focus_distance_model)
+            ? PredictBlurRadiusPx(v.lens,
+                                  views_[s.view]->working_pitch_mm,
+                                  result.scale,
+                                  v.focus_distance_model,
+                                  s.depth)
+            : kNaN;
+  }
+  result.success = true;
+  return result;
+}
+
+}  // namespace dpsfm

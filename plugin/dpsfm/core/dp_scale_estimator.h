@@ -1,0 +1,217 @@
+// The whole DP-SfM scale pipeline behind one class: per-view patch blur
+// estimation (AddView), then the linear initial estimate with view selection
+// and the intensity-based search (Estimate). Images, depths and lens data in,
+// numbers out; no files, no COLMAP types.
+//
+// Scale convention: metric metres = s * model units.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/blur_estimation.h"
+#include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/intensity_search.h"
+#include "dpsfm/core/lens_model.h"
+#include "dpsfm/core/linear_estimator.h"
+
+namespace dpsfm {
+
+// A scale-ambiguous depth sample: DP-frame pixel coordinates (pixel centres
+// at integer coordinates) and z' in model units.
+struct DepthPoint {
+  double x = 0;
+  double y = 0;
+  double depth = 0;
+};
+
+struct DPView {
+  std::string name;
+  // Same size, CV_32FC1 or CV_32FC3, intensities in [0, 1]. Left/right follow
+  // docs/cli-contract.md (a nearer point lies towards +x in the left view).
+  cv::Mat left, right;
+  DPLensData lens;
+  // Dense mode: CV_32FC1 z' covering the same field as the frame at any
+  // resolution: frame pixel (x, y) <-> depth pixel (x * dw / W, y * dh / H);
+  // <= 0 or non-finite = invalid.
+  cv::Mat depth;
+  // Sparse mode (used when `depth` is empty): the same patch grid as the
+  // dense mode; a patch takes the median depth of the points inside it and
+  // needs DPScaleOptions::min_depth_points_per_patch of them, so patches sit
+  // where the points are and spread as they do.
+  std::vector<DepthPoint> depth_points;
+};
+
+struct DPScaleOptions {
+  // --- Patch geometry, in pixels of the working frame (the DP frame resized
+  // by resize_factor). 0 = automatic from DefaultPatchGeometry.
+  int patch_size = 0;
+  int stride = 0;
+  double max_radius_px = 0;
+  double resize_factor = 0;
+
+  // Per-patch blur search (max_radius_px is taken from the geometry).
+  BlurEstimationOptions blur;
+
+  // --- Patches.
+  // T_c: fraction of a view's valid patches kept, by confidence.
+  double top_patch_fraction = 0.1;
+  // Keep at least this many per view when available (a view needs
+  // LinearEstimatorOptions::min_samples_per_view for its own solve).
+  int min_patches_per_view = 8;
+  // The T_c patches are shared among this many equal-width bins of inverse
+  // depth (see SelectTopFractionStratified); 1 = the paper's plain top T_c.
+  int depth_strata = 4;
+  // Memory bound: at most this many patches per view keep their image crops
+  // for the intensity stage (the highest-confidence ones).
+  int max_stored_patches_per_view = 64;
+  // A patch needs depth on this fraction of its pixels (dense mode)...
+  double min_depth_coverage = 0.5;
+  // ...or this many depth points inside it (sparse mode).
+  int min_depth_points_per_patch = 3;
+  // Patches whose horizontal texture is below this multiple of what sensor
+  // noise alone produces are dropped: their blur "estimate" fits the noise.
+  // (Texture is the blur estimator's mean |horizontal Sobel| of left + right;
+  // pure noise of std sigma per view gives about 3.9 sigma, i.e. a ratio of
+  // 1.00 +- 0.05 on patches of ~50 px; 1.3 sits well above that.)
+  double min_texture_snr = 1.3;
+  // Patches whose depth varies more than this inside (robust relative
+  // spread, (p90 - p10) / median) straddle a depth edge: the blur model
+  // assumes one depth per patch, so they are dropped.
+  double max_relative_depth_spread = 0.1;
+
+  // --- Linear stage (T_p, N_v, IRLS, bootstrap). Its seed is replaced by
+  // `seed` below.
+  LinearEstimatorOptions linear;
+
+  // --- Intensity stage (candidates, T_s, refine pass, loss, bootstrap).
+  // Its seed and num_threads are replaced by the fields below, and its
+  // max_radius_px by the patch geometry's (the crops' border supports
+  // exactly that).
+  bool intensity_refinement = true;
+  IntensitySearchOptions intensity;
+  // The intensity scale replaces the linear one only if its bootstrap
+  // interval is narrower than this fraction of the scale, its minimum is
+  // inside the searched range, and at least this share of bootstrap
+  // resamples agree with it; otherwise the linear scale is kept and the
+  // result says why (the stage never makes things worse silently).
+  double max_intensity_ci_relative_width = 0.3;
+  double min_intensity_bootstrap_support = 0.5;
+
+  // OpenMP threads for blur estimation and the intensity search; -1 = all.
+  int num_threads = -1;
+  uint64_t seed = 42;
+
+  bool Check() const;
+};
+
+// What AddView did with one view.
+struct DPViewSummary {
+  std::string name;
+  int index = -1;
+  cv::Size frame_size;
+  cv::Size working_size;
+  double resize_factor = 1;
+  int patch_size = 0;
+  int stride = 0;
+  double max_radius_px = 0;
+  int patches_tried = 0;  // grid positions
+  int patches_with_depth = 0;
+  int patches_valid = 0;  // usable blur estimates
+  int patches_kept = 0;   // top-T_c
+  double seconds = 0;
+  // Patch rejection counts by reason (e.g. {"without depth", 12}).
+  std::vector<std::pair<std::string, int>> rejections;
+};
+
+struct PatchSample {
+  int view = -1;
+  double x = 0, y = 0;         // centre, DP-frame pixels
+  double depth = 0;            // z'
+  double radius_px = 0;        // signed estimate, working-frame pixels
+  double radius_frame_px = 0;  // the same in DP-frame pixels
+  double confidence = 0;
+  double fit_quality = 0;
+  double texture = 0;
+  double texture_snr = 0;  // texture / (texture of noise alone)
+  bool selected = false;   // among the view's top T_c
+  bool used = false;       // selected and its view used
+  // Radius predicted by the final (s, g_i') in working-frame pixels (NaN if
+  // the view has no focus distance).
+  double predicted_radius_px = 0;
+};
+
+struct DPViewResult {
+  std::string name;
+  bool used = false;
+  std::string reason;
+  double focus_distance_model = 0;  // g' (model units); NaN if unknown
+  double focus_distance_m = 0;      // s * g'
+  double single_view_scale = 0;     // NaN if the view could not be solved
+  double predicted_blur_range_px = 0;
+  double median_abs_residual_px = 0;
+  int patches_tried = 0;
+  int patches_valid = 0;
+  int patches_selected = 0;
+  DPLensData lens;
+};
+
+struct DPScaleResult {
+  bool success = false;
+  std::string failure_reason;
+  double scale = 0;          // final s (metres per model unit)
+  double scale_initial = 0;  // linear-stage s*
+  double scale_ci_low = 0, scale_ci_high = 0;  // of `scale`
+  double scale_initial_ci_low = 0, scale_initial_ci_high = 0;
+  // Intensity stage: whether its scale was adopted, and why (not).
+  bool intensity_used = false;
+  std::string intensity_status;
+  double scale_intensity = 0;  // the search's minimiser (even if not used)
+  double intensity_ci_low = 0, intensity_ci_high = 0;
+  // Share of bootstrap resamples whose minimum lies within one first-pass
+  // step of scale_intensity.
+  double intensity_bootstrap_support = 0;
+  std::string intensity_loss;
+  std::vector<DPViewResult> views;
+  std::vector<PatchSample> patches;
+  // Intensity loss curve for the report plot.
+  std::vector<double> candidate_scales, candidate_losses;
+  int num_patches = 0;  // patches in the final solve
+  int num_views_used = 0;
+  double linear_median_abs_residual_px = 0;
+  double seconds_blur = 0, seconds_linear = 0, seconds_intensity = 0;
+};
+
+class DPScaleEstimator {
+ public:
+  DPScaleEstimator(const DPScaleOptions& options,
+                   std::shared_ptr<const DPPsfModel> psf);
+  ~DPScaleEstimator();
+
+  // Estimates patch blurs in one view and keeps only what later stages need
+  // (samples + crops of the top-T_c patches), so memory stays bounded for
+  // 30+ large views. Throws std::invalid_argument (naming the view) for
+  // malformed input: empty or mismatched images, bad lens data, neither depth
+  // map nor points. Data that merely carry no information (no texture, no
+  // depth) are recorded, not thrown.
+  DPViewSummary AddView(const DPView& view);
+
+  int NumViews() const;
+
+  // Linear stage (per-view solves, view selection, joint solve) then the
+  // intensity stage. Never throws for bad data: success = false with a reason
+  // a user understands.
+  DPScaleResult Estimate() const;
+
+ private:
+  struct ViewData;
+  DPScaleOptions options_;
+  std::shared_ptr<const DPPsfModel> psf_;
+  std::vector<std::unique_ptr<ViewData>> views_;
+};
+
+}  // namespace dpsfm

@@ -1,0 +1,124 @@
+// Intensity-based optimisation of the scale (paper sec. "Intensity-based
+// Optimization", eq. (loss_refine)): with the focus distances g_i' fixed from
+// the linear stage, a discrete search over candidate scales around s* of the
+// cross-view alignment loss of the selected patches, then a finer second pass
+// around the minimum and a bootstrap confidence interval.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/lens_model.h"
+
+namespace dpsfm {
+
+// What the loss compares (see IntensitySearchOptions::loss).
+enum class IntensityLoss {
+  // Eq. (loss_refine) verbatim: sum over channels of the L1 distance of the
+  // per-patch normalised cross-blurred patches, eta(X) = X / ||X||_1.
+  kPaperL1,
+  // Squared distance of the same normalised patches (scaled to mean 1).
+  kL2,
+  // kL2 minus its expected sensor-noise floor. The cross-blurred noise has
+  // energy sigma^2 ||H||^2 per pixel, which falls as the kernels grow, so an
+  // uncorrected loss prefers larger blur (smaller s) on noisy data; this
+  // removes that bias (notes sec. 5).
+  kNoiseCorrectedL2,
+};
+const char* IntensityLossName(IntensityLoss loss);
+
+struct IntensitySearchOptions {
+  // Candidates uniformly spanning s* (1 +- T_s): the paper's 100 and 80 %.
+  int num_candidates = 100;
+  double relative_range = 0.8;  // T_s
+  // Second pass: this many candidates uniformly between the neighbours of the
+  // first pass's minimum (0 disables it).
+  int num_refine_candidates = 24;
+  IntensityLoss loss = IntensityLoss::kNoiseCorrectedL2;
+  // Blur radii are clamped to this (px); also never beyond what a patch's
+  // border supports.
+  double max_radius_px = 20;
+  // Bootstrap resamples (views, then patches inside them) of the per-patch
+  // loss curves for the confidence interval; 0 disables it.
+  int num_bootstrap = 300;
+  double confidence_level = 0.95;
+  uint64_t seed = 42;
+  // OpenMP threads; -1 = all.
+  int num_threads = -1;
+  bool Check() const;
+};
+
+// Geometry of a view as the search sees it.
+struct IntensityView {
+  DPLensData lens;
+  double pixel_pitch_mm = 0;        // pitch of the patch pixels (after resize)
+  double focus_distance_model = 0;  // g_i' (model units), fixed
+};
+
+// One selected patch with its crops.
+struct IntensityPatch {
+  int view = 0;      // index into the IntensityView list
+  double depth = 0;  // z' (model units)
+  // Left/right crops, same size, CV_32FC1/3 in [0,1] or CV_16UC1/3 (65535 =
+  // 1). The loss is evaluated on the interior that excludes `border` pixels
+  // on each side; the border feeds the convolution.
+  cv::Mat left, right;
+  int border = 0;
+};
+
+struct IntensitySearchResult {
+  bool success = false;
+  std::string failure_reason;
+  double scale = 0;  // minimiser (parabolic refinement on the final grid)
+  double scale_ci_low = 0, scale_ci_high = 0;
+  // The whole loss curve (first and second pass merged, sorted by scale).
+  std::vector<double> candidate_scales, candidate_losses;
+  // The minimum lies on the first or last first-pass candidate: the true
+  // minimiser may be outside the searched range.
+  bool at_boundary = false;
+  // Fraction of bootstrap resamples whose minimum lies within one first-pass
+  // step of `scale` (1 = the curve is decisive).
+  double bootstrap_support = 0;
+  int num_patches = 0;
+  int num_evaluations = 0;  // patch x candidate loss evaluations
+};
+
+// Loss of one patch at one signed blur radius (clamped as in the search).
+// `noise_sigma_left/right` (per channel, may be empty = 0) feed
+// kNoiseCorrectedL2 only.
+double PatchAlignmentLoss(const IntensityPatch& patch,
+                          double radius_px,
+                          const DPPsfModel& psf,
+                          IntensityLoss loss,
+                          double max_radius_px,
+                          const std::vector<double>& noise_sigma_left = {},
+                          const std::vector<double>& noise_sigma_right = {});
+
+// Robust sensor-noise sigma of an image (per channel): MAD of the response to
+// the 3x3 mask [1 -2 1; -2 4 -2; 1 -2 1] (zero on planes and ramps, so mild
+// defocused texture barely leaks in), divided by the mask's norm 6. Sharp
+// texture inflates it.
+std::vector<double> EstimateChannelNoiseSigma(const cv::Mat& image);
+
+// Per-view noise sigma of a DP pair (per channel), from the same estimator
+// applied to (left - right) / sqrt(2) after equalising the two means. The
+// scene cancels where it matters: in focus the views are nearly equal, out
+// of focus both are smooth; what is left is the noise of one view (assuming
+// independent noise of equal strength in the two views).
+std::vector<double> EstimatePairNoiseSigma(const cv::Mat& left,
+                                           const cv::Mat& right);
+
+// The search. `initial_scale` is s*; views carry g_i' from the linear stage.
+// Never throws on bad data: success = false with a reason.
+IntensitySearchResult SearchScaleByIntensity(
+    const std::vector<IntensityView>& views,
+    const std::vector<IntensityPatch>& patches,
+    double initial_scale,
+    const DPPsfModel& psf,
+    const IntensitySearchOptions& options);
+
+}  // namespace dpsfm

@@ -1,0 +1,267 @@
+#include "dpsfm/exe/dp_scale_estimator.h"
+
+#include <cstdlib>
+#include <exception>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "colmap/controllers/option_manager.h"
+#include "colmap/util/logging.h"
+#include "colmap/util/misc.h"
+#include "colmap/util/timer.h"
+#include "dpsfm/colmap/report.h"
+#include "dpsfm/colmap/transaction.h"
+#include "dpsfm/colmap/workspace.h"
+#include "dpsfm/colmap/workspace_reader.h"
+#include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/dp_scale_estimator.h"
+
+namespace dpsfm {
+namespace {
+
+// The one line a failed run leaves on stderr (besides earlier progress).
+int Fail(const std::string& message) {
+  std::cerr << "ERROR: dp_scale_estimator: " << message << std::endl;
+  return EXIT_FAILURE;
+}
+
+std::string FormatSeconds(double seconds) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(2) << seconds << " s";
+  return text.str();
+}
+
+void AddCommandOptions(colmap::OptionManager* manager,
+                       DPScaleEstimatorOptions* options,
+                       DPScaleOptions* core) {
+  manager->AddDefaultOption("workspace_path", &options->workspace_path,
+                            "COLMAP dense workspace to rescale");
+  manager->AddDefaultOption("input_path", &options->input_path,
+                            "sparse model to use instead of a dense workspace");
+  manager->AddRequiredOption(
+      "dp_image_path", &options->dp_image_path,
+      "DP views: left/<name> with right/<name> or sum/<name>");
+  manager->AddDefaultOption("image_path", &options->image_path,
+                            "original images (EXIF lens data)");
+  manager->AddDefaultOption("database_path", &options->database_path,
+                            "project database, read only");
+  manager->AddDefaultOption("lens_path", &options->lens_path,
+                            "lens.csv with per-image lens data");
+  manager->AddDefaultOption("input_type", &options->input_type,
+                            "{geometric, photometric} depth maps");
+  manager->AddDefaultOption("report_path", &options->report_path,
+                            "JSON report to write");
+  manager->AddDefaultOption("dry_run", &options->dry_run,
+                            "estimate and report, change nothing");
+  manager->AddDefaultOption(
+      "output_path", &options->output_path,
+      "write a rescaled copy here instead of rescaling in place");
+  manager->AddDefaultOption(
+      "extra_model_paths", &options->extra_model_paths,
+      "comma-separated sparse model folders in the same frame to rescale too");
+  manager->AddDefaultOption(
+      "force", &options->force,
+      "rescale a workspace that was already rescaled (composes the scales)");
+  manager->AddDefaultOption("DPScaleEstimator.focal_length_mm",
+                            &options->focal_length_mm,
+                            "focal length in mm for every image");
+  manager->AddDefaultOption("DPScaleEstimator.f_number", &options->f_number,
+                            "f-number for every image");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.pixel_pitch_um", &options->pixel_pitch_um,
+      "pixel pitch in um of the model camera's pixels");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.swap_dp_views", &options->swap_dp_views,
+      "swap left and right DP views (sensor with the opposite convention)");
+  // The method's parameters (paper names in brackets).
+  manager->AddDefaultOption("DPScaleEstimator.patch_size", &core->patch_size,
+                            "patch side in px of the working frame (0: auto)");
+  manager->AddDefaultOption("DPScaleEstimator.stride", &core->stride,
+                            "patch stride in px (0: auto)");
+  manager->AddDefaultOption("DPScaleEstimator.max_radius_px",
+                            &core->max_radius_px,
+                            "blur radius search bound in px (0: auto)");
+  manager->AddDefaultOption("DPScaleEstimator.top_patch_fraction",
+                            &core->top_patch_fraction,
+                            "[T_c] fraction of patches kept per view");
+  manager->AddDefaultOption("DPScaleEstimator.intensity_refinement",
+                            &core->intensity_refinement,
+                            "run the intensity-based search after the "
+                            "linear estimate");
+  manager->AddDefaultOption("DPScaleEstimator.num_threads",
+                            &core->num_threads, "threads (-1: all cores)");
+}
+
+}  // namespace
+
+int RunDPScaleEstimator(int argc, char** argv) {
+  DPScaleEstimatorOptions options;
+  DPScaleOptions core_options;
+
+  colmap::OptionManager option_manager;
+  AddCommandOptions(&option_manager, &options, &core_options);
+  option_manager.Parse(argc, argv);
+
+  try {
+    colmap::Timer total_timer;
+    total_timer.Start();
+    colmap::PrintHeading1("DP scale estimation");
+    const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+    try {
+      core_options.Check();
+    } catch (const std::invalid_argument& error) {
+      throw InputError(std::string("invalid DPScaleEstimator option: ") +
+                       error.what());
+    }
+    LOG(INFO) << "Model: " << layout.model_path << " ("
+              << (layout.dense ? "dense workspace" : "sparse model") << ")";
+
+    // The folder whose metric files are rescaled and which holds the record.
+    const std::string root =
+        layout.dense ? options.workspace_path : options.input_path;
+    const bool in_place = !options.dry_run && options.output_path.empty();
+    if (in_place) {
+      // A commit cut short by a crash or kill is finished (or rolled back)
+      // before anything else reads the workspace.
+      const RecoveryReport recovery = RecoverInterruptedCommit(root);
+      if (recovery.action != RecoveryReport::Action::kNothing) {
+        LOG(WARNING) << "Interrupted rescale found: " << recovery.Describe();
+      }
+    }
+    const ScaleRecord record = ReadScaleRecord(root);
+    if (record.IsRescaled()) {
+      const ScaleRecordEntry& last = record.entries.back();
+      std::ostringstream note;
+      note << "this workspace was already rescaled by dp_scale_estimator ("
+           << record.entries.size() << " time(s), last on " << last.time
+           << " by " << last.scale << ", total " << record.CumulativeScale()
+           << "; see " << ScaleRecordPath(root) << ")";
+      if (in_place && !options.force) {
+        throw InputError(note.str() +
+                         "; pass --force 1 to apply another scale on top");
+      }
+      LOG(WARNING) << note.str();
+    }
+
+    const WorkspaceReader reader(options, layout);
+    std::vector<ViewSource> sources;
+    for (size_t i = 0; i < reader.NumViews(); ++i) {
+      const ViewSource& source = reader.Source(i);
+      sources.push_back(source);
+      LOG(INFO) << "  " << source.image_name << ": f "
+                << source.lens.lens.focal_length_mm << " mm ("
+                << source.lens.focal_length_source << "), f/"
+                << source.lens.lens.f_number << " ("
+                << source.lens.f_number_source << "), pitch "
+                << source.lens.lens.pixel_pitch_um << " um ("
+                << source.lens.pixel_pitch_source << ")";
+    }
+
+    colmap::PrintHeading2("Per-patch DP blur estimation");
+    DPScaleEstimator estimator(core_options,
+                               std::make_shared<TranslatingDiskPsf>());
+    RunTimings timings;
+    std::vector<DPViewSummary> summaries;
+    for (size_t i = 0; i < reader.NumViews(); ++i) {
+      colmap::Timer read_timer;
+      read_timer.Start();
+      const DPView view = reader.LoadView(i);
+      timings.read += read_timer.ElapsedSeconds();
+      DPViewSummary summary;
+      try {
+        summary = estimator.AddView(view);
+      } catch (const std::invalid_argument& error) {
+        throw InputError("image " + view.name + ": " + error.what());
+      }
+      timings.blur += summary.seconds;
+      LOG(INFO) << "[" << i + 1 << "/" << reader.NumViews() << "] "
+                << view.name << ": " << summary.patches_valid << " of "
+                << summary.patches_tried << " patches with a blur estimate, "
+                << summary.patches_kept << " kept ("
+                << FormatSeconds(summary.seconds) << ")";
+      summaries.push_back(summary);
+    }
+
+    colmap::PrintHeading2("Scale estimation");
+    const DPScaleResult result = estimator.Estimate();
+    timings.linear = result.seconds_linear;
+    timings.intensity = result.seconds_intensity;
+    for (const DPViewResult& view : result.views) {
+      LOG(INFO) << "  " << view.name << ": "
+                << (view.used ? "used" : "not used") << " (" << view.reason
+                << ")";
+    }
+    timings.total = total_timer.ElapsedSeconds();
+    if (!options.report_path.empty()) {
+      WriteJsonFile(options.report_path,
+                    MakeReport(result, sources, summaries, timings));
+      LOG(INFO) << "Report: " << options.report_path;
+    }
+    if (!result.success) {
+      return Fail("no scale: " + result.failure_reason +
+                  "; nothing was changed");
+    }
+    LOG(INFO) << "Linear estimate s* = " << result.scale_initial
+              << ", final s = " << result.scale << " (95% interval "
+              << result.scale_ci_low << " .. " << result.scale_ci_high
+              << "; intensity stage: " << result.intensity_status << ")";
+    LOG(INFO) << "Timings: read " << FormatSeconds(timings.read) << ", blur "
+              << FormatSeconds(timings.blur) << ", linear "
+              << FormatSeconds(timings.linear) << ", intensity "
+              << FormatSeconds(timings.intensity);
+
+    if (options.dry_run) {
+      LOG(INFO) << "Scale " << result.scale
+                << " metres per model unit (dry run: nothing was changed)";
+      return EXIT_SUCCESS;
+    }
+    colmap::PrintHeading2(options.output_path.empty()
+                              ? "Rescaling the workspace in place"
+                              : "Writing a rescaled copy");
+    colmap::Timer rescale_timer;
+    rescale_timer.Start();
+    RescaleWorkspaceOptions rescale_options;
+    rescale_options.extra_model_dirs =
+        colmap::CSVToVector<std::string>(options.extra_model_paths);
+    rescale_options.force = options.force;
+    rescale_options.tool_version = "dp-sfm " + DPSFMVersion();
+    for (const std::string* input :
+         {&options.workspace_path, &options.input_path, &options.dp_image_path,
+          &options.lens_path, &options.image_path}) {
+      if (!input->empty()) rescale_options.inputs.push_back(*input);
+    }
+    const RescaleWorkspaceResult rescaled =
+        options.output_path.empty()
+            ? RescaleWorkspaceInPlace(root, result.scale, rescale_options)
+            : WriteRescaledCopy(root, options.output_path, result.scale,
+                                rescale_options);
+    timings.rescale = rescale_timer.ElapsedSeconds();
+    for (const std::string& file : rescaled.rescaled_files) {
+      VLOG(1) << "  rescaled " << file;
+    }
+    timings.total = total_timer.ElapsedSeconds();
+    if (!options.report_path.empty()) {
+      nlohmann::json report = MakeReport(result, sources, summaries, timings);
+      report["rescaled_files"] = rescaled.rescaled_files;
+      report["cumulative_scale"] = rescaled.entry.cumulative_scale;
+      report["record_path"] = rescaled.record_path;
+      WriteJsonFile(options.report_path, report);
+    }
+    LOG(INFO) << "Scale " << result.scale << " metres per model unit: "
+              << rescaled.rescaled_files.size() << " files rescaled "
+              << (options.output_path.empty() ? "in place in " + root
+                                              : "into " + options.output_path)
+              << " (" << FormatSeconds(timings.rescale)
+              << "); the model is now in metres. Record: "
+              << rescaled.record_path;
+    return EXIT_SUCCESS;
+  } catch (const InputError& error) {
+    return Fail(error.what());
+  } catch (const std::exception& error) {
+    return Fail(std::string("internal error: ") + error.what());
+  }
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# Makes a patched COLMAP 3.10 source tree in the cache and prints its path.
+#  1. Downloads Debian's orig tarball of colmap 3.10 once, through apt with a
+#     private deb-src entry for the next Debian release made from this
+#     machine's own apt entry (the system's apt configuration is untouched).
+#  2. Checks its sha256 against the pinned value and stops on a mismatch.
+#  3. Extracts it and applies colmap_patches/*.patch in order with git apply,
+#     into a directory keyed by the patch series, renamed into place only when
+#     complete (an interrupted run leaves nothing half-patched behind).
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+download_dir="$DPSFM_CACHE_DIR/downloads"
+tarball="$download_dir/$COLMAP_TARBALL"
+mkdir -p "$download_dir"
+
+# Writes a deb-src entry for COLMAP_DEBIAN_SUITE from the machine's own Debian
+# mirror entry into $1 (deb822 format).
+write_source_entry() {
+  local out="$1" uri="" keyring="/usr/share/keyrings/debian-archive-keyring.gpg"
+  if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+    uri=$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources)
+    local k
+    k=$(awk '/^Signed-By:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources)
+    [ -n "$k" ] && keyring="$k"
+  fi
+  if [ -z "$uri" ] && [ -f /etc/apt/sources.list ]; then
+    uri=$(awk '$1 == "deb" && $2 !~ /security/ {print ($2 ~ /^\[/ ? $3 : $2); exit}' /etc/apt/sources.list)
+  fi
+  [ -n "$uri" ] || die "cannot find this machine's Debian mirror in /etc/apt; download $COLMAP_TARBALL yourself into $download_dir"
+  cat > "$out" <<EOT
+Types: deb-src
+URIs: $uri
+Suites: $COLMAP_DEBIAN_SUITE
+Components: main
+Signed-By: $keyring
+EOT
+}
+
+download_tarball() {
+  local apt_dir
+  apt_dir="$(mktemp -d "$DPSFM_CACHE_DIR/apt.XXXXXX")"
+  mkdir -p "$apt_dir/lists/partial" "$apt_dir/get"
+  write_source_entry "$apt_dir/colmap-src.sources"
+  local apt_opts=(-o Dir::Etc::SourceList=/dev/null
+                  -o "Dir::Etc::SourceParts=$apt_dir"
+                  -o "Dir::State::Lists=$apt_dir/lists"
+                  -o APT::Sandbox::User=root -q)
+  log "downloading $COLMAP_TARBALL (Debian source package colmap=$COLMAP_DEBIAN_VERSION)"
+  apt-get "${apt_opts[@]}" update >/dev/null
+  # The .dsc and the Debian patch tarball may be gone from the mirror while
+  # the orig tarball remains: accept the failure if the tarball arrived.
+  (cd "$apt_dir/get" && apt-get "${apt_opts[@]}" source --download-only \
+     "colmap=$COLMAP_DEBIAN_VERSION" >/dev/null 2>&1) || true
+  [ -f "$apt_dir/get/$COLMAP_TARBALL" ] || {
+    rm -rf "$apt_dir"
+    die "could not download $COLMAP_TARBALL through apt; put it into $download_dir by hand"
+  }
+  mv "$apt_dir/get/$COLMAP_TARBALL" "$tarball.part"
+  rm -rf "$apt_dir"
+  mv "$tarball.part" "$tarball"
+}
+
+verify_tarball() {
+  local actual
+  actual="$(sha256sum "$tarball" | cut -d' ' -f1)"
+  if [ "$actual" != "$COLMAP_TARBALL_SHA256" ]; then
+    die "sha256 mismatch for $tarball: expected $COLMAP_TARBALL_SHA256, got $actual (delete it to download again)"
+  fi
+}
+
+[ -f "$tarball" ] || download_tarball
+verify_tarball
+
+source_key="$("$DPSFM_ROOT/scripts/cache_key.sh" "$DPSFM_ROOT/colmap_patches" source)"
+source_dir="$DPSFM_CACHE_DIR/src/colmap-$COLMAP_VERSION-$source_key"
+if [ ! -f "$source_dir/.dpsfm-complete" ]; then
+  mkdir -p "$DPSFM_CACHE_DIR/src"
+  work="$(mktemp -d "$DPSFM_CACHE_DIR/src/.work.XXXXXX")"
+  tar -xzf "$tarball" -C "$work"
+  [ -d "$work/colmap-$COLMAP_VERSION" ] || die "unexpected tarball layout in $tarball"
+  for patch in $(ls -1 "$DPSFM_ROOT"/colmap_patches/*.patch | LC_ALL=C sort); do
+    log "applying $(basename "$patch")"
+    (cd "$work/colmap-$COLMAP_VERSION" && git apply --whitespace=nowarn "$patch") \
+      || die "patch $(basename "$patch") does not apply to COLMAP $COLMAP_VERSION"
+  done
+  touch "$work/colmap-$COLMAP_VERSION/.dpsfm-complete"
+  rm -rf "$source_dir"
+  mv "$work/colmap-$COLMAP_VERSION" "$source_dir"
+  rm -rf "$work"
+fi
+echo "$source_dir"

@@ -1,0 +1,163 @@
+#include "dpsfm/core/dp_psf.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+namespace dpsfm {
+namespace {
+
+// Max |a - b| of two kernels of possibly different sizes, centred.
+double MaxAbsDiff(const cv::Mat& a, const cv::Mat& b) {
+  const int half = std::max(a.rows, b.rows) / 2;
+  cv::Mat fa = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
+  cv::Mat fb = fa.clone();
+  a.copyTo(fa(cv::Rect(half - a.cols / 2, half - a.rows / 2, a.cols, a.rows)));
+  b.copyTo(fb(cv::Rect(half - b.cols / 2, half - b.rows / 2, b.cols, b.rows)));
+  return cv::norm(fa, fb, cv::NORM_INF);
+}
+
+TEST(TranslatingDiskPsf, MirrorSymmetryAndEnergy) {
+  const TranslatingDiskPsf psf;
+  for (const double r : {-15.3, -4.0, -1.0, -0.7, 0.7, 1.0, 2.5, 8.0, 20.0}) {
+    const DPKernels k = psf.Kernels(r);
+    ASSERT_EQ(k.left.type(), CV_32FC1);
+    ASSERT_EQ(k.left.size(), k.right.size());
+    ASSERT_EQ(k.left.rows, k.left.cols);
+    ASSERT_EQ(k.left.rows % 2, 1);
+    EXPECT_EQ(k.left.rows, 2 * psf.KernelRadius(r) + 1) << "r = " << r;
+    cv::Mat flipped;
+    cv::flip(k.left, flipped, 1);
+    EXPECT_EQ(cv::norm(flipped, k.right, cv::NORM_INF), 0.0) << "r = " << r;
+    EXPECT_NEAR(cv::sum(k.left)[0], 0.5, 1e-5) << "r = " << r;
+    EXPECT_NEAR(cv::sum(k.right)[0], 0.5, 1e-5) << "r = " << r;
+    double min_value = 0;
+    cv::minMaxLoc(k.left, &min_value);
+    EXPECT_GE(min_value, 0.0);
+    // Symmetric in y.
+    cv::Mat flipped_y;
+    cv::flip(k.left, flipped_y, 0);
+    EXPECT_EQ(cv::norm(flipped_y, k.left, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST(TranslatingDiskPsf, CentroidSignAndMagnitude) {
+  const TranslatingDiskPsf psf;
+  const double expected_per_radius = 3 * M_PI / 32;
+  EXPECT_NEAR(TranslatingDiskPsf::CentroidOffsetPerRadius(), 0.29452, 1e-5);
+  // Sampling the area integral at pixel centres moves the centroid a little
+  // where the disk edge cuts pixels: +10 % at R = 1, +1.6 % at R = 2,
+  // < 0.3 % from R = 4 (the reference code's cumulative sum is -18 % at
+  // R = 1 and -12 % at R = 4, which these bounds reject).
+  const double tolerance[] = {0.11, 0.02, 0.004, 0.002, 0.002};
+  int index = 0;
+  for (const double radius : {1.0, 2.0, 4.0, 8.0, 15.0}) {
+    const double tol = tolerance[index++] * expected_per_radius * radius;
+    // Near (r < 0): left centroid at larger x than the right one.
+    const DPKernels near = psf.Kernels(-radius);
+    const cv::Point2d near_left = KernelCentroid(near.left);
+    const cv::Point2d near_right = KernelCentroid(near.right);
+    EXPECT_GT(near_left.x, near_right.x) << "R = " << radius;
+    EXPECT_NEAR(near_left.x, expected_per_radius * radius, tol)
+        << "R = " << radius;
+    EXPECT_NEAR(near_right.x, -expected_per_radius * radius, tol);
+    EXPECT_NEAR(near_left.y, 0.0, 1e-6);
+    // Far (r > 0): the other way round.
+    const DPKernels far = psf.Kernels(radius);
+    EXPECT_LT(KernelCentroid(far.left).x, KernelCentroid(far.right).x);
+    EXPECT_NEAR(KernelCentroid(far.left).x, -expected_per_radius * radius,
+                tol);
+  }
+}
+
+TEST(TranslatingDiskPsf, SumWeightsChords) {
+  // Left + right weighs (x + a) + (-x + a) = 2 a(y), a = sqrt(R^2 - y^2):
+  // constant along each row inside the disk, normalised to 1 over the disk
+  // (integral 16 R^3 / 3), i.e. 3 / (8 R^2) at the centre.
+  const TranslatingDiskPsf psf;
+  const double radius = 6;
+  const DPKernels k = psf.Kernels(radius);
+  const cv::Mat sum = k.left + k.right;
+  EXPECT_NEAR(cv::sum(sum)[0], 1.0, 1e-5);
+  const float centre = sum.at<float>(6, 6);
+  EXPECT_NEAR(centre, 3 / (8 * radius * radius), 1e-4);
+  EXPECT_NEAR(sum.at<float>(6, 9), centre, 1e-6);
+  EXPECT_NEAR(sum.at<float>(6, 3), centre, 1e-6);
+  EXPECT_NEAR(sum.at<float>(3, 6) / centre, std::sqrt(27.0) / 6, 0.01);
+}
+
+TEST(TranslatingDiskPsf, ContinuousInRadius) {
+  const TranslatingDiskPsf psf;
+  // Including across integers, the kernel-size steps at n + 0.5, and the
+  // in-focus threshold 0.5.
+  for (const double r : {0.4995, 0.9995, 1.4995, 2.0, 2.4995, 3.7, 7.4995,
+                         10.0, 14.9995, -0.4995, -1.4995, -6.0}) {
+    const double delta = r > 0 ? 1e-3 : -1e-3;
+    const DPKernels a = psf.Kernels(r);
+    const DPKernels b = psf.Kernels(r + delta);
+    EXPECT_LT(MaxAbsDiff(a.left, b.left), 2e-3) << "r = " << r;
+    EXPECT_LT(MaxAbsDiff(a.right, b.right), 2e-3) << "r = " << r;
+  }
+  // The centroid moves smoothly: no jumps on a fine sweep.
+  double previous = KernelCentroid(psf.Kernels(-0.5).left).x;
+  for (double r = -0.49; r < 6.0; r += 0.01) {
+    const double c = KernelCentroid(psf.Kernels(r).left).x;
+    EXPECT_LT(std::abs(c - previous), 0.01) << "r = " << r;
+    previous = c;
+  }
+}
+
+TEST(TranslatingDiskPsf, InFocusIsDelta) {
+  const TranslatingDiskPsf psf;
+  for (const double r : {0.0, 0.2, -0.3, 0.5, -0.5}) {
+    EXPECT_EQ(psf.KernelRadius(r), 0);
+    const DPKernels k = psf.Kernels(r);
+    ASSERT_EQ(k.left.rows, 1);
+    EXPECT_FLOAT_EQ(k.left.at<float>(0, 0), 0.5f);
+    EXPECT_FLOAT_EQ(k.right.at<float>(0, 0), 0.5f);
+  }
+  EXPECT_EQ(psf.KernelRadius(0.51), 1);
+  EXPECT_EQ(psf.KernelRadius(1.5), 1);
+  EXPECT_EQ(psf.KernelRadius(20), 20);
+  EXPECT_EQ(psf.KernelRadius(-10), 10);
+  EXPECT_THROW(psf.Kernels(std::nan("")), std::invalid_argument);
+}
+
+TEST(ConvolvePsf, IsTrueConvolution) {
+  // A point at x0 blurred by a kernel whose mass lies at +1 in x (and +1 in
+  // y) moves to x0 + 1 (y0 + 1): the kernel is a PSF, not a template.
+  cv::Mat image = cv::Mat::zeros(9, 11, CV_32FC1);
+  image.at<float>(4, 5) = 1;
+  cv::Mat psf = cv::Mat::zeros(3, 3, CV_32FC1);
+  psf.at<float>(2, 2) = 1;  // offset (+1, +1)
+  const cv::Mat out = ConvolvePsf(image, psf);
+  ASSERT_EQ(out.size(), image.size());
+  EXPECT_FLOAT_EQ(out.at<float>(5, 6), 1.0f);
+  EXPECT_FLOAT_EQ(static_cast<float>(cv::sum(out)[0]), 1.0f);
+
+  // Same with a translating-disk kernel: the near-field left PSF moves the
+  // point's centroid to +x.
+  const TranslatingDiskPsf disk;
+  cv::Mat big = cv::Mat::zeros(41, 41, CV_32FC1);
+  big.at<float>(20, 20) = 1;
+  const cv::Mat left = ConvolvePsf(big, disk.Kernels(-6).left);
+  const cv::Point2d centroid = KernelCentroid(left);
+  EXPECT_NEAR(centroid.x, 3 * M_PI / 32 * 6, 0.02);
+
+  // Three channels are blurred independently.
+  cv::Mat colour = cv::Mat::zeros(9, 11, CV_32FC3);
+  colour.at<cv::Vec3f>(4, 5) = cv::Vec3f(1, 2, 3);
+  const cv::Mat out3 = ConvolvePsf(colour, psf);
+  EXPECT_EQ(out3.type(), CV_32FC3);
+  EXPECT_FLOAT_EQ(out3.at<cv::Vec3f>(5, 6)[2], 3.0f);
+
+  EXPECT_THROW(ConvolvePsf(cv::Mat::zeros(5, 5, CV_8UC1), psf),
+               std::invalid_argument);
+  EXPECT_THROW(ConvolvePsf(image, cv::Mat::ones(2, 2, CV_32FC1)),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dpsfm

@@ -1,0 +1,96 @@
+// The COLMAP build cache: its key follows the patch series and the pinned
+// source tarball is verified.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+const std::string kRoot = DPSFM_SOURCE_DIR;
+
+std::string CacheKey(const std::string& patch_dir, const std::string& kind) {
+  const CommandResult result =
+      RunCommand({"bash", kRoot + "/scripts/cache_key.sh", patch_dir, kind});
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  std::string key = result.out;
+  while (!key.empty() && (key.back() == '\n' || key.back() == ' ')) {
+    key.pop_back();
+  }
+  return key;
+}
+
+// A copy of colmap_patches/ to edit.
+std::string CopyPatches(const TempDir& dir) {
+  const std::string copy = dir / "patches";
+  boost::filesystem::create_directories(copy);
+  for (boost::filesystem::directory_iterator it(kRoot + "/colmap_patches"), end;
+       it != end;
+       ++it) {
+    boost::filesystem::copy_file(it->path(), copy / it->path().filename());
+  }
+  return copy;
+}
+
+TEST(BuildCache, KeyIsStable) {
+  const std::string patches = kRoot + "/colmap_patches";
+  const std::string key = CacheKey(patches, "build");
+  EXPECT_EQ(key.size(), 16u);
+  EXPECT_EQ(CacheKey(patches, "build"), key);
+  TempDir dir;
+  EXPECT_EQ(CacheKey(CopyPatches(dir), "build"), key);
+}
+
+TEST(BuildCache, KeyChangesWhenAPatchChanges) {
+  TempDir dir;
+  const std::string patches = CopyPatches(dir);
+  const std::string source_key = CacheKey(patches, "source");
+  const std::string build_key = CacheKey(patches, "build");
+  boost::filesystem::directory_iterator first(patches);
+  const std::string patch = first->path().string();
+  WriteTextFile(patch, ReadTextFile(patch) + "\n");
+  EXPECT_NE(CacheKey(patches, "source"), source_key);
+  EXPECT_NE(CacheKey(patches, "build"), build_key);
+}
+
+TEST(BuildCache, KeyChangesWhenAPatchIsAdded) {
+  TempDir dir;
+  const std::string patches = CopyPatches(dir);
+  const std::string build_key = CacheKey(patches, "build");
+  WriteTextFile(patches + "/9999-extra.patch", "");
+  EXPECT_NE(CacheKey(patches, "build"), build_key);
+}
+
+TEST(BuildCache, KeyChangesWithBuildOptions) {
+  const std::string patches = kRoot + "/colmap_patches";
+  const std::string release = CacheKey(patches, "build");
+  const CommandResult debug =
+      RunCommand({"env", "DPSFM_BUILD_TYPE=Debug", "bash",
+                  kRoot + "/scripts/cache_key.sh", patches, "build"});
+  EXPECT_EQ(debug.exit_code, 0);
+  EXPECT_NE(debug.out.substr(0, 16), release);
+  // The source key does not depend on build options.
+  const CommandResult debug_source =
+      RunCommand({"env", "DPSFM_BUILD_TYPE=Debug", "bash",
+                  kRoot + "/scripts/cache_key.sh", patches, "source"});
+  EXPECT_EQ(debug_source.out.substr(0, 16), CacheKey(patches, "source"));
+}
+
+TEST(BuildCache, TarballWithWrongChecksumIsRefused) {
+  TempDir cache;
+  WriteTextFile(cache / "downloads/colmap_3.10.orig.tar.gz", "not colmap");
+  const CommandResult result =
+      RunCommand({"env", "DPSFM_CACHE_DIR=" + cache.path(), "bash",
+                  kRoot + "/scripts/fetch_colmap.sh"});
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.err.find("sha256 mismatch"), std::string::npos)
+      << result.err;
+  EXPECT_FALSE(boost::filesystem::exists(cache / "src"));
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm

@@ -1,0 +1,125 @@
+// Helpers for end-to-end tests that run the real `colmap` binary.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <boost/filesystem.hpp>
+#include <gtest/gtest.h>
+
+namespace dpsfm {
+namespace test {
+
+struct CommandResult {
+  int exit_code = -1;
+  bool signaled = false;  // killed by a signal (abort, segfault)
+  std::string out;
+  std::string err;
+};
+
+inline std::string ReadTextFile(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << file.rdbuf();
+  return buffer.str();
+}
+
+inline std::string ShellQuote(const std::string& arg) {
+  std::string quoted = "'";
+  for (const char c : arg) {
+    if (c == '\'') {
+      quoted += "'\\''";
+    } else {
+      quoted += c;
+    }
+  }
+  return quoted + "'";
+}
+
+// A fresh empty directory under the test temp dir, removed on destruction.
+class TempDir {
+ public:
+  TempDir() {
+    path_ = (boost::filesystem::temp_directory_path() /
+             boost::filesystem::unique_path("dpsfm-test-%%%%-%%%%-%%%%"))
+                .string();
+    boost::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    boost::system::error_code ec;
+    boost::filesystem::remove_all(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+  std::string operator/(const std::string& name) const {
+    return (boost::filesystem::path(path_) / name).string();
+  }
+
+ private:
+  std::string path_;
+};
+
+// Runs a program with arguments (no shell interpretation of the arguments),
+// capturing stdout and stderr.
+inline CommandResult RunCommand(const std::vector<std::string>& args) {
+  TempDir dir;
+  std::string command;
+  for (const std::string& arg : args) {
+    command += ShellQuote(arg) + " ";
+  }
+  command += "</dev/null >" + ShellQuote(dir / "out") + " 2>" +
+             ShellQuote(dir / "err");
+  const int status = std::system(command.c_str());
+  CommandResult result;
+  if (WIFEXITED(status)) {
+    result.exit_code = WEXITSTATUS(status);
+  }
+  result.signaled = WIFSIGNALED(status);
+  result.out = ReadTextFile(dir / "out");
+  result.err = ReadTextFile(dir / "err");
+  return result;
+}
+
+inline std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream stream(text);
+  std::string line;
+  while (std::getline(stream, line)) {
+    lines.push_back(line);
+  }
+  return lines;
+}
+
+// Every regular file under `root` (relative path -> contents), to prove a
+// failed run left a workspace byte-for-byte unchanged.
+inline std::map<std::string, std::string> SnapshotTree(
+    const std::string& root) {
+  std::map<std::string, std::string> files;
+  for (boost::filesystem::recursive_directory_iterator it(root), end;
+       it != end;
+       ++it) {
+    if (boost::filesystem::is_regular_file(it->path())) {
+      files[boost::filesystem::relative(it->path(), root).string()] =
+          ReadTextFile(it->path().string());
+    } else if (boost::filesystem::is_directory(it->path())) {
+      files[boost::filesystem::relative(it->path(), root).string() + "/"] =
+          "";
+    }
+  }
+  return files;
+}
+
+inline void WriteTextFile(const std::string& path, const std::string& text) {
+  boost::filesystem::create_directories(
+      boost::filesystem::path(path).parent_path());
+  std::ofstream file(path, std::ios::binary);
+  file << text;
+}
+
+}  // namespace test
+}  // namespace dpsfm
