@@ -40,6 +40,7 @@ if [ ! -f "$build_dir/build.ninja" ]; then
   stage "configure" configure
 fi
 
+ccache --zero-stats >/dev/null 2>&1 || true
 # Build output goes to stderr: stdout carries only the build directory.
 stage "build" cmake --build "$build_dir" -j "$(jobs_count)" >&2
 ccache --show-stats 2>/dev/null | grep -E "Hits|Misses|hit rate" | head -n 3 | sed 's/^/[dp-sfm] ccache: /' >&2 || true

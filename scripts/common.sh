@@ -8,6 +8,8 @@ DPSFM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 DPSFM_CACHE_DIR="${DPSFM_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/dp-sfm}"
 export CCACHE_DIR="${CCACHE_DIR:-$DPSFM_CACHE_DIR/ccache}"
 export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-5G}"
+# A fresh clone gives every file a new mtime/ctime; the contents decide.
+export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-include_file_mtime,include_file_ctime,time_macros}"
 
 # The COLMAP release the plugin is built against, and the pinned source
 # tarball (Debian's orig tarball of colmap 3.10).
