@@ -126,8 +126,24 @@ int RunDPScaleEstimator(int argc, char** argv) {
       // A commit cut short by a crash or kill is finished (or rolled back)
       // before anything else reads the workspace.
       const RecoveryReport recovery = RecoverInterruptedCommit(root);
-      if (recovery.action != RecoveryReport::Action::kNothing) {
-        LOG(WARNING) << "Interrupted rescale found: " << recovery.Describe();
+      if (recovery.action == RecoveryReport::Action::kRolledForward) {
+        // The interrupted run had estimated and staged everything; finishing
+        // its commit is the whole job. Estimating again would rescale twice.
+        const ScaleRecord finished = ReadScaleRecord(root);
+        LOG(WARNING) << "Finished an interrupted rescale: "
+                     << recovery.Describe();
+        if (finished.IsRescaled()) {
+          LOG(INFO) << "Scale " << finished.entries.back().scale
+                    << " metres per model unit (applied "
+                    << finished.entries.back().time
+                    << "); the model is now in metres. Record: "
+                    << ScaleRecordPath(root);
+        }
+        return EXIT_SUCCESS;
+      }
+      if (recovery.action == RecoveryReport::Action::kRolledBack) {
+        LOG(WARNING) << "Rolled back an interrupted rescale: "
+                     << recovery.Describe();
       }
     }
     const ScaleRecord record = ReadScaleRecord(root);
@@ -193,8 +209,10 @@ int RunDPScaleEstimator(int argc, char** argv) {
                 << (view.used ? "used" : "not used") << " (" << view.reason
                 << ")";
     }
+    // Without a rescale to follow, the report is complete now.
+    const bool rescale = result.success && !options.dry_run;
     timings.total = total_timer.ElapsedSeconds();
-    if (!options.report_path.empty()) {
+    if (!options.report_path.empty() && !rescale) {
       WriteJsonFile(options.report_path,
                     MakeReport(result, sources, summaries, timings));
       LOG(INFO) << "Report: " << options.report_path;
@@ -248,6 +266,7 @@ int RunDPScaleEstimator(int argc, char** argv) {
       report["cumulative_scale"] = rescaled.entry.cumulative_scale;
       report["record_path"] = rescaled.record_path;
       WriteJsonFile(options.report_path, report);
+      LOG(INFO) << "Report: " << options.report_path;
     }
     LOG(INFO) << "Scale " << result.scale << " metres per model unit: "
               << rescaled.rescaled_files.size() << " files rescaled "

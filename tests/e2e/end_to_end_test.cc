@@ -1,0 +1,437 @@
+// `colmap dp_scale_estimator` end to end on generated workspaces: the real
+// binary estimates the scale of a scene whose truth is known, rescales every
+// artefact by exactly that scale, leaves everything else byte-identical,
+// refuses to rescale twice, and survives a kill during its commit.
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/workspace_reader.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+namespace fs = boost::filesystem;
+
+const std::string kColmap = DPSFM_COLMAP_EXE;
+const std::string kScenes = DPSFM_E2E_SCENES_DIR;
+
+// Largest accepted |1 - s_est / s_true| on the clean generated DSLR scene.
+constexpr double kMaxScaleError = 0.25;
+
+nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream file(path);
+  EXPECT_TRUE(file.good()) << path;
+  return nlohmann::json::parse(file);
+}
+
+// A private copy of a generated scene.
+class SceneCopy {
+ public:
+  explicit SceneCopy(const std::string& scene) {
+    const std::string source = kScenes + "/" + scene;
+    if (!fs::is_directory(source)) {
+      ADD_FAILURE() << "generated scene missing: " << source
+                    << " (run the whole suite with ctest; the "
+                       "e2e_generate_scenes fixture makes it)";
+      return;
+    }
+    root_ = dir_ / scene;
+    fs::create_directories(root_);
+    for (fs::recursive_directory_iterator it(source), end; it != end; ++it) {
+      const fs::path target =
+          fs::path(root_) / fs::relative(it->path(), source);
+      if (fs::is_directory(it->path())) {
+        fs::create_directories(target);
+      } else {
+        fs::copy_file(it->path(), target);
+      }
+    }
+  }
+  const std::string& root() const { return root_; }
+  std::string operator/(const std::string& name) const {
+    return (fs::path(root_) / name).string();
+  }
+  const TempDir& temp() const { return dir_; }
+
+ private:
+  TempDir dir_;
+  std::string root_;
+};
+
+CommandResult RunEstimator(const std::vector<std::string>& args,
+                           const std::vector<std::string>& env = {}) {
+  std::vector<std::string> command;
+  if (!env.empty()) {
+    command.push_back("env");
+    command.insert(command.end(), env.begin(), env.end());
+  }
+  command.push_back(kColmap);
+  command.push_back("dp_scale_estimator");
+  command.insert(command.end(), args.begin(), args.end());
+  return RunCommand(command);
+}
+
+std::vector<std::string> DenseArgs(const SceneCopy& scene) {
+  return {"--workspace_path", scene / "dense", "--dp_image_path", scene / "dp",
+          "--lens_path", scene / "lens.csv"};
+}
+
+std::vector<std::string> With(std::vector<std::string> args,
+                              const std::vector<std::string>& more) {
+  args.insert(args.end(), more.begin(), more.end());
+  return args;
+}
+
+// One error line naming `expected`, exit 1, and the tree untouched.
+void ExpectRefusal(const CommandResult& result,
+                   const std::string& expected,
+                   const std::map<std::string, std::string>& before,
+                   const std::string& root) {
+  EXPECT_FALSE(result.signaled) << result.err;
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  const std::vector<std::string> lines = Lines(result.err);
+  int error_lines = 0;
+  for (const std::string& line : lines) {
+    if (line.compare(0, 7, "ERROR: ") == 0) {
+      ++error_lines;
+      EXPECT_NE(line.find(expected), std::string::npos)
+          << line << "\nexpected: " << expected;
+    }
+  }
+  EXPECT_EQ(error_lines, 1) << result.err;
+  EXPECT_TRUE(SnapshotTree(root) == before) << "the workspace changed";
+}
+
+void ExpectModelScaled(const std::string& before_dir,
+                       const std::string& after_dir,
+                       double scale) {
+  colmap::Reconstruction before, after;
+  before.Read(before_dir);
+  after.Read(after_dir);
+  ASSERT_EQ(before.NumRegImages(), after.NumRegImages());
+  for (const auto& image : before.Images()) {
+    const colmap::Image& scaled = after.Image(image.first);
+    EXPECT_EQ(scaled.Name(), image.second.Name());
+    EXPECT_TRUE(scaled.CamFromWorld().rotation.isApprox(
+        image.second.CamFromWorld().rotation, 1e-15));
+    EXPECT_TRUE(scaled.CamFromWorld().translation.isApprox(
+        scale * image.second.CamFromWorld().translation, 1e-12));
+  }
+  ASSERT_EQ(before.NumPoints3D(), after.NumPoints3D());
+  for (const auto& point : before.Points3D()) {
+    EXPECT_TRUE(
+        after.Point3D(point.first).xyz.isApprox(scale * point.second.xyz, 1e-12));
+  }
+}
+
+void ExpectDepthMapScaled(const std::string& before_path,
+                          const std::string& after_path,
+                          double scale) {
+  const cv::Mat before = ReadColmapDepthMap(before_path);
+  const cv::Mat after = ReadColmapDepthMap(after_path);
+  ASSERT_EQ(before.size(), after.size());
+  for (int r = 0; r < before.rows; ++r) {
+    for (int c = 0; c < before.cols; ++c) {
+      const float d = before.at<float>(r, c);
+      const float expected = d > 0 ? static_cast<float>(scale * d) : d;
+      ASSERT_NEAR(after.at<float>(r, c), expected, 1e-6 * std::abs(expected))
+          << after_path << " at " << c << "," << r;
+    }
+  }
+}
+
+// fused.ply: binary little-endian, 27 bytes per vertex (xyz, normal, rgb).
+void ExpectFusedPlyScaled(const std::string& before, const std::string& after,
+                          double scale) {
+  const std::string a = ReadTextFile(before), b = ReadTextFile(after);
+  ASSERT_EQ(a.size(), b.size());
+  const size_t header_end = a.find("end_header\n") + 11;
+  ASSERT_EQ(a.substr(0, header_end), b.substr(0, header_end));
+  for (size_t offset = header_end; offset + 27 <= a.size(); offset += 27) {
+    for (int k = 0; k < 3; ++k) {
+      float x, y;
+      std::memcpy(&x, a.data() + offset + 4 * k, 4);
+      std::memcpy(&y, b.data() + offset + 4 * k, 4);
+      ASSERT_NEAR(y, static_cast<float>(scale * x), 1e-6 * std::abs(scale * x));
+    }
+    ASSERT_EQ(a.substr(offset + 12, 15), b.substr(offset + 12, 15))
+        << "normal or colour changed at byte " << offset;
+  }
+}
+
+bool IsRescaledArtefact(const std::string& relative) {
+  if (relative.back() == '/') return false;  // a directory entry
+  return relative == "dense/sparse/images.bin" ||
+         relative == "dense/sparse/points3D.bin" ||
+         relative == "dense/fused.ply" ||
+         relative.find("dense/stereo/depth_maps/") == 0;
+}
+
+TEST(EndToEnd, DenseWorkspaceInPlace) {
+  SceneCopy scene("dslr");
+  const auto before = SnapshotTree(scene.root());
+  const std::string original = scene.temp() / "original";
+  fs::create_directories(original);
+  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
+    fs::copy_file(scene / (std::string("dense/sparse/") + name),
+                  fs::path(original) / name);
+  }
+  const std::string report_path = scene.temp() / "report.json";
+  const CommandResult result =
+      RunEstimator(With(DenseArgs(scene), {"--report_path", report_path}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+
+  const nlohmann::json report = ReadJson(report_path);
+  const nlohmann::json truth = ReadJson(scene / "ground_truth.json");
+  const double scale = report.at("scale").get<double>();
+  const double true_scale = truth.at("scale").get<double>();
+  EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError)
+      << "estimated " << scale << ", true " << true_scale;
+  EXPECT_TRUE(report.at("scale_initial").is_number());
+  EXPECT_GT(report.at("num_patches").get<int>(), 0);
+  EXPECT_EQ(report.at("views").size(), 8u);
+  for (const auto& view : report.at("views").items()) {
+    EXPECT_TRUE(view.value().contains("used"));
+    EXPECT_TRUE(view.value().contains("reason"));
+    EXPECT_TRUE(view.value().contains("focus_distance_m"));
+  }
+  EXPECT_GT(report.at("seconds").get<double>(), 0);
+
+  // Every metric artefact is the original times s; nothing else changed.
+  ExpectModelScaled(original, scene / "dense/sparse", scale);
+  const auto after = SnapshotTree(scene.root());
+  std::set<std::string> rescaled;
+  for (const auto& file : before) {
+    ASSERT_TRUE(after.count(file.first)) << file.first << " disappeared";
+    if (IsRescaledArtefact(file.first)) {
+      EXPECT_NE(after.at(file.first), file.second) << file.first;
+      rescaled.insert(file.first);
+    } else {
+      EXPECT_TRUE(after.at(file.first) == file.second)
+          << file.first << " changed";
+    }
+  }
+  // The model, 8 x 2 depth maps and fused.ply.
+  EXPECT_EQ(rescaled.size(), 2u + 16u + 1u);
+  for (const std::string& file : rescaled) {
+    if (file.find("depth_maps/") != std::string::npos) {
+      const std::string copy = scene.temp() / "depth_before.bin";
+      WriteTextFile(copy, before.at(file));
+      ExpectDepthMapScaled(copy, scene / file, scale);
+    }
+  }
+  const std::string fused_before = scene.temp() / "fused_before.ply";
+  WriteTextFile(fused_before, before.at("dense/fused.ply"));
+  ExpectFusedPlyScaled(fused_before, scene / "dense/fused.ply", scale);
+  // A record of what was applied.
+  const nlohmann::json record = ReadJson(scene / "dense/dp_scale_record.json");
+  EXPECT_EQ(after.size(), before.size() + 1);
+  EXPECT_NE(record.dump().find("cumulative_scale"), std::string::npos);
+
+  // A second run refuses and changes nothing; with --force it composes.
+  const auto rescaled_tree = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "already rescaled",
+                rescaled_tree, scene.root());
+  const std::string report2 = scene.temp() / "report2.json";
+  const CommandResult forced = RunEstimator(
+      With(DenseArgs(scene), {"--force", "1", "--report_path", report2}));
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  const double scale2 = ReadJson(report2).at("scale").get<double>();
+  // The model is already metric: a second estimate is close to 1.
+  EXPECT_LT(std::abs(scale2 - 1.0), kMaxScaleError);
+  const nlohmann::json record2 = ReadJson(scene / "dense/dp_scale_record.json");
+  EXPECT_NEAR(ReadJson(report2).at("cumulative_scale").get<double>(),
+              scale * scale2, 1e-9 * scale * scale2)
+      << record2.dump(2);
+}
+
+TEST(EndToEnd, DryRunChangesNothing) {
+  SceneCopy scene("dslr");
+  const auto before = SnapshotTree(scene.root());
+  const std::string report_path = scene.temp() / "report.json";
+  const CommandResult result = RunEstimator(
+      With(DenseArgs(scene), {"--dry_run", "1", "--report_path", report_path}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(SnapshotTree(scene.root()) == before);
+  EXPECT_TRUE(ReadJson(report_path).at("scale").is_number());
+}
+
+TEST(EndToEnd, OutputPathWritesARescaledCopy) {
+  SceneCopy scene("dslr");
+  const auto before = SnapshotTree(scene.root());
+  const std::string out = scene.temp() / "metric";
+  const std::string report_path = scene.temp() / "report.json";
+  const CommandResult result = RunEstimator(With(
+      DenseArgs(scene), {"--output_path", out, "--report_path", report_path}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(SnapshotTree(scene.root()) == before) << "input changed";
+  const double scale = ReadJson(report_path).at("scale").get<double>();
+  ExpectModelScaled(scene / "dense/sparse", out + "/sparse", scale);
+  ExpectDepthMapScaled(
+      scene / "dense/stereo/depth_maps/DP_0001.jpg.geometric.bin",
+      out + "/stereo/depth_maps/DP_0001.jpg.geometric.bin", scale);
+}
+
+TEST(EndToEnd, SparseModelOnly) {
+  SceneCopy scene("dslr");
+  const std::string original = scene.temp() / "original";
+  fs::create_directories(original);
+  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
+    fs::copy_file(scene / (std::string("sparse/0/") + name),
+                  fs::path(original) / name);
+  }
+  const std::string report_path = scene.temp() / "report.json";
+  const CommandResult result = RunEstimator(
+      {"--input_path", scene / "sparse/0", "--dp_image_path", scene / "dp",
+       "--lens_path", scene / "lens.csv", "--report_path", report_path});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const double scale = ReadJson(report_path).at("scale").get<double>();
+  const double true_scale =
+      ReadJson(scene / "ground_truth.json").at("scale").get<double>();
+  EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError)
+      << "estimated " << scale << ", true " << true_scale;
+  ExpectModelScaled(original, scene / "sparse/0", scale);
+}
+
+TEST(EndToEnd, KillDuringCommitThenRerunFinishes) {
+  // Kill the process right after its 5th rename, then run again: every file
+  // must end up fully rescaled exactly once.
+  SceneCopy scene("dslr");
+  const std::string original = scene.temp() / "original";
+  fs::create_directories(original);
+  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
+    fs::copy_file(scene / (std::string("dense/sparse/") + name),
+                  fs::path(original) / name);
+  }
+  const std::string report_path = scene.temp() / "report.json";
+  const CommandResult killed =
+      RunEstimator(With(DenseArgs(scene), {"--report_path", report_path}),
+                   {"DPSFM_FAULT_INJECT_COMMIT_AFTER=5"});
+  EXPECT_EQ(killed.exit_code, 77) << killed.err;
+  const CommandResult rerun = RunEstimator(DenseArgs(scene));
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_NE(rerun.err.find("Finished an interrupted rescale"),
+            std::string::npos)
+      << rerun.err;
+  const nlohmann::json record = ReadJson(scene / "dense/dp_scale_record.json");
+  ASSERT_EQ(record.at("entries").size(), 1u) << record.dump(2);
+  const double scale = record.at("entries")[0].at("scale").get<double>();
+  ExpectModelScaled(original, scene / "dense/sparse", scale);
+  for (fs::recursive_directory_iterator it(scene.root()), end; it != end;
+       ++it) {
+    EXPECT_EQ(it->path().string().find(".dpsfm-staged"), std::string::npos)
+        << it->path();
+  }
+}
+
+// --- Bad input: exit 1, one error line that says what and which file, and a
+// byte-identical workspace.
+
+TEST(EndToEndErrors, MissingDPView) {
+  SceneCopy scene("dslr");
+  fs::remove(scene / "dp/left/DP_0003.png");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0003.jpg", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, UnreadableDPView) {
+  SceneCopy scene("dslr");
+  WriteTextFile(scene / "dp/right/DP_0002.png", "not a png");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0002.png", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, DPViewSizeMismatch) {
+  // Both views cropped: they agree with each other but not with the camera.
+  SceneCopy scene("dslr");
+  for (const char* side : {"left", "right"}) {
+    const std::string path = scene / (std::string("dp/") + side + "/DP_0004.png");
+    const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+    cv::imwrite(path, image(cv::Rect(0, 0, image.cols - 7, image.rows)).clone());
+  }
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0004.jpg", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, LeftRightSizeMismatch) {
+  SceneCopy scene("dslr");
+  const std::string path = scene / "dp/left/DP_0004.png";
+  const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  cv::imwrite(path, image(cv::Rect(0, 0, image.cols - 7, image.rows)).clone());
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0004.png", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, TruncatedDepthMap) {
+  SceneCopy scene("dslr");
+  const std::string path =
+      scene / "dense/stereo/depth_maps/DP_0005.jpg.geometric.bin";
+  const std::string bytes = ReadTextFile(path);
+  WriteTextFile(path, bytes.substr(0, bytes.size() / 2));
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), path, before, scene.root());
+}
+
+TEST(EndToEndErrors, NonFiniteDepthMap) {
+  SceneCopy scene("dslr");
+  const std::string path =
+      scene / "dense/stereo/depth_maps/DP_0006.jpg.geometric.bin";
+  std::string bytes = ReadTextFile(path);
+  const float nan = std::nanf("");
+  std::memcpy(&bytes[bytes.size() - 400], &nan, sizeof(nan));
+  WriteTextFile(path, bytes);
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "non-finite", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, LensDataMissing) {
+  SceneCopy scene("dslr");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator({"--workspace_path", scene / "dense",
+                              "--dp_image_path", scene / "dp"}),
+                "--DPScaleEstimator.focal_length_mm", before, scene.root());
+}
+
+TEST(EndToEndErrors, ModelWithoutRegisteredImages) {
+  SceneCopy scene("dslr");
+  colmap::Reconstruction empty;
+  colmap::Reconstruction model;
+  model.Read(scene / "dense/sparse");
+  for (const auto& camera : model.Cameras()) {
+    empty.AddCamera(camera.second);
+  }
+  fs::remove_all(scene / "dense/sparse");
+  fs::create_directories(scene / "dense/sparse");
+  empty.WriteBinary(scene / "dense/sparse");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "no registered images", before,
+                scene.root());
+}
+
+TEST(EndToEndErrors, PanFocusCaptureIsRefusedWithAReason) {
+  SceneCopy scene("pan_focus");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), "too little blur", before,
+                scene.root());
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
