@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "dpsfm/colmap/workspace_reader.h"
 #include "tests/test_utils.h"
@@ -430,6 +431,61 @@ TEST(EndToEndErrors, PanFocusCaptureIsRefusedWithAReason) {
   const auto before = SnapshotTree(scene.root());
   ExpectRefusal(RunEstimator(DenseArgs(scene)), "too little blur", before,
                 scene.root());
+}
+
+// A project database holding the model's cameras and images (or, with
+// `rename`, images of another project).
+void WriteDatabase(const std::string& model_dir, const std::string& path,
+                   bool rename) {
+  colmap::Reconstruction model;
+  model.Read(model_dir);
+  colmap::Database database(path);
+  for (const auto& camera : model.Cameras()) {
+    database.WriteCamera(camera.second, /*use_camera_id=*/true);
+  }
+  for (const auto& image : model.Images()) {
+    colmap::Image copy;
+    copy.SetName(rename ? "other_" + image.second.Name() : image.second.Name());
+    copy.SetCameraId(image.second.CameraId());
+    database.WriteImage(copy);
+  }
+  database.Close();
+}
+
+TEST(EndToEnd, DatabaseIsOnlyRead) {
+  SceneCopy scene("dslr");
+  const std::string database = scene.temp() / "project.db";
+  WriteDatabase(scene / "sparse/0", database, false);
+  const auto before = SnapshotTree(scene.temp().path());
+  const CommandResult result = RunEstimator(With(
+      DenseArgs(scene), {"--database_path", database, "--dry_run", "1"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("Database: 8 images; 0 model images missing"),
+            std::string::npos)
+      << result.err;
+  // Not a byte changed, and no -wal / -shm files appeared.
+  EXPECT_TRUE(SnapshotTree(scene.temp().path()) == before);
+}
+
+TEST(EndToEndErrors, DatabaseOfAnotherProject) {
+  SceneCopy scene("dslr");
+  const std::string database = scene.temp() / "other.db";
+  WriteDatabase(scene / "sparse/0", database, true);
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(
+      RunEstimator(With(DenseArgs(scene), {"--database_path", database})),
+      "none of the model's 8 images is in the database", before,
+      scene.root());
+}
+
+TEST(EndToEndErrors, NotADatabase) {
+  SceneCopy scene("dslr");
+  const std::string database = scene.temp() / "notes.db";
+  WriteTextFile(database, "these are my notes, not a database");
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(
+      RunEstimator(With(DenseArgs(scene), {"--database_path", database})),
+      database, before, scene.root());
 }
 
 }  // namespace

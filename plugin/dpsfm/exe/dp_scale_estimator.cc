@@ -11,6 +11,7 @@
 #include "colmap/util/logging.h"
 #include "colmap/util/misc.h"
 #include "colmap/util/timer.h"
+#include "dpsfm/colmap/database_check.h"
 #include "dpsfm/colmap/report.h"
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
@@ -162,6 +163,21 @@ int RunDPScaleEstimator(int argc, char** argv) {
     }
 
     const WorkspaceReader reader(options, layout);
+    if (!options.database_path.empty()) {
+      const DatabaseCheck check = CheckModelAgainstDatabase(
+          options.database_path, reader.reconstruction());
+      LOG(INFO) << "Database: " << check.num_database_images
+                << " images; " << check.missing_images.size()
+                << " model images missing from it, "
+                << check.camera_mismatches.size()
+                << " with a different camera aspect";
+      for (const std::string& name : check.missing_images) {
+        LOG(WARNING) << "  not in the database: " << name;
+      }
+      for (const std::string& name : check.camera_mismatches) {
+        LOG(WARNING) << "  camera differs from the database's: " << name;
+      }
+    }
     std::vector<ViewSource> sources;
     for (size_t i = 0; i < reader.NumViews(); ++i) {
       const ViewSource& source = reader.Source(i);
