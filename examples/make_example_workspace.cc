@@ -26,6 +26,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "colmap/mvs/depth_map.h"
+#include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "colmap/util/ply.h"
 #include "dpsfm/core/dp_psf.h"
@@ -58,6 +59,10 @@ struct GeneratorOptions {
   int depth_map_factor = 1;
   // Mean gain of the right view relative to the left one.
   double right_gain = 1.0;
+  // Radial distortion k1 of the original images (COLMAP SIMPLE_RADIAL).
+  // The DP views and sparse/0 are in the distorted geometry; dense/ is
+  // undistorted (PINHOLE), as image_undistorter makes it.
+  double radial_k1 = 0.0;
 };
 
 void WriteDepthMap(const cv::Mat& depth_model, int factor,
@@ -123,6 +128,7 @@ int Run(const GeneratorOptions& options) {
                                  0.3 + 0.15 * unit(rng));
     views.push_back(PinholeView::LookAt(center, target, options.width,
                                         options.height, focal_px));
+    views.back().k1 = options.radial_k1;
   }
 
   colmap::Reconstruction reconstruction;
@@ -138,14 +144,20 @@ int Run(const GeneratorOptions& options) {
   truth["scale"] = true_scale;
   truth["model_unit"] = "metres / scale";
 
+  // Renders in the undistorted (dense) geometry: depth maps, tracks, fused.
   std::vector<RenderedView> renders;
   std::vector<std::string> names;
   for (int i = 0; i < options.num_views; ++i) {
     char name[32];
     std::snprintf(name, sizeof(name), "DP_%04d", i + 1);
     names.push_back(name);
+    // The original (possibly distorted) image, and the undistorted one.
     const RenderedView render = dpsfm::examples::RenderView(scene, views[i]);
-    renders.push_back(render);
+    PinholeView pinhole = views[i];
+    pinhole.k1 = 0;
+    renders.push_back(options.radial_k1 == 0
+                          ? render
+                          : dpsfm::examples::RenderView(scene, pinhole));
 
     // Focus somewhere inside the scene's depth range, as a photographer
     // focusing on the subject would.
@@ -190,9 +202,15 @@ int Run(const GeneratorOptions& options) {
     cv::Mat(left + right).convertTo(combined, CV_8U, 255.0);
     const std::string image_name = std::string(name) + ".jpg";
     cv::imwrite((out / "images" / image_name).string(), combined);
-    cv::imwrite((out / "dense/images" / image_name).string(), combined);
+    if (options.radial_k1 == 0) {
+      cv::imwrite((out / "dense/images" / image_name).string(), combined);
+    } else {
+      cv::Mat undistorted;
+      renders.back().image.convertTo(undistorted, CV_8U, 255.0);
+      cv::imwrite((out / "dense/images" / image_name).string(), undistorted);
+    }
 
-    const cv::Mat depth_model = render.depth / true_scale;
+    const cv::Mat depth_model = renders.back().depth / true_scale;
     const fs::path depth_dir = out / "dense/stereo/depth_maps";
     WriteDepthMap(depth_model, options.depth_map_factor,
                   (depth_dir / (image_name + ".geometric.bin")).string());
@@ -206,6 +224,8 @@ int Run(const GeneratorOptions& options) {
 
   // Tracks: grid samples of every view, observed wherever they are visible.
   std::vector<std::vector<colmap::Point2D>> points2D(options.num_views);
+  // The same observations in the original, distorted images (sparse/0).
+  std::vector<std::vector<Eigen::Vector2d>> distorted2D(options.num_views);
   struct Track3D {
     Eigen::Vector3d xyz;
     std::vector<std::pair<int, int>> observations;  // (view, point2D idx)
@@ -240,6 +260,8 @@ int Run(const GeneratorOptions& options) {
           point.xy = Eigen::Vector2d(u + 0.5, v + 0.5);
           track.observations.emplace_back(j, points2D[j].size());
           points2D[j].push_back(point);
+          distorted2D[j].push_back(views[j].Project(pc) +
+                                   Eigen::Vector2d(0.5, 0.5));
         }
         if (track.observations.size() >= 2) tracks.push_back(track);
       }
@@ -265,8 +287,31 @@ int Run(const GeneratorOptions& options) {
     reconstruction.AddPoint3D(track.xyz / true_scale, colmap_track,
                               Eigen::Vector3ub(128, 128, 128));
   }
-  reconstruction.WriteBinary((out / "sparse/0").string());
   reconstruction.WriteBinary((out / "dense/sparse").string());
+  // sparse/0: the model of the original images, as the mapper leaves it.
+  colmap::Camera original = colmap::Camera::CreateFromModelName(
+      1, "SIMPLE_RADIAL", focal_px, options.width, options.height);
+  original.params[3] = options.radial_k1;
+  reconstruction.Camera(1) = original;
+  for (int i = 0; i < options.num_views; ++i) {
+    colmap::Image& image = reconstruction.Image(i + 1);
+    for (size_t k = 0; k < distorted2D[i].size(); ++k) {
+      image.Point2D(k).xy = distorted2D[i][k];
+    }
+  }
+  reconstruction.WriteBinary((out / "sparse/0").string());
+  {
+    // The project database, as feature extraction leaves it (cameras and
+    // images; no features are needed here).
+    colmap::Database database((out / "database.db").string());
+    database.WriteCamera(original, /*use_camera_id=*/true);
+    for (int i = 0; i < options.num_views; ++i) {
+      colmap::Image image;
+      image.SetName(names[i] + ".jpg");
+      image.SetCameraId(1);
+      database.WriteImage(image);
+    }
+  }
 
   // fused.ply: every 4th depth pixel of every view, in model units.
   std::vector<colmap::PlyPoint> ply_points;
@@ -321,7 +366,8 @@ int main(int argc, char** argv) {
       ("scale", po::value(&options.scale)->default_value(options.scale), "metres per model unit (0: random)")
       ("noise", po::value(&options.noise)->default_value(options.noise), "noise sigma on [0,1]")
       ("depth_map_factor", po::value(&options.depth_map_factor)->default_value(options.depth_map_factor), "")
-      ("right_gain", po::value(&options.right_gain)->default_value(options.right_gain), "");
+      ("right_gain", po::value(&options.right_gain)->default_value(options.right_gain), "")
+      ("radial_k1", po::value(&options.radial_k1)->default_value(options.radial_k1), "SIMPLE_RADIAL k1 of the original images");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);

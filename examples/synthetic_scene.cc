@@ -120,6 +120,28 @@ PinholeView PinholeView::LookAt(const Eigen::Vector3d& center,
   return view;
 }
 
+Eigen::Vector3d PinholeView::RayThroughPixel(double col, double row) const {
+  const double xd = (col - (width - 1) / 2.0) / focal_px;
+  const double yd = (row - (height - 1) / 2.0) / focal_px;
+  // Invert r_d = r_u (1 + k1 r_u^2) by fixed-point iteration (converges for
+  // the mild distortion of real lenses).
+  double xu = xd, yu = yd;
+  for (int i = 0; i < 50 && k1 != 0; ++i) {
+    const double factor = 1 + k1 * (xu * xu + yu * yu);
+    xu = xd / factor;
+    yu = yd / factor;
+  }
+  return Eigen::Vector3d(xu, yu, 1.0);
+}
+
+Eigen::Vector2d PinholeView::Project(const Eigen::Vector3d& point_cam) const {
+  const double xu = point_cam.x() / point_cam.z();
+  const double yu = point_cam.y() / point_cam.z();
+  const double factor = 1 + k1 * (xu * xu + yu * yu);
+  return Eigen::Vector2d(focal_px * xu * factor + (width - 1) / 2.0,
+                         focal_px * yu * factor + (height - 1) / 2.0);
+}
+
 bool CastRay(const TabletopScene& scene,
              const Eigen::Vector3d& origin,
              const Eigen::Vector3d& direction,
@@ -168,7 +190,6 @@ RenderedView RenderView(const TabletopScene& scene, const PinholeView& view) {
   out.depth = cv::Mat(view.height, view.width, CV_32FC1, cv::Scalar(0));
   const Eigen::Vector3d center = view.Center();
   const Eigen::Matrix3d world_from_cam = view.rotation.transpose();
-  const double cx = (view.width - 1) / 2.0, cy = (view.height - 1) / 2.0;
 #pragma omp parallel for schedule(dynamic, 8)
   for (int row = 0; row < view.height; ++row) {
     for (int col = 0; col < view.width; ++col) {
@@ -178,8 +199,7 @@ RenderedView RenderView(const TabletopScene& scene, const PinholeView& view) {
         // Sample 0 is the pixel centre (gives the depth); 1-4 a 2x2 grid.
         const double dx = s == 0 ? 0 : ((s - 1) % 2 - 0.5) * 0.5;
         const double dy = s == 0 ? 0 : ((s - 1) / 2 - 0.5) * 0.5;
-        const Eigen::Vector3d ray_cam((col + dx - cx) / view.focal_px,
-                                      (row + dy - cy) / view.focal_px, 1.0);
+        const Eigen::Vector3d ray_cam = view.RayThroughPixel(col + dx, row + dy);
         const Eigen::Vector3d direction = (world_from_cam * ray_cam).normalized();
         double t;
         Eigen::Vector3d color;

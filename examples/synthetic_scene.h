@@ -35,9 +35,17 @@ struct PinholeView {
   int width = 0;
   int height = 0;
   double focal_px = 0;
+  // COLMAP SIMPLE_RADIAL distortion: normalised coordinates scale by
+  // (1 + k1 r^2). 0 is a pinhole camera.
+  double k1 = 0;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   Eigen::Vector3d Center() const { return -rotation.transpose() * translation; }
+  // Camera-frame ray (z = 1) through pixel (col, row), pixel centres at
+  // integer coordinates, undoing the distortion.
+  Eigen::Vector3d RayThroughPixel(double col, double row) const;
+  // Pixel (col, row) of a camera-frame point, with distortion.
+  Eigen::Vector2d Project(const Eigen::Vector3d& point_cam) const;
   // A view at `center` looking at `target` with the world z axis up.
   static PinholeView LookAt(const Eigen::Vector3d& center,
                             const Eigen::Vector3d& target,

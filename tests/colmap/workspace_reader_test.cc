@@ -286,3 +286,54 @@ TEST(ReadColmapDepthMap, RejectsBadFilesNamingThem) {
 }  // namespace
 }  // namespace test
 }  // namespace dpsfm
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+TEST(ResampleDepthToFrame, FollowsTheDistortion) {
+  // Original camera with strong barrel distortion, undistorted PINHOLE of
+  // another size; the depth map is half the undistorted size and encodes
+  // its own pixel position, so every resampled value says where it came
+  // from.
+  colmap::Camera original = colmap::Camera::CreateFromModelName(
+      1, "SIMPLE_RADIAL", 500, 400, 300);
+  original.params[3] = -0.2;
+  const colmap::Camera undistorted =
+      colmap::Camera::CreateFromModelName(2, "PINHOLE", 480, 440, 330);
+  cv::Mat depth(165, 220, CV_32FC1);
+  for (int r = 0; r < depth.rows; ++r) {
+    for (int c = 0; c < depth.cols; ++c) {
+      depth.at<float>(r, c) = 1 + c + 1000 * r;
+    }
+  }
+  const int k = 2;  // DP frames at half the original size
+  const cv::Mat mapped =
+      ResampleDepthToFrame(depth, undistorted, original, cv::Size(200, 150), k);
+  ASSERT_EQ(mapped.size(), cv::Size(200, 150));
+  int checked = 0;
+  for (int y = 0; y < 150; y += 7) {
+    for (int x = 0; x < 200; x += 7) {
+      const float value = mapped.at<float>(y, x);
+      if (value == 0) continue;  // outside the undistorted view
+      const int col = static_cast<int>(value - 1) % 1000;
+      const int row = static_cast<int>(value - 1) / 1000;
+      // Back to the original image through the undistorted camera: it must
+      // land on this frame pixel (within the depth map's 2 px cells).
+      const Eigen::Vector2d centre((col + 0.5) * 2, (row + 0.5) * 2);
+      const Eigen::Vector2d in_original =
+          original.ImgFromCam(undistorted.CamFromImg(centre));
+      EXPECT_NEAR(in_original.x(), (x + 0.5) * k, 3.0) << x << "," << y;
+      EXPECT_NEAR(in_original.y(), (y + 0.5) * k, 3.0) << x << "," << y;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400);
+  // The principal points correspond: frame centre -> depth map centre.
+  const float centre_value = mapped.at<float>(75, 100);
+  EXPECT_NEAR(static_cast<int>(centre_value - 1) % 1000, 110, 2);
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm

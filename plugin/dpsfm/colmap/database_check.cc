@@ -64,13 +64,25 @@ DatabaseCheck CheckModelAgainstDatabase(
     const std::string& database_path,
     const colmap::Reconstruction& reconstruction) {
   ReadOnlyDatabase database(database_path);
-  std::map<int64_t, std::pair<int64_t, int64_t>> camera_sizes;
-  database.Query("SELECT camera_id, width, height FROM cameras",
-                 [&](sqlite3_stmt* row) {
-                   camera_sizes[sqlite3_column_int64(row, 0)] = {
-                       sqlite3_column_int64(row, 1),
-                       sqlite3_column_int64(row, 2)};
-                 });
+  std::map<int64_t, colmap::Camera> cameras;
+  database.Query(
+      "SELECT camera_id, model, width, height, params FROM cameras",
+      [&](sqlite3_stmt* row) {
+        colmap::Camera camera;
+        camera.camera_id = static_cast<colmap::camera_t>(
+            sqlite3_column_int64(row, 0));
+        camera.model_id =
+            static_cast<colmap::CameraModelId>(sqlite3_column_int64(row, 1));
+        camera.width = static_cast<size_t>(sqlite3_column_int64(row, 2));
+        camera.height = static_cast<size_t>(sqlite3_column_int64(row, 3));
+        const int bytes = sqlite3_column_bytes(row, 4);
+        const auto* params =
+            static_cast<const double*>(sqlite3_column_blob(row, 4));
+        if (params != nullptr && bytes % sizeof(double) == 0) {
+          camera.params.assign(params, params + bytes / sizeof(double));
+        }
+        cameras[camera.camera_id] = camera;
+      });
   std::map<std::string, int64_t> image_cameras;
   database.Query("SELECT name, camera_id FROM images", [&](sqlite3_stmt* row) {
     image_cameras[Text(row, 0)] = sqlite3_column_int64(row, 1);
@@ -88,13 +100,16 @@ DatabaseCheck CheckModelAgainstDatabase(
     }
     ++found;
     const colmap::Camera& camera = reconstruction.Camera(image.CameraId());
-    const auto size = camera_sizes.find(entry->second);
+    const auto original = cameras.find(entry->second);
+    if (original != cameras.end() && original->second.VerifyParams()) {
+      check.original_cameras[image.Name()] = original->second;
+    }
     // A dense workspace's model is undistorted and may be resized, so only
     // a different aspect ratio counts as a mismatch.
-    if (size != camera_sizes.end() && size->second.second > 0 &&
+    if (original != cameras.end() && original->second.height > 0 &&
         camera.height > 0) {
-      const double db_aspect =
-          static_cast<double>(size->second.first) / size->second.second;
+      const double db_aspect = static_cast<double>(original->second.width) /
+                               original->second.height;
       const double model_aspect =
           static_cast<double>(camera.width) / camera.height;
       if (std::abs(db_aspect - model_aspect) > 0.05 * model_aspect) {

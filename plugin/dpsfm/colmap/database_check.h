@@ -3,6 +3,7 @@
 // open, and a wrong path would silently create an empty database.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,9 @@ struct DatabaseCheck {
   // size differs from the database's camera for that image.
   std::vector<std::string> missing_images;
   std::vector<std::string> camera_mismatches;
+  // The database's camera of each model image: the ORIGINAL camera, with its
+  // distortion, where the model is a dense workspace's undistorted one.
+  std::map<std::string, colmap::Camera> original_cameras;
 };
 
 // Reads image names and camera sizes from the database. Throws InputError if

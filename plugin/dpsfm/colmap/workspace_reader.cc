@@ -26,6 +26,21 @@ bool ReadHeaderField(std::istream* stream, long long* value) {
   return true;
 }
 
+// True if two cameras map pixels to rays identically (no distortion to
+// undo between them).
+bool SameGeometry(const colmap::Camera& a, const colmap::Camera& b) {
+  if (a.width != b.width || a.height != b.height) return false;
+  for (const double x : {0.0, 0.5, 1.0}) {
+    for (const double y : {0.0, 0.5, 1.0}) {
+      const Eigen::Vector2d pixel(x * a.width, y * a.height);
+      if ((a.CamFromImg(pixel) - b.CamFromImg(pixel)).norm() > 1e-6) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 cv::Mat ReadColmapDepthMap(const std::string& path) {
@@ -97,6 +112,11 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
               return reconstruction_.Image(a).Name() <
                      reconstruction_.Image(b).Name();
             });
+
+  if (!options_.database_path.empty()) {
+    database_check_ =
+        CheckModelAgainstDatabase(options_.database_path, reconstruction_);
+  }
 
   dp_index_.reset(new DPImageIndex(layout_));
   std::vector<std::string> missing;
@@ -173,16 +193,66 @@ std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
                    image_name + " (expected " + preferred + ")");
 }
 
+cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
+                             const colmap::Camera& undistorted,
+                             const colmap::Camera& original,
+                             const cv::Size& frame_size,
+                             int k) {
+  cv::Mat mapped(frame_size, CV_32FC1, cv::Scalar(0));
+  const double sx = static_cast<double>(depth.cols) / undistorted.width;
+  const double sy = static_cast<double>(depth.rows) / undistorted.height;
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < frame_size.height; ++y) {
+    for (int x = 0; x < frame_size.width; ++x) {
+      // COLMAP puts the top-left pixel centre at 0.5.
+      const Eigen::Vector2d ray = original.CamFromImg(
+          Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
+      const Eigen::Vector2d uv = undistorted.ImgFromCam(ray);
+      const int col = static_cast<int>(std::floor(uv.x() * sx));
+      const int row = static_cast<int>(std::floor(uv.y() * sy));
+      if (col >= 0 && row >= 0 && col < depth.cols && row < depth.rows) {
+        mapped.at<float>(y, x) = depth.at<float>(row, col);
+      }
+    }
+  }
+  return mapped;
+}
+
 DPView WorkspaceReader::LoadView(size_t index) const {
   const ViewSource& source = sources_.at(index);
   const colmap::Image& image = reconstruction_.Image(source.image_id);
   const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
 
   const DPFrames frames = LoadDPFrames(source.dp, options_.swap_dp_views);
-  const int k = DPFrameDownsampling(frames.left.size(),
-                                    static_cast<int>(camera.width),
-                                    static_cast<int>(camera.height),
-                                    source.image_name);
+  // A dense workspace's model is undistorted; the DP frames keep the
+  // geometry of the original images. With the original camera known (from
+  // the database) and different, depths are mapped through both cameras.
+  const colmap::Camera* original = nullptr;
+  if (layout_.dense) {
+    const auto entry =
+        database_check_.original_cameras.find(source.image_name);
+    if (entry != database_check_.original_cameras.end() &&
+        !SameGeometry(entry->second, camera)) {
+      original = &entry->second;
+    }
+  }
+  const colmap::Camera& frame_camera = original ? *original : camera;
+  int k = 0;
+  try {
+    k = DPFrameDownsampling(frames.left.size(),
+                            static_cast<int>(frame_camera.width),
+                            static_cast<int>(frame_camera.height),
+                            source.image_name);
+  } catch (const InputError& error) {
+    if (layout_.dense && original == nullptr &&
+        options_.database_path.empty()) {
+      throw InputError(std::string(error.what()) +
+                       "; if the DP views keep the geometry of distorted "
+                       "original images, pass --database_path so their "
+                       "cameras can be mapped");
+    }
+    throw;
+  }
   DPView view;
   view.name = source.image_name;
   view.left = frames.left;
@@ -193,6 +263,10 @@ DPView WorkspaceReader::LoadView(size_t index) const {
 
   if (layout_.dense) {
     view.depth = ReadColmapDepthMap(source.depth_source);
+    if (original != nullptr) {
+      view.depth = ResampleDepthToFrame(view.depth, camera, *original,
+                                        frames.left.size(), k);
+    }
     // The depth map covers the camera's field at its own resolution; it
     // must keep the camera's aspect (PatchMatch scales both sides alike).
     const double aspect_camera =

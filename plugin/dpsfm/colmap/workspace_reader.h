@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/database_check.h"
 #include "dpsfm/colmap/dp_images.h"
 #include "dpsfm/colmap/lens_data.h"
 #include "dpsfm/colmap/workspace.h"
@@ -20,6 +21,17 @@ namespace dpsfm {
 // CV_32FC1. Throws InputError naming the file if it is missing, malformed,
 // truncated, multi-channel or holds non-finite values.
 cv::Mat ReadColmapDepthMap(const std::string& path);
+
+// A dense workspace's depth map (in the undistorted camera's geometry, at
+// any resolution) resampled into a DP frame of the original, distorted
+// camera downsampled by k: frame pixel -> original image -> ray ->
+// undistorted image -> depth pixel (nearest, so depths never blend across
+// edges). Pixels that map outside the depth map get 0 (invalid).
+cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
+                             const colmap::Camera& undistorted,
+                             const colmap::Camera& original,
+                             const cv::Size& frame_size,
+                             int k);
 
 // Where one view's inputs come from, for the log and the report.
 struct ViewSource {
@@ -38,6 +50,8 @@ class WorkspaceReader {
   const colmap::Reconstruction& reconstruction() const {
     return reconstruction_;
   }
+  // The cross-check against --database_path (empty without one).
+  const DatabaseCheck& database_check() const { return database_check_; }
   size_t NumViews() const { return sources_.size(); }
   const ViewSource& Source(size_t index) const { return sources_[index]; }
 
@@ -53,6 +67,7 @@ class WorkspaceReader {
   colmap::Reconstruction reconstruction_;
   std::unique_ptr<DPImageIndex> dp_index_;
   std::vector<ViewSource> sources_;
+  DatabaseCheck database_check_;
 };
 
 }  // namespace dpsfm

@@ -164,13 +164,13 @@ int RunDPScaleEstimator(int argc, char** argv) {
 
     const WorkspaceReader reader(options, layout);
     if (!options.database_path.empty()) {
-      const DatabaseCheck check = CheckModelAgainstDatabase(
-          options.database_path, reader.reconstruction());
+      const DatabaseCheck& check = reader.database_check();
       LOG(INFO) << "Database: " << check.num_database_images
                 << " images; " << check.missing_images.size()
                 << " model images missing from it, "
                 << check.camera_mismatches.size()
-                << " with a different camera aspect";
+                << " with a different camera aspect; "
+                << check.original_cameras.size() << " original cameras";
       for (const std::string& name : check.missing_images) {
         LOG(WARNING) << "  not in the database: " << name;
       }
