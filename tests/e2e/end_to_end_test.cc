@@ -306,6 +306,29 @@ TEST(EndToEnd, SparseModelOnly) {
   ExpectModelScaled(original, scene / "sparse/0", scale);
 }
 
+TEST(EndToEnd, DistortedCamerasDenseAndSparse) {
+  SceneCopy scene("distorted");
+  const double true_scale =
+      ReadJson(scene / "ground_truth.json").at("scale").get<double>();
+  const std::string report_path = scene.temp() / "report.json";
+  // Dense: the database's original cameras map depths into the DP frames.
+  CommandResult result = RunEstimator(
+      With(DenseArgs(scene), {"--database_path", scene / "database.db",
+                              "--dry_run", "1", "--report_path", report_path}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("6 original cameras"), std::string::npos)
+      << result.err;
+  double scale = ReadJson(report_path).at("scale").get<double>();
+  EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
+  // Sparse: the model's own (distorted) 2D points are in frame geometry.
+  result = RunEstimator({"--input_path", scene / "sparse/0", "--dp_image_path",
+                         scene / "dp", "--lens_path", scene / "lens.csv",
+                         "--dry_run", "1", "--report_path", report_path});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  scale = ReadJson(report_path).at("scale").get<double>();
+  EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
+}
+
 TEST(EndToEnd, KillDuringCommitThenRerunFinishes) {
   // Kill the process right after its 5th rename, then run again: every file
   // must end up fully rescaled exactly once.

@@ -11,3 +11,7 @@ mkdir -p "$out"
 # Pan-focus: 24 mm at f/16 gives under a pixel of blur; no scale exists.
 "$generator" --output_path "$out/pan_focus" --seed 8 --num_views 4 \
   --focal_length_mm 24 --f_number 16
+# Distorted original images (SIMPLE_RADIAL k1 = -0.1): DP views and sparse/0
+# in the distorted geometry, dense/ undistorted, cameras in database.db.
+"$generator" --output_path "$out/distorted" --seed 9 --num_views 6 \
+  --radial_k1 -0.1
