@@ -126,6 +126,15 @@ WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options) {
                      options.dp_image_path);
   }
 
+  std::stringstream extra(options.extra_model_paths);
+  std::string model;
+  while (std::getline(extra, model, ',')) {
+    if (model.empty()) continue;
+    RequireDir(model, "--extra_model_paths entry");
+    if (!IsModelDir(model)) {
+      throw InputError("--extra_model_paths entry has no model: " + model);
+    }
+  }
   if (!options.image_path.empty()) {
     RequireDir(options.image_path, "--image_path");
   }

@@ -87,6 +87,18 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption("DPScaleEstimator.top_patch_fraction",
                             &core->top_patch_fraction,
                             "[T_c] fraction of patches kept per view");
+  manager->AddDefaultOption("DPScaleEstimator.min_blur_range_px",
+                            &core->linear.min_blur_range_px,
+                            "[T_p] views need a wider blur range (px)");
+  manager->AddDefaultOption("DPScaleEstimator.num_selected_views",
+                            &core->linear.num_selected_views,
+                            "[N_v] views nearest the median kept");
+  manager->AddDefaultOption("DPScaleEstimator.num_candidates",
+                            &core->intensity.num_candidates,
+                            "candidate scales of the intensity search");
+  manager->AddDefaultOption("DPScaleEstimator.candidate_range",
+                            &core->intensity.relative_range,
+                            "[T_s] candidates span s* (1 +- this)");
   manager->AddDefaultOption("DPScaleEstimator.intensity_refinement",
                             &core->intensity_refinement,
                             "run the intensity-based search after the "
