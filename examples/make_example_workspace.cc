@@ -63,6 +63,9 @@ struct GeneratorOptions {
   // The DP views and sparse/0 are in the distorted geometry; dense/ is
   // undistorted (PINHOLE), as image_undistorter makes it.
   double radial_k1 = 0.0;
+  // "additive" (seamless surfaces) or "layers" (occlusion-aware "over"
+  // compositing, seams at blur-bin boundaries): see DPRenderOptions.
+  std::string compositing = "additive";
 };
 
 void WriteDepthMap(const cv::Mat& depth_model, int factor,
@@ -184,8 +187,13 @@ int Run(const GeneratorOptions& options) {
       }
     }
     cv::Mat left, right;
+    dpsfm::DPRenderOptions render_options;
+    render_options.compositing =
+        options.compositing == "layers"
+            ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
+            : dpsfm::DPRenderOptions::Compositing::kAdditive;
     dpsfm::RenderDPViews(render.image, render.depth, radius, psf,
-                         dpsfm::DPRenderOptions(), &left, &right);
+                         render_options, &left, &right);
     right *= options.right_gain;
     for (cv::Mat* view : {&left, &right}) {
       cv::Mat noise(view->size(), view->type());
@@ -367,7 +375,8 @@ int main(int argc, char** argv) {
       ("noise", po::value(&options.noise)->default_value(options.noise), "noise sigma on [0,1]")
       ("depth_map_factor", po::value(&options.depth_map_factor)->default_value(options.depth_map_factor), "")
       ("right_gain", po::value(&options.right_gain)->default_value(options.right_gain), "")
-      ("radial_k1", po::value(&options.radial_k1)->default_value(options.radial_k1), "SIMPLE_RADIAL k1 of the original images");
+      ("radial_k1", po::value(&options.radial_k1)->default_value(options.radial_k1), "SIMPLE_RADIAL k1 of the original images")
+      ("compositing", po::value(&options.compositing)->default_value(options.compositing), "additive | layers");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -377,8 +386,11 @@ int main(int argc, char** argv) {
     }
     po::notify(vm);
     if (options.num_views < 1 || options.width < 64 || options.height < 64 ||
-        options.depth_map_factor < 1) {
-      throw std::invalid_argument("num_views >= 1, width/height >= 64, depth_map_factor >= 1");
+        options.depth_map_factor < 1 ||
+        (options.compositing != "additive" && options.compositing != "layers")) {
+      throw std::invalid_argument(
+          "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
+          "compositing additive or layers");
     }
     return Run(options);
   } catch (const std::exception& error) {

@@ -90,6 +90,10 @@ void RenderDPViews(const cv::Mat& sharp,
     for (int view = 0; view < 2; ++view) {
       const cv::Mat& kernel = view == 0 ? kernels.left : kernels.right;
       cv::Mat out = (view == 0 ? *left : *right)(roi);
+      if (options.compositing == DPRenderOptions::Compositing::kAdditive) {
+        out += ConvolvePsf(layer, kernel);
+        continue;
+      }
       // Coverage of this layer in this view: the layer's mask blurred by the
       // view's kernel, rescaled to [0, 1] by the view's share of the light.
       const double share = cv::sum(kernel)[0];

@@ -17,6 +17,23 @@ struct DPRenderOptions {
   // at a third of the cost of 0.1 px bins.
   double radius_step_px = 0.25;
 
+  // How the radius bins are combined.
+  enum class Compositing {
+    // Sum of every bin blurred by its own kernel: each scene point spreads
+    // its light with its own PSF. Exact for surfaces without occlusion, so
+    // continuous slanted surfaces stay seamless; at depth edges the blurred
+    // foreground does not hide the background (a halo), which only patches
+    // straddling the edge see, and the estimator discards those.
+    kAdditive,
+    // Bins composited back to front with "over": the nearer layer hides
+    // what lies behind it. Right at depth edges, but a continuous surface
+    // split into bins gets a seam at every bin boundary (each bin's soft
+    // edge partly hides its neighbour), which biases blur estimates on
+    // slanted surfaces.
+    kOcclusionLayers,
+  };
+  Compositing compositing = Compositing::kAdditive;
+
   bool Check() const;
 };
 
@@ -26,8 +43,7 @@ struct DPRenderOptions {
 // radius_px: CV_32FC1 signed blur radius per pixel (> 0 farther than focus).
 // Outputs left and right views of the same type as `sharp`. Each view
 // receives half of the light (left + right is the ordinary defocused image).
-// Layers are composited back to front, so a near object's blur spreads over
-// the far background but the background does not bleed through it.
+// See DPRenderOptions::compositing for how occlusion is treated.
 void RenderDPViews(const cv::Mat& sharp,
                    const cv::Mat& depth,
                    const cv::Mat& radius_px,

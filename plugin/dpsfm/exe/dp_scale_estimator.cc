@@ -13,6 +13,7 @@
 #include "colmap/util/timer.h"
 #include "dpsfm/colmap/database_check.h"
 #include "dpsfm/colmap/report.h"
+#include "dpsfm/colmap/report_plots.h"
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/colmap/workspace_reader.h"
@@ -208,6 +209,10 @@ int RunDPScaleEstimator(int argc, char** argv) {
                                std::make_shared<TranslatingDiskPsf>());
     RunTimings timings;
     std::vector<DPViewSummary> summaries;
+    // A few views' images for the report's patch overlays (8-bit, to keep
+    // memory bounded): the first, middle and last view.
+    std::vector<std::pair<int, cv::Mat>> overlay_images;
+    const int num_views = static_cast<int>(reader.NumViews());
     for (size_t i = 0; i < reader.NumViews(); ++i) {
       colmap::Timer read_timer;
       read_timer.Start();
@@ -220,6 +225,15 @@ int RunDPScaleEstimator(int argc, char** argv) {
         throw InputError("image " + view.name + ": " + error.what());
       }
       timings.blur += summary.seconds;
+      const int index = static_cast<int>(i);
+      if (!options.report_path.empty() &&
+          (index == 0 || index == (num_views - 1) / 2 ||
+           index == num_views - 1) &&
+          (overlay_images.empty() || overlay_images.back().first != index)) {
+        cv::Mat image;
+        cv::Mat(0.5 * (view.left + view.right)).convertTo(image, CV_8U, 255.0);
+        overlay_images.emplace_back(index, image);
+      }
       LOG(INFO) << "[" << i + 1 << "/" << reader.NumViews() << "] "
                 << view.name << ": " << summary.patches_valid << " of "
                 << summary.patches_tried << " patches with a blur estimate, "
@@ -240,6 +254,13 @@ int RunDPScaleEstimator(int argc, char** argv) {
     // Without a rescale to follow, the report is complete now.
     const bool rescale = result.success && !options.dry_run;
     timings.total = total_timer.ElapsedSeconds();
+    if (!options.report_path.empty()) {
+      for (const std::string& plot :
+           WriteReportPlots(result, overlay_images, options.report_path,
+                            summaries.empty() ? 0 : summaries[0].patch_size)) {
+        LOG(INFO) << "Plot: " << plot;
+      }
+    }
     if (!options.report_path.empty() && !rescale) {
       WriteJsonFile(options.report_path,
                     MakeReport(result, sources, summaries, timings));
