@@ -7,7 +7,12 @@
 #include <iostream>
 #include <string>
 
+#include <algorithm>
+#include <vector>
+
 #include <nlohmann/json.hpp>
+
+#include "colmap/scene/reconstruction.h"
 
 namespace {
 
@@ -20,19 +25,57 @@ nlohmann::json ReadJson(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string truth_path, report_path;
+  std::string truth_path, report_path, model_path;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--ground_truth") truth_path = argv[i + 1];
     if (flag == "--report") report_path = argv[i + 1];
+    if (flag == "--model_path") model_path = argv[i + 1];
   }
   if (truth_path.empty() || report_path.empty()) {
-    std::cerr << "usage: dpsfm_compare_to_truth --ground_truth FILE --report FILE\n";
+    std::cerr << "usage: dpsfm_compare_to_truth --ground_truth FILE --report "
+                 "FILE [--model_path RESCALED_MODEL]\n";
     return EXIT_FAILURE;
   }
   try {
     const nlohmann::json truth = ReadJson(truth_path);
     const nlohmann::json report = ReadJson(report_path);
+    if (!model_path.empty()) {
+      // A model of the real pipeline has a frame and scale of its own: judge
+      // it by its camera distances, which after rescaling must be metres.
+      colmap::Reconstruction model;
+      model.Read(model_path);
+      std::vector<std::pair<std::string, Eigen::Vector3d>> centers;
+      for (const colmap::image_t id : model.RegImageIds()) {
+        const colmap::Image& image = model.Image(id);
+        if (truth.at("views").contains(image.Name())) {
+          centers.emplace_back(image.Name(), image.ProjectionCenter());
+        }
+      }
+      std::vector<double> ratios;
+      for (size_t i = 0; i < centers.size(); ++i) {
+        for (size_t j = i + 1; j < centers.size(); ++j) {
+          const auto& a = truth["views"][centers[i].first]["center_m"];
+          const auto& b = truth["views"][centers[j].first]["center_m"];
+          const Eigen::Vector3d ta(a[0], a[1], a[2]), tb(b[0], b[1], b[2]);
+          const double d_true = (ta - tb).norm();
+          if (d_true > 1e-6) {
+            ratios.push_back((centers[i].second - centers[j].second).norm() /
+                             d_true);
+          }
+        }
+      }
+      if (ratios.empty()) throw std::runtime_error("no camera pairs to compare");
+      std::sort(ratios.begin(), ratios.end());
+      const double median = ratios[ratios.size() / 2];
+      std::printf("\nrescaled model %s: %zu registered images\n",
+                  model_path.c_str(), centers.size());
+      std::printf("camera distances, metres in the model / true metres: median "
+                  "%.4f (min %.4f, max %.4f over %zu pairs): error %.2f%%\n",
+                  median, ratios.front(), ratios.back(), ratios.size(),
+                  100 * std::abs(1 - median));
+      return EXIT_SUCCESS;
+    }
     const double s_true = truth.at("scale").get<double>();
     const double s_est = report.at("scale").get<double>();
     const double s_lin = report.at("scale_initial").get<double>();

@@ -228,6 +228,9 @@ int Run(const GeneratorOptions& options) {
     lens_csv << image_name << "," << options.focal_length_mm << ","
              << options.f_number << "," << lens.pixel_pitch_um << "\n";
     truth["views"][image_name]["focus_distance_m"] = focus_m;
+    const Eigen::Vector3d center = views[i].Center();
+    truth["views"][image_name]["center_m"] = {center.x(), center.y(),
+                                              center.z()};
   }
 
   // Tracks: grid samples of every view, observed wherever they are visible.
