@@ -2,6 +2,7 @@
 // binary estimates the scale of a scene whose truth is known, rescales every
 // artefact by exactly that scale, leaves everything else byte-identical,
 // refuses to rescale twice, and survives a kill during its commit.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -327,6 +328,57 @@ TEST(EndToEnd, DistortedCamerasDenseAndSparse) {
   ASSERT_EQ(result.exit_code, 0) << result.err;
   scale = ReadJson(report_path).at("scale").get<double>();
   EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
+}
+
+TEST(EndToEnd, RealColmapPipelineSparseMode) {
+  // COLMAP's own SfM on the generated images gives a model of arbitrary
+  // frame and scale; after dp_scale_estimator its camera distances must be
+  // the true ones in metres.
+  SceneCopy scene("dslr");
+  const std::string db = scene.temp() / "pipeline.db";
+  const std::string sparse = scene.temp() / "sparse";
+  fs::create_directories(sparse);
+  for (const std::vector<std::string>& step :
+       std::vector<std::vector<std::string>>{
+           {"feature_extractor", "--database_path", db, "--image_path",
+            scene / "images", "--ImageReader.single_camera", "1",
+            "--SiftExtraction.use_gpu", "0"},
+           {"exhaustive_matcher", "--database_path", db,
+            "--SiftMatching.use_gpu", "0"},
+           {"mapper", "--database_path", db, "--image_path", scene / "images",
+            "--output_path", sparse}}) {
+    std::vector<std::string> command = {kColmap};
+    command.insert(command.end(), step.begin(), step.end());
+    const CommandResult result = RunCommand(command);
+    ASSERT_EQ(result.exit_code, 0) << step[0] << "\n" << result.err;
+  }
+  ASSERT_TRUE(fs::is_directory(sparse + "/0"));
+  const CommandResult result = RunEstimator(
+      {"--input_path", sparse + "/0", "--dp_image_path", scene / "dp",
+       "--lens_path", scene / "lens.csv", "--database_path", db});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+
+  const nlohmann::json truth = ReadJson(scene / "ground_truth.json");
+  colmap::Reconstruction model;
+  model.Read(sparse + "/0");
+  std::vector<double> ratios;
+  const std::vector<colmap::image_t> ids = model.RegImageIds();
+  for (size_t i = 0; i < ids.size(); ++i) {
+    for (size_t j = i + 1; j < ids.size(); ++j) {
+      const colmap::Image& a = model.Image(ids[i]);
+      const colmap::Image& b = model.Image(ids[j]);
+      const auto& ta = truth["views"][a.Name()]["center_m"];
+      const auto& tb = truth["views"][b.Name()]["center_m"];
+      const Eigen::Vector3d true_a(ta[0], ta[1], ta[2]);
+      const Eigen::Vector3d true_b(tb[0], tb[1], tb[2]);
+      ratios.push_back((a.ProjectionCenter() - b.ProjectionCenter()).norm() /
+                       (true_a - true_b).norm());
+    }
+  }
+  ASSERT_GE(ids.size(), 6u);
+  std::sort(ratios.begin(), ratios.end());
+  EXPECT_LT(std::abs(1 - ratios[ratios.size() / 2]), kMaxScaleError)
+      << "median metric/true camera distance " << ratios[ratios.size() / 2];
 }
 
 TEST(EndToEnd, KillDuringCommitThenRerunFinishes) {
