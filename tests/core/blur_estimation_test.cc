@@ -181,6 +181,64 @@ TEST(EstimatePatchBlur, BeyondTheBoundIsRejected) {
   }
 }
 
+// A patch blurred far beyond the search bound (the near floor of a tabletop
+// scene at r = -20..-30 px against an automatic bound of 5.5 px) fits no
+// kernel pair, yet its loss can have an interior minimum at a small radius:
+// it used to come back as a valid "nearly in focus" patch. It must be
+// rejected or flagged by its relative residual, which stays tiny for patches
+// inside the bound.
+TEST(EstimatePatchBlur, FarBeyondTheBoundIsNotAFit) {
+  const TranslatingDiskPsf psf;
+  BlurEstimationOptions options;
+  options.max_radius_px = 5.5;
+  const int patch = 33 + 2 * psf.KernelRadius(5.5);  // the pipeline's crop
+  double worst_inside = 0;
+  for (const double radius : {2.0, -3.5, 4.5}) {
+    for (uint64_t seed = 201; seed < 205; ++seed) {
+      const DPPair pair = MakePatch(radius, seed, 0.002, 1, 1, patch);
+      const PatchBlurEstimate e =
+          EstimatePatchBlur(pair.left, pair.right, psf, options);
+      ASSERT_TRUE(e.valid) << "r = " << radius << ": " << e.reject_reason;
+      EXPECT_NEAR(e.radius_px, radius, 0.35);
+      worst_inside = std::max(worst_inside, e.relative_residual);
+    }
+  }
+  EXPECT_LT(worst_inside, 0.001);
+  // Smooth multi-octave texture (value noise with cells of 160 px down to
+  // 5 px, as the example scene's surfaces at 0.5 m):
+  // heavy blur leaves little structure and spurious interior minima appear.
+  test::TextureOptions smooth;
+  smooth.coarsest_cell_px = 160;
+  smooth.octaves = 6;
+  smooth.persistence = 0.75;
+  smooth.shapes_per_10k_px = 0;
+  int valid_beyond = 0, tried = 0;
+  for (const double radius : {-24.0, -16.0, 18.0}) {
+    for (uint64_t seed = 211; seed < 231; ++seed) {
+      const int margin = 64;
+      const cv::Mat sharp = MakeTexture(
+          cv::Size(patch + 2 * margin, patch + 2 * margin), seed, smooth);
+      RenderOptions render;
+      render.noise_sigma = 0.002;
+      render.noise_seed = seed + 1000;
+      const DPPair full = RenderDP(sharp, psf, radius, render);
+      const cv::Rect crop(margin, margin, patch, patch);
+      const DPPair pair{full.left(crop).clone(), full.right(crop).clone()};
+      ++tried;
+      const PatchBlurEstimate e =
+          EstimatePatchBlur(pair.left, pair.right, psf, options);
+      valid_beyond += e.valid;
+      EXPECT_TRUE(!e.valid || e.relative_residual > 3 * worst_inside)
+          << "r = " << radius << " read as " << e.radius_px
+          << " with relative residual " << e.relative_residual
+          << " (inside the bound <= " << worst_inside << ")";
+    }
+  }
+  // Diagnostic: how many of them the bound test alone lets through.
+  std::printf("far beyond the bound: %d of %d not at the bound\n",
+              valid_beyond, tried);
+}
+
 TEST(EstimatePatchBlur, RejectsBadInput) {
   const TranslatingDiskPsf psf;
   const BlurEstimationOptions options;

@@ -220,3 +220,66 @@ TEST(SearchScaleByIntensity, RefusesWithoutInput) {
 
 }  // namespace
 }  // namespace dpsfm
+
+namespace dpsfm {
+namespace {
+
+// Patches the model cannot fit: a colour channel without scene content (only
+// clipped noise, as a renderer bug once produced) and patches whose true blur
+// lies far beyond what the crops support. The absolute losses fall with blur
+// on such patches, so their sum over many patches drifted to the small-s
+// edge of the range; the relative loss must stay near the truth.
+TEST(SearchScaleByIntensity, PatchesTheModelCannotFitDoNotDragTheMinimum) {
+  const TranslatingDiskPsf psf;
+  const double scale = 0.5;
+  test::RenderOptions render;
+  render.noise_sigma = 0.002;
+  Scene scene = MakeScene(psf, scale, 3, 8, render);
+  cv::RNG rng(5);
+  for (IntensityPatch& patch : scene.patches) {
+    for (cv::Mat* image : {&patch.left, &patch.right}) {
+      std::vector<cv::Mat> channels;
+      cv::split(*image, channels);
+      for (int c = 1; c < 3; ++c) {
+        cv::Mat noise(channels[c].size(), CV_32FC1);
+        rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.002);
+        channels[c] = cv::max(noise, 0.0);
+      }
+      cv::merge(channels, *image);
+    }
+  }
+  // Two patches per view blurred three times beyond the crops' support.
+  for (int v = 0; v < 3; ++v) {
+    for (int j = 0; j < 2; ++j) {
+      test::RenderOptions rv = render;
+      rv.noise_seed = 4000 + 10 * v + j;
+      IntensityPatch patch = RenderPatch(psf, j ? 3 * kMaxRadius : -3 * kMaxRadius,
+                                         v, 1.0, 700 + 10 * v + j, 3, rv);
+      // Its depth claims a modest blur.
+      patch.depth = scene.views[v].focus_distance_model * (j ? 1.2 : 0.9);
+      scene.patches.push_back(patch);
+    }
+  }
+  IntensitySearchOptions options;
+  options.num_bootstrap = 0;
+  options.max_radius_px = kMaxRadius;
+  double relative_error = 1;
+  for (IntensityLoss loss :
+       {IntensityLoss::kNoiseCorrectedL2, IntensityLoss::kRelativeL2}) {
+    options.loss = loss;
+    const IntensitySearchResult result = SearchScaleByIntensity(
+        scene.views, scene.patches, scale * 1.05, psf, options);
+    ASSERT_TRUE(result.success);
+    std::printf("unfittable patches, loss %-20s: scale error %+.4f%s\n",
+                IntensityLossName(loss), result.scale / scale - 1.0,
+                result.at_boundary ? " (at the range edge)" : "");
+    if (loss == IntensityLoss::kRelativeL2) {
+      relative_error = result.scale / scale - 1.0;
+      EXPECT_FALSE(result.at_boundary);
+    }
+  }
+  EXPECT_LT(std::abs(relative_error), 0.01);
+}
+
+}  // namespace
+}  // namespace dpsfm

@@ -683,6 +683,17 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     }
   }
 
+  {
+    // Signal power of the interior: gain-equalised variances minus noise.
+    const cv::Mat il = gl(t.interior), ir = gr(t.interior);
+    cv::Scalar ml, sl, mr, sr;
+    cv::meanStdDev(il, ml, sl);
+    cv::meanStdDev(ir, mr, sr);
+    const double noise2 = std::isfinite(sigma2) ? sigma2 : 0.0;
+    const double power =
+        std::max(sl[0] * sl[0] + sr[0] * sr[0] - 2 * noise2, 1e-300);
+    result.relative_residual = std::max(best.corrected, 0.0) / power;
+  }
   result.radius_px = best.radius;
   result.loss = best.raw;
   result.corrected_loss = best.corrected;

@@ -127,6 +127,13 @@ struct PatchBlurEstimate {
   // from the coarse search; +inf if there is none. A small gap to
   // corrected_loss means an ambiguous sign.
   double opposite_sign_loss = 0;
+  // corrected_loss relative to the interior's signal power (variance of
+  // left + variance of right, gain-equalised, noise variance removed): the
+  // share of the patch's structure the best kernel pair leaves unexplained.
+  // ~0 for a patch the model fits (one depth, blur inside the bound); large
+  // when the true blur lies beyond the search bound (then a spurious small
+  // radius can win) or the depth varies inside the patch.
+  double relative_residual = 0;
   std::string reject_reason;
 };
 

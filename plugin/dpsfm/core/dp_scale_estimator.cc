@@ -87,6 +87,16 @@ std::string CountsToString(
   return s.str();
 }
 
+// Whether `value` lies in [lo, hi] widened by a relative systematic term
+// (in quadrature with each half).
+bool IntervalContains(double centre, double lo, double hi, double relative,
+                      double value) {
+  const double sys = relative * centre;
+  const double dl = std::max(0.0, centre - lo), dh = std::max(0.0, hi - centre);
+  return value >= centre - std::sqrt(dl * dl + sys * sys) &&
+         value <= centre + std::sqrt(dh * dh + sys * sys);
+}
+
 }  // namespace
 
 bool DPScaleOptions::Check() const {
@@ -99,11 +109,17 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GE(min_patches_per_view, 0);
   DPSFM_CHECK_GE(depth_strata, 1);
   DPSFM_CHECK_GE(max_stored_patches_per_view, 0);
+  DPSFM_CHECK_GE(max_stored_megabytes_per_view, 0);
   DPSFM_CHECK(min_depth_coverage > 0 && min_depth_coverage <= 1);
   DPSFM_CHECK_GE(min_depth_points_per_patch, 1);
   DPSFM_CHECK_GT(max_relative_depth_spread, 0);
   DPSFM_CHECK_GE(min_texture_snr, 0);
+  DPSFM_CHECK_GE(max_relative_residual, 0);
+  DPSFM_CHECK_GE(relative_residual_factor, 0);
   DPSFM_CHECK_GT(max_intensity_ci_relative_width, 0);
+  DPSFM_CHECK_GT(max_scale_ci_relative_width, 0);
+  DPSFM_CHECK_GE(min_total_patches, 0);
+  DPSFM_CHECK_GE(scale_systematic_uncertainty, 0);
   DPSFM_CHECK(min_intensity_bootstrap_support >= 0 &&
               min_intensity_bootstrap_support <= 1);
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
@@ -290,14 +306,65 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                        p + 2 * crop_border,
                        p + 2 * crop_border);
       try {
-        estimates[k] =
-            estimator.Estimate(gray_left(r).clone(), gray_right(r).clone());
+        const cv::Mat patch_left = gray_left(r).clone();
+        const cv::Mat patch_right = gray_right(r).clone();
+        // Cheap pre-selection: a patch whose horizontal texture does not
+        // clear what noise alone gives would be dropped after the search
+        // anyway (same measures as the estimator's, with a 10 % margin for
+        // its gain equalisation); skip the search.
+        if (options_.min_texture_snr > 0) {
+          cv::Mat sum, diff;
+          cv::add(patch_left, patch_right, sum);
+          cv::subtract(patch_left, patch_right, diff);
+          const double sl = EstimateNoiseSigma(patch_left);
+          const double sr = EstimateNoiseSigma(patch_right);
+          const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
+          const double sigma =
+              std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
+          const double snr =
+              HorizontalTexture(sum) / (3.91 * std::max(sigma, 1e-6));
+          if (snr < 0.9 * options_.min_texture_snr) {
+            estimates[k].valid = false;
+            estimates[k].texture = HorizontalTexture(sum);
+            estimates[k].noise_sigma = sigma;
+            estimates[k].reject_reason = "with texture too weak for the noise";
+            continue;
+          }
+        }
+        estimates[k] = estimator.Estimate(patch_left, patch_right);
       } catch (const std::exception& e) {
         estimates[k].valid = false;
         estimates[k].reject_reason = e.what();
       }
     }
   }
+
+  // Residual threshold of this view (see max_relative_residual).
+  double residual_threshold = options_.max_relative_residual;
+  {
+    std::vector<double> residuals;
+    for (int k = 0; k < num; ++k) {
+      if (candidates[k].reject.empty() && estimates[k].valid &&
+          std::isfinite(estimates[k].relative_residual)) {
+        residuals.push_back(estimates[k].relative_residual);
+      }
+    }
+    if (!residuals.empty()) {
+      std::nth_element(residuals.begin(),
+                       residuals.begin() + residuals.size() / 2,
+                       residuals.end());
+      residual_threshold =
+          std::max(residual_threshold, options_.relative_residual_factor *
+                                           residuals[residuals.size() / 2]);
+    }
+  }
+  auto usable = [&](int k) {
+    const PatchBlurEstimate& e = estimates[k];
+    return candidates[k].reject.empty() && e.valid && !e.at_bound &&
+           std::isfinite(e.radius_px) &&
+           TextureSnr(e) >= options_.min_texture_snr &&
+           !(e.relative_residual > residual_threshold);
+  };
 
   std::map<std::string, int> rejections;
   for (int k = 0; k < num; ++k) {
@@ -315,6 +382,11 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     const double texture_snr = TextureSnr(e);
     if (!(texture_snr >= options_.min_texture_snr)) {
       rejections["with texture too weak for the noise"]++;
+      continue;
+    }
+    if (e.relative_residual > residual_threshold) {
+      rejections["not fitted by one blur (blur beyond the search bound or "
+                 "depth varying inside)"]++;
       continue;
     }
     PatchSample s;
@@ -360,18 +432,19 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   std::stable_sort(by_confidence.begin(),
                    by_confidence.end(),
                    [&](int a, int b) { return confidence[a] > confidence[b]; });
-  if (static_cast<int>(by_confidence.size()) >
-      options_.max_stored_patches_per_view) {
-    by_confidence.resize(options_.max_stored_patches_per_view);
+  {
+    const double crop_bytes = 2.0 * crop * crop * left.channels() * 2;
+    const int by_memory = static_cast<int>(
+        options_.max_stored_megabytes_per_view * 1e6 / crop_bytes);
+    const int cap = std::min(options_.max_stored_patches_per_view, by_memory);
+    if (static_cast<int>(by_confidence.size()) > cap) {
+      by_confidence.resize(std::max(0, cap));
+    }
   }
   // Map samples back to their grid rectangles.
   std::vector<int> sample_candidate;
   for (int k = 0; k < num; ++k) {
-    if (candidates[k].reject.empty() && estimates[k].valid &&
-        !estimates[k].at_bound && std::isfinite(estimates[k].radius_px) &&
-        TextureSnr(estimates[k]) >= options_.min_texture_snr) {
-      sample_candidate.push_back(k);
-    }
+    if (usable(k)) sample_candidate.push_back(k);
   }
   for (int i : by_confidence) {
     const cv::Rect interior = candidates[sample_candidate[i]].interior;
@@ -476,6 +549,54 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     result.failure_reason = s.str();
     return result;
   }
+  // Intervals: the bootstrap's, widened by the systematic term.
+  auto widen = [&](double s, double* lo, double* hi) {
+    const double sys = options_.scale_systematic_uncertainty * s;
+    const double dl = std::max(0.0, s - *lo), dh = std::max(0.0, *hi - s);
+    *lo = s - std::sqrt(dl * dl + sys * sys);
+    *hi = s + std::sqrt(dh * dh + sys * sys);
+  };
+  widen(linear.scale, &linear.scale_ci_low, &linear.scale_ci_high);
+  {
+    const double width =
+        (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
+    std::ostringstream s;
+    if (linear.num_rows < options_.min_total_patches) {
+      s << "too few usable patches for a scale (" << linear.num_rows
+        << " in the joint solve, need " << options_.min_total_patches
+        << ")";
+    } else if (!(width <= options_.max_scale_ci_relative_width)) {
+      s << "the data do not determine the scale: its bootstrap interval ["
+        << linear.scale_ci_low << ", " << linear.scale_ci_high << "] spans "
+        << std::fixed << std::setprecision(0) << 100 * width
+        << " % of the estimate " << std::setprecision(4) << linear.scale
+        << " (limit " << std::setprecision(0)
+        << 100 * options_.max_scale_ci_relative_width << " %)";
+    }
+    if (!s.str().empty()) {
+      std::map<std::string, int> rejections;
+      int tried = 0, valid = 0;
+      for (const auto& v : views_) {
+        tried += v->summary.patches_tried;
+        valid += v->summary.patches_valid;
+        for (const auto& r : v->summary.rejections)
+          rejections[r.first] += r.second;
+      }
+      s << "; patches over all views: " << tried << " tried, " << valid
+        << " usable";
+      if (!rejections.empty()) {
+        s << " ("
+          << CountsToString(std::vector<std::pair<std::string, int>>(
+                 rejections.begin(), rejections.end()))
+          << ")";
+      }
+      s << ". Typical causes: sensor noise too strong for the texture, "
+           "too little defocus blur (small aperture, distant subjects), "
+           "textureless surfaces";
+      result.failure_reason = s.str();
+      return result;
+    }
+  }
   result.scale_initial = linear.scale;
   result.scale_initial_ci_low = linear.scale_ci_low;
   result.scale_initial_ci_high = linear.scale_ci_high;
@@ -559,6 +680,21 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                      options_.min_intensity_bootstrap_support) {
         status << "minimum not stable under resampling (support "
                << intensity.bootstrap_support << "); linear estimate kept";
+      } else if (search.num_bootstrap > 0 &&
+                 !IntervalContains(intensity.scale, intensity.scale_ci_low,
+                                   intensity.scale_ci_high,
+                                   options_.scale_systematic_uncertainty,
+                                   linear.scale)) {
+        // Both stages read the same patches; if they disagree beyond the
+        // intensity stage's own interval (plus the systematic term), one of
+        // them is wrong and the linear stage is the robust one (L1 over
+        // per-patch estimates vs a sum of loss curves that a few patches can
+        // pull).
+        status << "disagrees with the linear estimate (intensity "
+               << intensity.scale << ", interval [" << intensity.scale_ci_low
+               << ", " << intensity.scale_ci_high
+               << "] excludes the linear " << linear.scale
+               << "); linear estimate kept";
       } else {
         status << "used (moved the scale by " << std::showpos << std::fixed
                << std::setprecision(2)
@@ -568,6 +704,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         result.scale = intensity.scale;
         result.scale_ci_low = intensity.scale_ci_low;
         result.scale_ci_high = intensity.scale_ci_high;
+        widen(result.scale, &result.scale_ci_low, &result.scale_ci_high);
         result.num_patches = intensity.num_patches;
       }
     }

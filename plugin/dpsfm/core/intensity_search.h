@@ -28,6 +28,21 @@ enum class IntensityLoss {
   // uncorrected loss prefers larger blur (smaller s) on noisy data; this
   // removes that bias (notes sec. 5).
   kNoiseCorrectedL2,
+  // The default. Per channel, kNoiseCorrectedL2 divided by the signal power
+  // of the two normalised cross-blurred patches (their variances) at the
+  // patch's radius under the initial scale (fixed per patch, so the
+  // denominator does not favour any candidate): the share of the patch's
+  // structure the two views disagree on, averaged over the channels whose
+  // structure rises above their noise (a channel without scene content is
+  // skipped). The noise floor uses the pair estimate tightened by the fit
+  // (as in the blur estimator). Each patch's curve then enters the sum as
+  // d / (d + robust_loss_scale), d = its loss above its own minimum, so that
+  // no patch can contribute more than 1. Why: the absolute losses above fall
+  // as the kernels grow (heavy blur flattens both sides), so their plain sum
+  // over many patches drifts to the small-s edge of the range as soon as
+  // some patches do not fit (blur beyond the crops' support, depth varying
+  // inside, a dead colour channel): the example scenes went to s* x 0.2.
+  kRelativeL2,
 };
 const char* IntensityLossName(IntensityLoss loss);
 
@@ -38,7 +53,12 @@ struct IntensitySearchOptions {
   // Second pass: this many candidates uniformly between the neighbours of the
   // first pass's minimum (0 disables it).
   int num_refine_candidates = 24;
-  IntensityLoss loss = IntensityLoss::kNoiseCorrectedL2;
+  IntensityLoss loss = IntensityLoss::kRelativeL2;
+  // kRelativeL2 only: each patch contributes d / (d + c), d = its loss above
+  // its own minimum over the candidates, c this value (a share of the
+  // patch's structure left unexplained). Small c: robust to patches the
+  // model does not fit; large c: closer to the plain sum.
+  double robust_loss_scale = 0.01;
   // Blur radii are clamped to this (px); also never beyond what a patch's
   // border supports.
   double max_radius_px = 20;
