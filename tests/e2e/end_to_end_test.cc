@@ -30,7 +30,7 @@ const std::string kColmap = DPSFM_COLMAP_EXE;
 const std::string kScenes = DPSFM_E2E_SCENES_DIR;
 
 // Largest accepted |1 - s_est / s_true| on the clean generated DSLR scene.
-constexpr double kMaxScaleError = 0.25;
+constexpr double kMaxScaleError = 0.03;
 
 nlohmann::json ReadJson(const std::string& path) {
   std::ifstream file(path);
