@@ -65,15 +65,21 @@ int main(int argc, char** argv) {
           }
         }
       }
-      if (ratios.empty()) throw std::runtime_error("no camera pairs to compare");
+      if (ratios.empty())
+        throw std::runtime_error("no camera pairs to compare");
       std::sort(ratios.begin(), ratios.end());
       const double median = ratios[ratios.size() / 2];
       std::printf("\nrescaled model %s: %zu registered images\n",
-                  model_path.c_str(), centers.size());
-      std::printf("camera distances, metres in the model / true metres: median "
-                  "%.4f (min %.4f, max %.4f over %zu pairs): error %.2f%%\n",
-                  median, ratios.front(), ratios.back(), ratios.size(),
-                  100 * std::abs(1 - median));
+                  model_path.c_str(),
+                  centers.size());
+      std::printf(
+          "camera distances, metres in the model / true metres: median "
+          "%.4f (min %.4f, max %.4f over %zu pairs): error %.2f%%\n",
+          median,
+          ratios.front(),
+          ratios.back(),
+          ratios.size(),
+          100 * std::abs(1 - median));
       return EXIT_SUCCESS;
     }
     const double s_true = truth.at("scale").get<double>();
@@ -81,17 +87,28 @@ int main(int argc, char** argv) {
     const double s_lin = report.at("scale_initial").get<double>();
     std::printf("\n%-28s %12s %12s %10s\n", "", "scale", "ratio r_s", "error");
     std::printf("%-28s %12.6f\n", "true (metres / model unit)", s_true);
-    std::printf("%-28s %12.6f %12.4f %9.2f%%\n", "linear initial estimate", s_lin,
-                s_lin / s_true, 100 * std::abs(1 - s_lin / s_true));
-    std::printf("%-28s %12.6f %12.4f %9.2f%%\n", "final estimate", s_est,
-                s_est / s_true, 100 * std::abs(1 - s_est / s_true));
+    std::printf("%-28s %12.6f %12.4f %9.2f%%\n",
+                "linear initial estimate",
+                s_lin,
+                s_lin / s_true,
+                100 * std::abs(1 - s_lin / s_true));
+    std::printf("%-28s %12.6f %12.4f %9.2f%%\n",
+                "final estimate",
+                s_est,
+                s_est / s_true,
+                100 * std::abs(1 - s_est / s_true));
     if (report.contains("scale_ci_low") && report.contains("scale_ci_high")) {
-      std::printf("%-28s [%.6f, %.6f]\n", "confidence interval",
+      std::printf("%-28s [%.6f, %.6f]\n",
+                  "confidence interval",
                   report["scale_ci_low"].get<double>(),
                   report["scale_ci_high"].get<double>());
     }
-    std::printf("\n%-16s %14s %14s %8s  %s\n", "view", "focus true m",
-                "focus est m", "error", "used");
+    std::printf("\n%-16s %14s %14s %8s  %s\n",
+                "view",
+                "focus true m",
+                "focus est m",
+                "error",
+                "used");
     for (const auto& item : truth.at("views").items()) {
       const double g_true = item.value().at("focus_distance_m").get<double>();
       if (!report.at("views").contains(item.key())) {
@@ -103,12 +120,19 @@ int main(int argc, char** argv) {
       if (view.contains("focus_distance_m") &&
           view["focus_distance_m"].is_number()) {
         const double g_est = view["focus_distance_m"].get<double>();
-        std::printf("%-16s %14.4f %14.4f %7.2f%%  %s\n", item.key().c_str(),
-                    g_true, g_est, 100 * std::abs(1 - g_est / g_true),
+        std::printf("%-16s %14.4f %14.4f %7.2f%%  %s\n",
+                    item.key().c_str(),
+                    g_true,
+                    g_est,
+                    100 * std::abs(1 - g_est / g_true),
                     used ? "yes" : ("no: " + view.value("reason", "")).c_str());
       } else {
-        std::printf("%-16s %14.4f %14s %8s  %s\n", item.key().c_str(), g_true,
-                    "-", "-", ("no: " + view.value("reason", "")).c_str());
+        std::printf("%-16s %14.4f %14s %8s  %s\n",
+                    item.key().c_str(),
+                    g_true,
+                    "-",
+                    "-",
+                    ("no: " + view.value("reason", "")).c_str());
       }
     }
     return EXIT_SUCCESS;

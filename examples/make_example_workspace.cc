@@ -68,17 +68,22 @@ struct GeneratorOptions {
   std::string compositing = "additive";
 };
 
-void WriteDepthMap(const cv::Mat& depth_model, int factor,
+void WriteDepthMap(const cv::Mat& depth_model,
+                   int factor,
                    const std::string& path) {
   cv::Mat small = depth_model;
   if (factor > 1) {
-    cv::resize(depth_model, small,
+    cv::resize(depth_model,
+               small,
                cv::Size(depth_model.cols / factor, depth_model.rows / factor),
-               0, 0, cv::INTER_NEAREST);
+               0,
+               0,
+               cv::INTER_NEAREST);
   }
   double min_depth, max_depth;
   cv::minMaxLoc(small, &min_depth, &max_depth);
-  colmap::mvs::DepthMap map(small.cols, small.rows,
+  colmap::mvs::DepthMap map(small.cols,
+                            small.rows,
                             static_cast<float>(min_depth),
                             static_cast<float>(max_depth));
   for (int r = 0; r < small.rows; ++r) {
@@ -111,9 +116,14 @@ int Run(const GeneratorOptions& options) {
   lens.pixel_pitch_um = pitch_mm * 1e3;
 
   const fs::path out(options.output_path);
-  for (const char* dir : {"images", "sparse/0", "dense/sparse", "dense/images",
-                          "dense/stereo/depth_maps", "dense/stereo/normal_maps",
-                          "dp/left", "dp/right"}) {
+  for (const char* dir : {"images",
+                          "sparse/0",
+                          "dense/sparse",
+                          "dense/images",
+                          "dense/stereo/depth_maps",
+                          "dense/stereo/normal_maps",
+                          "dp/left",
+                          "dp/right"}) {
     fs::create_directories(out / dir);
   }
 
@@ -121,16 +131,16 @@ int Run(const GeneratorOptions& options) {
   const Eigen::Vector3d target(0.0, scene.wall_y * 0.4, 0.08);
   std::vector<PinholeView> views;
   for (int i = 0; i < options.num_views; ++i) {
-    const double angle = -0.45 + 0.9 * (options.num_views == 1
-                                            ? 0.5
-                                            : i / (options.num_views - 1.0));
+    const double angle =
+        -0.45 +
+        0.9 * (options.num_views == 1 ? 0.5 : i / (options.num_views - 1.0));
     const double distance = 0.75 + 0.2 * unit(rng);
     const Eigen::Vector3d center =
         target + Eigen::Vector3d(distance * std::sin(angle),
                                  -distance * std::cos(angle),
                                  0.3 + 0.15 * unit(rng));
-    views.push_back(PinholeView::LookAt(center, target, options.width,
-                                        options.height, focal_px));
+    views.push_back(PinholeView::LookAt(
+        center, target, options.width, options.height, focal_px));
     views.back().k1 = options.radial_k1;
   }
 
@@ -182,8 +192,8 @@ int Run(const GeneratorOptions& options) {
         const float z = render.depth.at<float>(r, c);
         const double b = dpsfm::SignedBlurDiameterMm(
             lens, focus_m * 1e3, z > 0 ? z * 1e3 : 1e12);
-        radius.at<float>(r, c) = static_cast<float>(
-            dpsfm::BlurRadiusPxFromDiameterMm(b, pitch_mm));
+        radius.at<float>(r, c) =
+            static_cast<float>(dpsfm::BlurRadiusPxFromDiameterMm(b, pitch_mm));
       }
     }
     cv::Mat left, right;
@@ -192,8 +202,8 @@ int Run(const GeneratorOptions& options) {
         options.compositing == "layers"
             ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
             : dpsfm::DPRenderOptions::Compositing::kAdditive;
-    dpsfm::RenderDPViews(render.image, render.depth, radius, psf,
-                         render_options, &left, &right);
+    dpsfm::RenderDPViews(
+        render.image, render.depth, radius, psf, render_options, &left, &right);
     right *= options.right_gain;
     for (cv::Mat* view : {&left, &right}) {
       cv::Mat noise(view->size(), view->type());
@@ -220,17 +230,19 @@ int Run(const GeneratorOptions& options) {
 
     const cv::Mat depth_model = renders.back().depth / true_scale;
     const fs::path depth_dir = out / "dense/stereo/depth_maps";
-    WriteDepthMap(depth_model, options.depth_map_factor,
+    WriteDepthMap(depth_model,
+                  options.depth_map_factor,
                   (depth_dir / (image_name + ".geometric.bin")).string());
-    WriteDepthMap(depth_model, options.depth_map_factor,
+    WriteDepthMap(depth_model,
+                  options.depth_map_factor,
                   (depth_dir / (image_name + ".photometric.bin")).string());
 
     lens_csv << image_name << "," << options.focal_length_mm << ","
              << options.f_number << "," << lens.pixel_pitch_um << "\n";
     truth["views"][image_name]["focus_distance_m"] = focus_m;
     const Eigen::Vector3d center = views[i].Center();
-    truth["views"][image_name]["center_m"] = {center.x(), center.y(),
-                                              center.z()};
+    truth["views"][image_name]["center_m"] = {
+        center.x(), center.y(), center.z()};
   }
 
   // Tracks: grid samples of every view, observed wherever they are visible.
@@ -248,17 +260,20 @@ int Run(const GeneratorOptions& options) {
       for (int c = 20; c < options.width - 20; c += options.width / 36) {
         const float z = renders[i].depth.at<float>(r, c);
         if (z <= 0) continue;
-        const Eigen::Vector3d cam((c - (options.width - 1) / 2.0) / focal_px * z,
-                                  (r - (options.height - 1) / 2.0) / focal_px * z,
-                                  z);
+        const Eigen::Vector3d cam(
+            (c - (options.width - 1) / 2.0) / focal_px * z,
+            (r - (options.height - 1) / 2.0) / focal_px * z,
+            z);
         Track3D track;
         track.xyz = world_from_cam * (cam - views[i].translation);
         for (int j = 0; j < options.num_views; ++j) {
           const Eigen::Vector3d pc =
               views[j].rotation * track.xyz + views[j].translation;
           if (pc.z() <= 0) continue;
-          const double u = focal_px * pc.x() / pc.z() + (options.width - 1) / 2.0;
-          const double v = focal_px * pc.y() / pc.z() + (options.height - 1) / 2.0;
+          const double u =
+              focal_px * pc.x() / pc.z() + (options.width - 1) / 2.0;
+          const double v =
+              focal_px * pc.y() / pc.z() + (options.height - 1) / 2.0;
           const int ui = static_cast<int>(std::lround(u));
           const int vi = static_cast<int>(std::lround(v));
           if (ui < 0 || vi < 0 || ui >= options.width || vi >= options.height) {
@@ -283,9 +298,9 @@ int Run(const GeneratorOptions& options) {
     image.SetImageId(i + 1);
     image.SetName(names[i] + ".jpg");
     image.SetCameraId(1);
-    image.CamFromWorld() = colmap::Rigid3d(
-        Eigen::Quaterniond(views[i].rotation),
-        views[i].translation / true_scale);
+    image.CamFromWorld() =
+        colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
+                        views[i].translation / true_scale);
     image.SetPoints2D(points2D[i]);
     reconstruction.AddImage(image);
     reconstruction.RegisterImage(i + 1);
@@ -295,8 +310,8 @@ int Run(const GeneratorOptions& options) {
     for (const auto& obs : track.observations) {
       colmap_track.AddElement(obs.first + 1, obs.second);
     }
-    reconstruction.AddPoint3D(track.xyz / true_scale, colmap_track,
-                              Eigen::Vector3ub(128, 128, 128));
+    reconstruction.AddPoint3D(
+        track.xyz / true_scale, colmap_track, Eigen::Vector3ub(128, 128, 128));
   }
   reconstruction.WriteBinary((out / "dense/sparse").string());
   // sparse/0: the model of the original images, as the mapper leaves it.
@@ -332,16 +347,21 @@ int Run(const GeneratorOptions& options) {
       for (int c = 0; c < options.width; c += 4) {
         const float z = renders[i].depth.at<float>(r, c);
         if (z <= 0) continue;
-        const Eigen::Vector3d cam((c - (options.width - 1) / 2.0) / focal_px * z,
-                                  (r - (options.height - 1) / 2.0) / focal_px * z,
-                                  z);
+        const Eigen::Vector3d cam(
+            (c - (options.width - 1) / 2.0) / focal_px * z,
+            (r - (options.height - 1) / 2.0) / focal_px * z,
+            z);
         const Eigen::Vector3d xyz =
             world_from_cam * (cam - views[i].translation) / true_scale;
         const Eigen::Vector3d normal = -(world_from_cam * cam).normalized();
         const cv::Vec3f bgr = renders[i].image.at<cv::Vec3f>(r, c);
         colmap::PlyPoint point;
-        point.x = xyz.x(); point.y = xyz.y(); point.z = xyz.z();
-        point.nx = normal.x(); point.ny = normal.y(); point.nz = normal.z();
+        point.x = xyz.x();
+        point.y = xyz.y();
+        point.z = xyz.z();
+        point.nx = normal.x();
+        point.ny = normal.y();
+        point.nz = normal.z();
         point.r = static_cast<uint8_t>(255 * bgr[2]);
         point.g = static_cast<uint8_t>(255 * bgr[1]);
         point.b = static_cast<uint8_t>(255 * bgr[0]);
@@ -349,13 +369,15 @@ int Run(const GeneratorOptions& options) {
       }
     }
   }
-  colmap::WriteBinaryPlyPoints((out / "dense/fused.ply").string(), ply_points,
-                               /*write_normal=*/true, /*write_rgb=*/true);
+  colmap::WriteBinaryPlyPoints((out / "dense/fused.ply").string(),
+                               ply_points,
+                               /*write_normal=*/true,
+                               /*write_rgb=*/true);
 
   std::ofstream((out / "ground_truth.json").string()) << truth.dump(2) << "\n";
-  std::cout << "Generated " << options.num_views << " views, "
-            << tracks.size() << " tracks, true scale " << true_scale
-            << " m per model unit, in " << options.output_path << std::endl;
+  std::cout << "Generated " << options.num_views << " views, " << tracks.size()
+            << " tracks, true scale " << true_scale << " m per model unit, in "
+            << options.output_path << std::endl;
   return EXIT_SUCCESS;
 }
 
@@ -365,21 +387,45 @@ int main(int argc, char** argv) {
   GeneratorOptions options;
   namespace po = boost::program_options;
   po::options_description desc("dpsfm_make_example options");
-  desc.add_options()("help,h", "")
-      ("output_path", po::value(&options.output_path)->required(), "output folder")
-      ("seed", po::value(&options.seed)->default_value(options.seed), "random seed")
-      ("num_views", po::value(&options.num_views)->default_value(options.num_views), "")
-      ("width", po::value(&options.width)->default_value(options.width), "image width")
-      ("height", po::value(&options.height)->default_value(options.height), "image height")
-      ("focal_length_mm", po::value(&options.focal_length_mm)->default_value(options.focal_length_mm), "")
-      ("f_number", po::value(&options.f_number)->default_value(options.f_number), "")
-      ("sensor_width_mm", po::value(&options.sensor_width_mm)->default_value(options.sensor_width_mm), "")
-      ("scale", po::value(&options.scale)->default_value(options.scale), "metres per model unit (0: random)")
-      ("noise", po::value(&options.noise)->default_value(options.noise), "noise sigma on [0,1]")
-      ("depth_map_factor", po::value(&options.depth_map_factor)->default_value(options.depth_map_factor), "")
-      ("right_gain", po::value(&options.right_gain)->default_value(options.right_gain), "")
-      ("radial_k1", po::value(&options.radial_k1)->default_value(options.radial_k1), "SIMPLE_RADIAL k1 of the original images")
-      ("compositing", po::value(&options.compositing)->default_value(options.compositing), "additive | layers");
+  desc.add_options()("help,h", "")("output_path",
+                                   po::value(&options.output_path)->required(),
+                                   "output folder")(
+      "seed",
+      po::value(&options.seed)->default_value(options.seed),
+      "random seed")(
+      "num_views",
+      po::value(&options.num_views)->default_value(options.num_views),
+      "")("width",
+          po::value(&options.width)->default_value(options.width),
+          "image width")(
+      "height",
+      po::value(&options.height)->default_value(options.height),
+      "image height")("focal_length_mm",
+                      po::value(&options.focal_length_mm)
+                          ->default_value(options.focal_length_mm),
+                      "")(
+      "f_number",
+      po::value(&options.f_number)->default_value(options.f_number),
+      "")("sensor_width_mm",
+          po::value(&options.sensor_width_mm)
+              ->default_value(options.sensor_width_mm),
+          "")("scale",
+              po::value(&options.scale)->default_value(options.scale),
+              "metres per model unit (0: random)")(
+      "noise",
+      po::value(&options.noise)->default_value(options.noise),
+      "noise sigma on [0,1]")("depth_map_factor",
+                              po::value(&options.depth_map_factor)
+                                  ->default_value(options.depth_map_factor),
+                              "")(
+      "right_gain",
+      po::value(&options.right_gain)->default_value(options.right_gain),
+      "")("radial_k1",
+          po::value(&options.radial_k1)->default_value(options.radial_k1),
+          "SIMPLE_RADIAL k1 of the original images")(
+      "compositing",
+      po::value(&options.compositing)->default_value(options.compositing),
+      "additive | layers");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -390,7 +436,8 @@ int main(int argc, char** argv) {
     po::notify(vm);
     if (options.num_views < 1 || options.width < 64 || options.height < 64 ||
         options.depth_map_factor < 1 ||
-        (options.compositing != "additive" && options.compositing != "layers")) {
+        (options.compositing != "additive" &&
+         options.compositing != "layers")) {
       throw std::invalid_argument(
           "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
           "compositing additive or layers");

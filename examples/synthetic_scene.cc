@@ -36,8 +36,8 @@ double ValueNoise(double x, double y, int seed) {
 double SurfaceTexture(double u, double v, int seed) {
   double value = 0, amplitude = 1, total = 0, frequency = 20.0;
   for (int octave = 0; octave < 6; ++octave) {
-    value += amplitude * ValueNoise(u * frequency, v * frequency,
-                                    seed * 31 + octave);
+    value += amplitude *
+             ValueNoise(u * frequency, v * frequency, seed * 31 + octave);
     total += amplitude;
     amplitude *= 0.75;
     frequency *= 2.0;
@@ -92,8 +92,8 @@ TabletopScene TabletopScene::Random(std::mt19937* rng, int num_boxes) {
     const double cy = -0.25 + (scene.wall_y + 0.1) * unit(*rng);
     box.min_corner = Eigen::Vector3d(cx - sx / 2, cy - sy / 2, 0);
     box.max_corner = Eigen::Vector3d(cx + sx / 2, cy + sy / 2, sz);
-    box.tint = Eigen::Vector3d(0.6 + 0.4 * unit(*rng), 0.6 + 0.4 * unit(*rng),
-                               0.6 + 0.4 * unit(*rng));
+    box.tint = Eigen::Vector3d(
+        0.6 + 0.4 * unit(*rng), 0.6 + 0.4 * unit(*rng), 0.6 + 0.4 * unit(*rng));
     box.texture_seed = 100 + i;
     scene.boxes.push_back(box);
   }
@@ -155,7 +155,8 @@ bool CastRay(const TabletopScene& scene,
     const Eigen::Vector3d p = origin + t * direction;
     if (t > 0 && t < best && p.y() < scene.wall_y) {
       best = t;
-      best_color = Eigen::Vector3d(0.9, 0.85, 0.75) * SurfaceTexture(p.x(), p.y(), 1);
+      best_color =
+          Eigen::Vector3d(0.9, 0.85, 0.75) * SurfaceTexture(p.x(), p.y(), 1);
     }
   }
   // Back wall y = wall_y.
@@ -164,7 +165,8 @@ bool CastRay(const TabletopScene& scene,
     const Eigen::Vector3d p = origin + t * direction;
     if (t > 0 && t < best && p.z() >= 0) {
       best = t;
-      best_color = Eigen::Vector3d(0.75, 0.8, 0.9) * SurfaceTexture(p.x(), p.z(), 2);
+      best_color =
+          Eigen::Vector3d(0.75, 0.8, 0.9) * SurfaceTexture(p.x(), p.z(), 2);
     }
   }
   for (const SceneBox& box : scene.boxes) {
@@ -175,7 +177,8 @@ bool CastRay(const TabletopScene& scene,
       // Texture coordinates: the two axes spanning the face hit.
       const int a = (axis + 1) % 3, b = (axis + 2) % 3;
       best = t;
-      best_color = box.tint * SurfaceTexture(p[a], p[b], box.texture_seed * 3 + axis);
+      best_color =
+          box.tint * SurfaceTexture(p[a], p[b], box.texture_seed * 3 + axis);
     }
   }
   if (!std::isfinite(best)) return false;
@@ -199,8 +202,10 @@ RenderedView RenderView(const TabletopScene& scene, const PinholeView& view) {
         // Sample 0 is the pixel centre (gives the depth); 1-4 a 2x2 grid.
         const double dx = s == 0 ? 0 : ((s - 1) % 2 - 0.5) * 0.5;
         const double dy = s == 0 ? 0 : ((s - 1) / 2 - 0.5) * 0.5;
-        const Eigen::Vector3d ray_cam = view.RayThroughPixel(col + dx, row + dy);
-        const Eigen::Vector3d direction = (world_from_cam * ray_cam).normalized();
+        const Eigen::Vector3d ray_cam =
+            view.RayThroughPixel(col + dx, row + dy);
+        const Eigen::Vector3d direction =
+            (world_from_cam * ray_cam).normalized();
         double t;
         Eigen::Vector3d color;
         if (CastRay(scene, center, direction, &t, &color)) {
@@ -217,7 +222,8 @@ RenderedView RenderView(const TabletopScene& scene, const PinholeView& view) {
         sum /= hits;
         // OpenCV order: BGR.
         out.image.at<cv::Vec3f>(row, col) =
-            cv::Vec3f(static_cast<float>(sum.z()), static_cast<float>(sum.y()),
+            cv::Vec3f(static_cast<float>(sum.z()),
+                      static_cast<float>(sum.y()),
                       static_cast<float>(sum.x()));
       }
     }

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
+#include <boost/filesystem.hpp>
 
 namespace dpsfm {
 namespace test {
@@ -100,15 +100,13 @@ inline std::vector<std::string> Lines(const std::string& text) {
 inline std::map<std::string, std::string> SnapshotTree(
     const std::string& root) {
   std::map<std::string, std::string> files;
-  for (boost::filesystem::recursive_directory_iterator it(root), end;
-       it != end;
+  for (boost::filesystem::recursive_directory_iterator it(root), end; it != end;
        ++it) {
     if (boost::filesystem::is_regular_file(it->path())) {
       files[boost::filesystem::relative(it->path(), root).string()] =
           ReadTextFile(it->path().string());
     } else if (boost::filesystem::is_directory(it->path())) {
-      files[boost::filesystem::relative(it->path(), root).string() + "/"] =
-          "";
+      files[boost::filesystem::relative(it->path(), root).string() + "/"] = "";
     }
   }
   return files;

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
+#include <boost/filesystem.hpp>
 
 #include "colmap/geometry/sim3.h"
 #include "colmap/math/random.h"
@@ -143,9 +143,8 @@ void ExpectScaledReconstruction(const colmap::Reconstruction& unscaled,
                                 const colmap::Reconstruction& actual,
                                 double scale) {
   colmap::Reconstruction original = unscaled;
-  original.Transform(
-      colmap::Sim3d(scale, Eigen::Quaterniond::Identity(),
-                    Eigen::Vector3d::Zero()));
+  original.Transform(colmap::Sim3d(
+      scale, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero()));
   ASSERT_EQ(original.NumCameras(), actual.NumCameras());
   ASSERT_EQ(original.NumImages(), actual.NumImages());
   ASSERT_EQ(original.NumPoints3D(), actual.NumPoints3D());
@@ -188,7 +187,8 @@ void ExpectScaledReconstruction(const colmap::Reconstruction& unscaled,
   }
 }
 
-void RescaleFileInPlace(ArtefactType type, const std::string& path,
+void RescaleFileInPlace(ArtefactType type,
+                        const std::string& path,
                         double scale) {
   std::string contents = ReadTextFile(path);
   RescaleContents(type, scale, path, &contents);
@@ -208,8 +208,8 @@ TEST(RescaleBinaryModel, ScalesTranslationsAndPointsOnly) {
   const std::string images_before = ReadTextFile(dir / "images.bin");
   const std::string points_before = ReadTextFile(dir / "points3D.bin");
   RescaleFileInPlace(ArtefactType::kImagesBinary, dir / "images.bin", kScale);
-  RescaleFileInPlace(ArtefactType::kPoints3DBinary, dir / "points3D.bin",
-                     kScale);
+  RescaleFileInPlace(
+      ArtefactType::kPoints3DBinary, dir / "points3D.bin", kScale);
   const std::string images_after = ReadTextFile(dir / "images.bin");
   const std::string points_after = ReadTextFile(dir / "points3D.bin");
 
@@ -264,7 +264,8 @@ TEST(RescaleBinaryModel, EmptyModelIsValid) {
 
 // Every truncation of a valid file, and trailing garbage, is refused with a
 // message naming the file, and the contents are left alone.
-void ExpectEveryTruncationRefused(ArtefactType type, const std::string& valid,
+void ExpectEveryTruncationRefused(ArtefactType type,
+                                  const std::string& valid,
                                   size_t step) {
   const std::string path = "/some/where/" + std::string(ArtefactTypeName(type));
   for (size_t size = 0; size < valid.size(); size += step) {
@@ -286,10 +287,10 @@ void ExpectEveryTruncationRefused(ArtefactType type, const std::string& valid,
 TEST(RescaleBinaryModel, TruncatedOrCorruptIsRefused) {
   TempDir dir;
   MakeReconstruction(2).WriteBinary(dir.path());
-  ExpectEveryTruncationRefused(ArtefactType::kImagesBinary,
-                               ReadTextFile(dir / "images.bin"), 1);
-  ExpectEveryTruncationRefused(ArtefactType::kPoints3DBinary,
-                               ReadTextFile(dir / "points3D.bin"), 1);
+  ExpectEveryTruncationRefused(
+      ArtefactType::kImagesBinary, ReadTextFile(dir / "images.bin"), 1);
+  ExpectEveryTruncationRefused(
+      ArtefactType::kPoints3DBinary, ReadTextFile(dir / "points3D.bin"), 1);
 
   // A huge count must not be trusted.
   std::string images = ReadTextFile(dir / "images.bin");
@@ -323,8 +324,10 @@ std::vector<std::string> Fields(const std::string& line) {
 
 // Every line keeps its fields except the scaled ones, which parse to v * s
 // exactly (they are printed with round-trip precision).
-void ExpectTextScaled(const std::string& before, const std::string& after,
-                      const std::vector<size_t>& scaled, bool images) {
+void ExpectTextScaled(const std::string& before,
+                      const std::string& after,
+                      const std::vector<size_t>& scaled,
+                      bool images) {
   const std::vector<std::string> lines_before = test::Lines(before);
   const std::vector<std::string> lines_after = test::Lines(after);
   ASSERT_EQ(lines_before.size(), lines_after.size());
@@ -365,16 +368,19 @@ TEST(RescaleTextModel, ScalesTranslationsAndPointsOnly) {
   original_read.ReadText(dir.path());
 
   RescaleFileInPlace(ArtefactType::kImagesText, dir / "images.txt", kScale);
-  RescaleFileInPlace(ArtefactType::kPoints3DText, dir / "points3D.txt",
-                     kScale);
+  RescaleFileInPlace(ArtefactType::kPoints3DText, dir / "points3D.txt", kScale);
 
   colmap::Reconstruction rescaled;
   rescaled.ReadText(dir.path());
   ExpectScaledReconstruction(original_read, rescaled, kScale);
-  ExpectTextScaled(images_before, ReadTextFile(dir / "images.txt"),
-                   {5, 6, 7}, /*images=*/true);
-  ExpectTextScaled(points_before, ReadTextFile(dir / "points3D.txt"),
-                   {1, 2, 3}, /*images=*/false);
+  ExpectTextScaled(images_before,
+                   ReadTextFile(dir / "images.txt"),
+                   {5, 6, 7},
+                   /*images=*/true);
+  ExpectTextScaled(points_before,
+                   ReadTextFile(dir / "points3D.txt"),
+                   {1, 2, 3},
+                   /*images=*/false);
 }
 
 TEST(RescaleTextModel, KeepsFormattingAndEmptyPointLines) {
@@ -434,7 +440,9 @@ TEST(RescaleTextModel, CorruptIsRefused) {
 
 // ---- depth maps ------------------------------------------------------------
 
-std::string MakeDepthMap(int width, int height, int channels,
+std::string MakeDepthMap(int width,
+                         int height,
+                         int channels,
                          const std::vector<float>& values) {
   std::string bytes = std::to_string(width) + "&" + std::to_string(height) +
                       "&" + std::to_string(channels) + "&";
@@ -444,9 +452,18 @@ std::string MakeDepthMap(int width, int height, int channels,
 
 TEST(RescaleDepthMap, ScalesOnlyValidDepths) {
   TempDir dir;
-  const std::vector<float> values = {0.0f,   1.0f,  -1.0f, 2.5f,  1e-7f,
-                                     -0.0f,  3e4f,  0.75f, 1.25f, 100.0f,
-                                     -5.0f,  0.1f};
+  const std::vector<float> values = {0.0f,
+                                     1.0f,
+                                     -1.0f,
+                                     2.5f,
+                                     1e-7f,
+                                     -0.0f,
+                                     3e4f,
+                                     0.75f,
+                                     1.25f,
+                                     100.0f,
+                                     -5.0f,
+                                     0.1f};
   const std::string path = dir / "stereo/depth_maps/a.jpg.geometric.bin";
   const std::string before = MakeDepthMap(4, 3, 1, values);
   WriteTextFile(path, before);
@@ -582,9 +599,9 @@ TEST(RescalePly, MeshKeepsValuesAndFaces) {
   for (int i = 0; i < kVertices; ++i) {
     const size_t base = header + i * 19;
     for (int k = 0; k < 3; ++k) {
-      EXPECT_EQ(static_cast<float>(LoadAt<float>(before, base + 4 * k) *
-                                   kScale),
-                LoadAt<float>(after, base + 4 * k));
+      EXPECT_EQ(
+          static_cast<float>(LoadAt<float>(before, base + 4 * k) * kScale),
+          LoadAt<float>(after, base + 4 * k));
     }
     EXPECT_EQ(before.substr(base + 12, 7), after.substr(base + 12, 7));
   }
@@ -649,10 +666,10 @@ TEST(RescalePly, Ascii) {
       "3 0 1 2\n",
       after);
   // Missing and surplus values.
-  for (const std::string bad :
-       {before.substr(0, before.size() - 3), before + "5\n",
-        before.substr(0, before.find("255")) + "x" +
-            before.substr(before.find("255") + 3)}) {
+  for (const std::string bad : {before.substr(0, before.size() - 3),
+                                before + "5\n",
+                                before.substr(0, before.find("255")) + "x" +
+                                    before.substr(before.find("255") + 3)}) {
     std::string contents = bad;
     EXPECT_THROW(RescalePly(2.0, "mesh.ply", &contents), InputError);
     EXPECT_EQ(bad, contents);
@@ -753,8 +770,7 @@ TEST(ListArtefacts, FindsEveryMetricFileAndNothingElse) {
   };
   EXPECT_EQ(expected, listed);
 
-  EXPECT_THROW(ListArtefactsToRescale(ws.path(), {ws / "images"}),
-               InputError);
+  EXPECT_THROW(ListArtefactsToRescale(ws.path(), {ws / "images"}), InputError);
   EXPECT_THROW(ListArtefactsToRescale(ws / "nope"), InputError);
 }
 
@@ -817,9 +833,12 @@ TEST(RescaleWorkspace, InPlaceScalesMetricFilesAndKeepsTheRest) {
   for (const auto& entry : before) {
     EXPECT_TRUE(after.count(entry.first)) << entry.first << " vanished";
   }
-  std::set<std::string> expected = {"sparse/images.bin", "sparse/points3D.bin",
-                                    "sparse/images.txt", "sparse/points3D.txt",
-                                    "fused.ply", "meshed-poisson.ply",
+  std::set<std::string> expected = {"sparse/images.bin",
+                                    "sparse/points3D.bin",
+                                    "sparse/images.txt",
+                                    "sparse/points3D.txt",
+                                    "fused.ply",
+                                    "meshed-poisson.ply",
                                     kScaleRecordFileName};
   for (const auto& image : original.Images()) {
     expected.insert("stereo/depth_maps/" + image.second.Name() +
@@ -902,11 +921,11 @@ TEST(RescaleWorkspace, CorruptArtefactLeavesTreeUnchanged) {
       InputError);
   EXPECT_EQ(before, SnapshotTree(ws.path()));
 
-  EXPECT_THROW(RescaleWorkspaceInPlace(ws.path(), -1.0,
-                                       RescaleWorkspaceOptions()),
-               InputError);
-  EXPECT_THROW(RescaleWorkspaceInPlace(ws.path(), std::nan(""),
-                                       RescaleWorkspaceOptions()),
+  EXPECT_THROW(
+      RescaleWorkspaceInPlace(ws.path(), -1.0, RescaleWorkspaceOptions()),
+      InputError);
+  EXPECT_THROW(RescaleWorkspaceInPlace(
+                   ws.path(), std::nan(""), RescaleWorkspaceOptions()),
                InputError);
   EXPECT_EQ(before, SnapshotTree(ws.path()));
 }

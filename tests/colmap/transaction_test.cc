@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
+#include <boost/filesystem.hpp>
 
 #include "colmap/math/random.h"
 #include "colmap/scene/reconstruction.h"
@@ -45,7 +45,8 @@ void AppendRaw(std::string* bytes, T value) {
   bytes->append(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
-std::string MakeDepthMap(int width, int height,
+std::string MakeDepthMap(int width,
+                         int height,
                          const std::vector<float>& values) {
   std::string bytes =
       std::to_string(width) + "&" + std::to_string(height) + "&1&";
@@ -119,8 +120,8 @@ Tree WithoutRecord(Tree tree) {
 bool IsTransactionFile(const std::string& relative) {
   const std::string suffix = kStagedSuffix;
   return (relative.size() > suffix.size() &&
-          relative.compare(relative.size() - suffix.size(), suffix.size(),
-                           suffix) == 0) ||
+          relative.compare(
+              relative.size() - suffix.size(), suffix.size(), suffix) == 0) ||
          relative == kJournalFileName || relative == kStagingListFileName;
 }
 
@@ -229,12 +230,13 @@ TEST(CommitTransaction, WithoutFaultItCompletesAndLeavesNoTraces) {
   CopyTree(reference.root, root);
   // A fault point beyond the last rename never fires.
   const std::string beyond = std::to_string(reference.num_renames + 1);
-  EXPECT_EQ(0, RunInChild(
-                   [&] {
-                     RescaleWorkspaceInPlace(root, kScale,
-                                             RescaleWorkspaceOptions());
-                   },
-                   beyond.c_str()));
+  EXPECT_EQ(0,
+            RunInChild(
+                [&] {
+                  RescaleWorkspaceInPlace(
+                      root, kScale, RescaleWorkspaceOptions());
+                },
+                beyond.c_str()));
   const Tree tree = SnapshotTree(root);
   EXPECT_EQ(reference.new_tree, WithoutRecord(tree));
   for (const auto& entry : tree) {
@@ -257,8 +259,7 @@ TEST(CommitTransaction, StagedWithoutJournalRollsBack) {
                   WriteRescaledArtefact(artefact, kScale, s);
                 });
               }
-              transaction.StageContents(ScaleRecordPath(reference.root),
-                                        "{}");
+              transaction.StageContents(ScaleRecordPath(reference.root), "{}");
               _exit(0);  // no destructor, no commit: a crash
             }));
   const Tree crashed = SnapshotTree(reference.root);
@@ -281,8 +282,8 @@ TEST(CommitTransaction, CrashWhileWritingTheJournalRollsBack) {
   EXPECT_EQ(0, RunInChild([&] {
               CommitTransaction transaction(reference.root);
               transaction.StageContents(reference.root + "/fused.ply", "new");
-              WriteTextFile(
-                  reference.root + "/" + kJournalFileName + ".tmp", "{\"ta");
+              WriteTextFile(reference.root + "/" + kJournalFileName + ".tmp",
+                            "{\"ta");
               _exit(0);
             }));
   EXPECT_EQ(RecoveryReport::Action::kRolledBack,
@@ -304,12 +305,11 @@ TEST(CommitTransaction, OutsideTargetsAreCommittedAndRecovered) {
   // Crash after all but two renames: the outside model files come before the
   // depth maps in the listing, so they are new, and recovery does the rest.
   const std::string k = std::to_string(renames - 2);
-  ASSERT_EQ(kFaultInjectExitCode,
-            RunInChild(
-                [&] {
-                  RescaleWorkspaceInPlace(reference.root, kScale, options);
-                },
-                k.c_str()));
+  ASSERT_EQ(
+      kFaultInjectExitCode,
+      RunInChild(
+          [&] { RescaleWorkspaceInPlace(reference.root, kScale, options); },
+          k.c_str()));
   EXPECT_EQ(RecoveryReport::Action::kRolledForward,
             RecoverInterruptedCommit(reference.root).action);
   EXPECT_EQ(reference.new_tree, WithoutRecord(SnapshotTree(reference.root)));
@@ -330,8 +330,8 @@ TEST(CommitTransaction, FailedStagingLeavesNothing) {
                                      throw InputError("writer failed");
                                    }),
                  InputError);
-    EXPECT_FALSE(fs::exists(reference.root + "/sparse/images.bin" +
-                            kStagedSuffix));
+    EXPECT_FALSE(
+        fs::exists(reference.root + "/sparse/images.bin" + kStagedSuffix));
     EXPECT_TRUE(fs::exists(reference.root + "/fused.ply" + kStagedSuffix));
   }  // destroyed without Commit
   EXPECT_EQ(reference.old_tree, SnapshotTree(reference.root));
@@ -342,20 +342,18 @@ TEST(CommitTransaction, RefusesToStartOverAnInterruptedCommit) {
   ASSERT_EQ(kFaultInjectExitCode,
             RunInChild(
                 [&] {
-                  RescaleWorkspaceInPlace(reference.root, kScale,
-                                          RescaleWorkspaceOptions());
+                  RescaleWorkspaceInPlace(
+                      reference.root, kScale, RescaleWorkspaceOptions());
                 },
                 "1"));
   const Tree crashed = SnapshotTree(reference.root);
   EXPECT_THROW(CommitTransaction transaction(reference.root), InputError);
   RescaleWorkspaceOptions force;
   force.force = true;
-  EXPECT_THROW(RescaleWorkspaceInPlace(reference.root, 2.0, force),
-               InputError);
+  EXPECT_THROW(RescaleWorkspaceInPlace(reference.root, 2.0, force), InputError);
   TempDir out;
-  EXPECT_THROW(
-      WriteRescaledCopy(reference.root, out / "copy", 2.0, force),
-      InputError);
+  EXPECT_THROW(WriteRescaledCopy(reference.root, out / "copy", 2.0, force),
+               InputError);
   EXPECT_EQ(crashed, SnapshotTree(reference.root));
 }
 
@@ -365,8 +363,7 @@ TEST(CommitTransaction, RecoveryOnACleanWorkspaceDoesNothing) {
   EXPECT_EQ(RecoveryReport::Action::kNothing, report.action);
   EXPECT_TRUE(report.removed.empty());
   EXPECT_EQ(reference.old_tree, SnapshotTree(reference.root));
-  EXPECT_THROW(RecoverInterruptedCommit(reference.dir / "missing"),
-               InputError);
+  EXPECT_THROW(RecoverInterruptedCommit(reference.dir / "missing"), InputError);
 }
 
 // ---- the record -----------------------------------------------------------
@@ -415,8 +412,8 @@ TEST(ScaleRecord, RefusesASecondScaleUnlessForcedAndComposes) {
 
   // The files now hold the original times both scales.
   const Tree twice = SnapshotTree(root);
-  std::string depth = reference.old_tree.at(
-      "stereo/depth_maps/image0.geometric.bin");
+  std::string depth =
+      reference.old_tree.at("stereo/depth_maps/image0.geometric.bin");
   RescaleDepthMap(kScale, "d", &depth);
   RescaleDepthMap(3.0, "d", &depth);
   EXPECT_EQ(depth, twice.at("stereo/depth_maps/image0.geometric.bin"));
@@ -484,24 +481,28 @@ TEST(WriteRescaledCopy, RefusesNonEmptyTargetsAndAcceptsEmptyOnes) {
   const std::string busy = reference.dir / "busy";
   WriteTextFile(busy + "/keep.txt", "mine");
   const Tree busy_before = SnapshotTree(busy);
-  EXPECT_THROW(WriteRescaledCopy(reference.root, busy, kScale,
-                                 RescaleWorkspaceOptions()),
+  EXPECT_THROW(WriteRescaledCopy(
+                   reference.root, busy, kScale, RescaleWorkspaceOptions()),
                InputError);
   EXPECT_EQ(busy_before, SnapshotTree(busy));
   WriteTextFile(reference.dir / "file", "x");
-  EXPECT_THROW(WriteRescaledCopy(reference.root, reference.dir / "file",
-                                 kScale, RescaleWorkspaceOptions()),
+  EXPECT_THROW(WriteRescaledCopy(reference.root,
+                                 reference.dir / "file",
+                                 kScale,
+                                 RescaleWorkspaceOptions()),
                InputError);
   // Inside the input: refused.
-  EXPECT_THROW(WriteRescaledCopy(reference.root, reference.root + "/copy",
-                                 kScale, RescaleWorkspaceOptions()),
+  EXPECT_THROW(WriteRescaledCopy(reference.root,
+                                 reference.root + "/copy",
+                                 kScale,
+                                 RescaleWorkspaceOptions()),
                InputError);
   EXPECT_EQ(reference.old_tree, SnapshotTree(reference.root));
 
   const std::string empty = reference.dir / "empty";
   fs::create_directories(empty);
-  WriteRescaledCopy(reference.root, empty + "/", kScale,
-                    RescaleWorkspaceOptions());
+  WriteRescaledCopy(
+      reference.root, empty + "/", kScale, RescaleWorkspaceOptions());
   EXPECT_EQ(reference.new_tree, WithoutRecord(SnapshotTree(empty)));
 }
 
@@ -521,8 +522,8 @@ TEST(WriteRescaledCopy, FailureOrStaleStagingNeverLeavesAHalfCopy) {
   const Tree before = SnapshotTree(reference.root);
   const std::string output2 = reference.dir / "out2";
   try {
-    WriteRescaledCopy(reference.root, output2, kScale,
-                      RescaleWorkspaceOptions());
+    WriteRescaledCopy(
+        reference.root, output2, kScale, RescaleWorkspaceOptions());
     ADD_FAILURE() << "corrupt depth map accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string::npos, std::string(e.what()).find(depth));

@@ -29,8 +29,11 @@ void PutU32(std::string* out, uint32_t v) {
 
 // A JPEG whose EXIF holds FNumber = f_num/f_den and FocalLength =
 // fl_num/fl_den as RATIONALs: an APP1 segment inserted after SOI.
-void WriteJpegWithExif(const std::string& path, uint32_t f_num, uint32_t f_den,
-                       uint32_t fl_num, uint32_t fl_den) {
+void WriteJpegWithExif(const std::string& path,
+                       uint32_t f_num,
+                       uint32_t f_den,
+                       uint32_t fl_num,
+                       uint32_t fl_den) {
   std::string tiff = "II";
   PutU16(&tiff, 42);
   PutU32(&tiff, 8);
@@ -64,8 +67,8 @@ void WriteJpegWithExif(const std::string& path, uint32_t f_num, uint32_t f_den,
   app1 += payload;
 
   std::vector<uchar> jpeg;
-  cv::imencode(".jpg", cv::Mat(16, 16, CV_8UC3, cv::Scalar(90, 120, 200)),
-               jpeg);
+  cv::imencode(
+      ".jpg", cv::Mat(16, 16, CV_8UC3, cv::Scalar(90, 120, 200)), jpeg);
   const std::string bytes(jpeg.begin(), jpeg.end());
   WriteTextFile(path, bytes.substr(0, 2) + app1 + bytes.substr(2));
 }
@@ -245,8 +248,8 @@ TEST(DPFrameDownsampling, IntegerFractionsOnly) {
 }
 
 std::string DepthMapBytes(int width, int height, const std::vector<float>& v) {
-  std::string bytes = std::to_string(width) + "&" + std::to_string(height) +
-                      "&1&";
+  std::string bytes =
+      std::to_string(width) + "&" + std::to_string(height) + "&1&";
   bytes.append(reinterpret_cast<const char*>(v.data()), v.size() * 4);
   return bytes;
 }
@@ -296,8 +299,8 @@ TEST(ResampleDepthToFrame, FollowsTheDistortion) {
   // another size; the depth map is half the undistorted size and encodes
   // its own pixel position, so every resampled value says where it came
   // from.
-  colmap::Camera original = colmap::Camera::CreateFromModelName(
-      1, "SIMPLE_RADIAL", 500, 400, 300);
+  colmap::Camera original =
+      colmap::Camera::CreateFromModelName(1, "SIMPLE_RADIAL", 500, 400, 300);
   original.params[3] = -0.2;
   const colmap::Camera undistorted =
       colmap::Camera::CreateFromModelName(2, "PINHOLE", 480, 440, 330);

@@ -21,8 +21,11 @@ constexpr int kPatch = 111;
 
 // A textured DP patch of kPatch pixels at blur r: rendered on a larger canvas
 // (so the patch border holds real blurred content) and cropped.
-DPPair MakePatch(double radius, uint64_t seed, double noise_sigma,
-                 double left_gain = 1, double right_gain = 1,
+DPPair MakePatch(double radius,
+                 uint64_t seed,
+                 double noise_sigma,
+                 double left_gain = 1,
+                 double right_gain = 1,
                  int patch = kPatch) {
   const TranslatingDiskPsf psf;
   const int margin = 32;
@@ -69,8 +72,8 @@ TEST(EstimatePatchBlur, RecoversSignedBlurWithNoise) {
       const DPPair pair = MakePatch(radius, seed++, 0.01);
       const PatchBlurEstimate estimate =
           estimator.Estimate(pair.left, pair.right);
-      EXPECT_TRUE(estimate.valid) << "r = " << radius << ": "
-                                  << estimate.reject_reason;
+      EXPECT_TRUE(estimate.valid)
+          << "r = " << radius << ": " << estimate.reject_reason;
       EXPECT_NEAR(estimate.radius_px, radius, 0.1) << "r = " << radius;
       EXPECT_GT(estimate.radius_px * radius, 0) << "wrong sign at " << radius;
       // Within ~1 px of focus the loss rises little towards the in-focus
@@ -113,19 +116,21 @@ TEST(EstimatePatchBlur, NoiseDoesNotInflateSmallBlurs) {
   for (int seed = 70; seed < 76; ++seed) {
     for (const double radius : {-1.5, 1.5, 2.0}) {
       const DPPair pair = MakePatch(radius, seed, 0.015, 1, 1, 61);
-      bias_corrected += std::abs(
-          corrected.Estimate(pair.left, pair.right).radius_px) -
+      bias_corrected +=
+          std::abs(corrected.Estimate(pair.left, pair.right).radius_px) -
           std::abs(radius);
-      bias_uncorrected += std::abs(
-          uncorrected.Estimate(pair.left, pair.right).radius_px) -
+      bias_uncorrected +=
+          std::abs(uncorrected.Estimate(pair.left, pair.right).radius_px) -
           std::abs(radius);
       ++count;
     }
   }
   bias_corrected /= count;
   bias_uncorrected /= count;
-  std::printf("mean |r| bias at sigma 0.015: corrected %.3f, uncorrected %.3f\n",
-              bias_corrected, bias_uncorrected);
+  std::printf(
+      "mean |r| bias at sigma 0.015: corrected %.3f, uncorrected %.3f\n",
+      bias_corrected,
+      bias_uncorrected);
   EXPECT_LT(std::abs(bias_corrected), 0.1);
   EXPECT_GT(bias_uncorrected, 0.3);  // the effect is real
 }
@@ -175,8 +180,8 @@ TEST(EstimatePatchBlur, BeyondTheBoundIsRejected) {
     const DPPair pair = MakePatch(radius, 97, 0.005, 1, 1, 61);
     const PatchBlurEstimate estimate =
         EstimatePatchBlur(pair.left, pair.right, psf, options);
-    EXPECT_FALSE(estimate.valid) << "r = " << radius << " read as "
-                                 << estimate.radius_px;
+    EXPECT_FALSE(estimate.valid)
+        << "r = " << radius << " read as " << estimate.radius_px;
     EXPECT_TRUE(estimate.at_bound) << "r = " << radius;
   }
 }
@@ -235,8 +240,8 @@ TEST(EstimatePatchBlur, FarBeyondTheBoundIsNotAFit) {
     }
   }
   // Diagnostic: how many of them the bound test alone lets through.
-  std::printf("far beyond the bound: %d of %d not at the bound\n",
-              valid_beyond, tried);
+  std::printf(
+      "far beyond the bound: %d of %d not at the bound\n", valid_beyond, tried);
 }
 
 TEST(EstimatePatchBlur, RejectsBadInput) {
@@ -279,7 +284,8 @@ TEST(EstimatePatchBlur, Timing) {
                                   .count() /
                               (repeats * pairs.size());
   std::printf("setup %.1f ms, %.3f ms per 111x111 patch (|r| <= 20)\n",
-              setup_ms, per_patch_ms);
+              setup_ms,
+              per_patch_ms);
   EXPECT_LT(per_patch_ms, 50.0);  // a gross regression guard only
 }
 

@@ -67,8 +67,7 @@ TEST(TranslatingDiskPsf, CentroidSignAndMagnitude) {
     // Far (r > 0): the other way round.
     const DPKernels far = psf.Kernels(radius);
     EXPECT_LT(KernelCentroid(far.left).x, KernelCentroid(far.right).x);
-    EXPECT_NEAR(KernelCentroid(far.left).x, -expected_per_radius * radius,
-                tol);
+    EXPECT_NEAR(KernelCentroid(far.left).x, -expected_per_radius * radius, tol);
   }
 }
 
@@ -92,8 +91,18 @@ TEST(TranslatingDiskPsf, ContinuousInRadius) {
   const TranslatingDiskPsf psf;
   // Including across integers, the kernel-size steps at n + 0.5, and the
   // in-focus threshold 0.5.
-  for (const double r : {0.4995, 0.9995, 1.4995, 2.0, 2.4995, 3.7, 7.4995,
-                         10.0, 14.9995, -0.4995, -1.4995, -6.0}) {
+  for (const double r : {0.4995,
+                         0.9995,
+                         1.4995,
+                         2.0,
+                         2.4995,
+                         3.7,
+                         7.4995,
+                         10.0,
+                         14.9995,
+                         -0.4995,
+                         -1.4995,
+                         -6.0}) {
     const double delta = r > 0 ? 1e-3 : -1e-3;
     const DPKernels a = psf.Kernels(r);
     const DPKernels b = psf.Kernels(r + delta);

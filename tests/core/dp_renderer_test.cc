@@ -26,16 +26,18 @@ void ExpectSeamless(DPRenderOptions::Compositing compositing,
   DPRenderOptions options;
   options.compositing = compositing;
   cv::Mat left, right;
-  RenderDPViews(sharp, depth, radius, TranslatingDiskPsf(), options, &left,
-                &right);
+  RenderDPViews(
+      sharp, depth, radius, TranslatingDiskPsf(), options, &left, &right);
   ASSERT_EQ(left.type(), CV_32FC3);
   const cv::Mat sum = left + right;
   double worst = 0;
   for (int r = 10; r < size.height - 10; ++r) {
     for (int c = 10; c < size.width - 10; ++c) {
       const cv::Vec3f value = sum.at<cv::Vec3f>(r, c);
-      worst = std::max({worst, std::abs(value[0] - 0.2),
-                        std::abs(value[1] - 0.5), std::abs(value[2] - 0.8)});
+      worst = std::max({worst,
+                        std::abs(value[0] - 0.2),
+                        std::abs(value[1] - 0.5),
+                        std::abs(value[2] - 0.8)});
     }
   }
   EXPECT_LT(worst, max_error);
@@ -59,8 +61,13 @@ TEST(RenderDPViews, EachViewGetsHalfTheLight) {
   const cv::Mat depth(64, 64, CV_32FC1, cv::Scalar(2.0));
   const cv::Mat radius(64, 64, CV_32FC1, cv::Scalar(3.0));
   cv::Mat left, right;
-  RenderDPViews(sharp, depth, radius, TranslatingDiskPsf(), DPRenderOptions(),
-                &left, &right);
+  RenderDPViews(sharp,
+                depth,
+                radius,
+                TranslatingDiskPsf(),
+                DPRenderOptions(),
+                &left,
+                &right);
   EXPECT_NEAR(left.at<float>(32, 32), 0.3, 1e-4);
   EXPECT_NEAR(right.at<float>(32, 32), 0.3, 1e-4);
 }

@@ -253,8 +253,13 @@ TEST(SearchScaleByIntensity, PatchesTheModelCannotFitDoNotDragTheMinimum) {
     for (int j = 0; j < 2; ++j) {
       test::RenderOptions rv = render;
       rv.noise_seed = 4000 + 10 * v + j;
-      IntensityPatch patch = RenderPatch(psf, j ? 3 * kMaxRadius : -3 * kMaxRadius,
-                                         v, 1.0, 700 + 10 * v + j, 3, rv);
+      IntensityPatch patch = RenderPatch(psf,
+                                         j ? 3 * kMaxRadius : -3 * kMaxRadius,
+                                         v,
+                                         1.0,
+                                         700 + 10 * v + j,
+                                         3,
+                                         rv);
       // Its depth claims a modest blur.
       patch.depth = scene.views[v].focus_distance_model * (j ? 1.2 : 0.9);
       scene.patches.push_back(patch);
@@ -271,7 +276,8 @@ TEST(SearchScaleByIntensity, PatchesTheModelCannotFitDoNotDragTheMinimum) {
         scene.views, scene.patches, scale * 1.05, psf, options);
     ASSERT_TRUE(result.success);
     std::printf("unfittable patches, loss %-20s: scale error %+.4f%s\n",
-                IntensityLossName(loss), result.scale / scale - 1.0,
+                IntensityLossName(loss),
+                result.scale / scale - 1.0,
                 result.at_boundary ? " (at the range edge)" : "");
     if (loss == IntensityLoss::kRelativeL2) {
       relative_error = result.scale / scale - 1.0;

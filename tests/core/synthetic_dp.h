@@ -38,7 +38,8 @@ struct TextureOptions {
 };
 
 // Multi-scale procedural texture in [min_value, max_value].
-inline cv::Mat MakeTexture(const cv::Size& size, uint64_t seed,
+inline cv::Mat MakeTexture(const cv::Size& size,
+                           uint64_t seed,
                            const TextureOptions& options = TextureOptions()) {
   DPSFM_CHECK(size.width > 0 && size.height > 0) << "empty texture size";
   DPSFM_CHECK(options.channels == 1 || options.channels == 3)
@@ -58,31 +59,41 @@ inline cv::Mat MakeTexture(const cv::Size& size, uint64_t seed,
       cv::Mat noise(grid, CV_32FC1);
       rng.fill(noise, cv::RNG::UNIFORM, -1.0, 1.0);
       cv::Mat up;
-      cv::resize(noise, up,
+      cv::resize(noise,
+                 up,
                  cv::Size(static_cast<int>(grid.width * cell),
                           static_cast<int>(grid.height * cell)),
-                 0, 0, cell > 1 ? cv::INTER_CUBIC : cv::INTER_NEAREST);
+                 0,
+                 0,
+                 cell > 1 ? cv::INTER_CUBIC : cv::INTER_NEAREST);
       // Random offset so octaves are not aligned to the same lattice.
       const int ox = rng.uniform(0, std::max(1, up.cols - size.width));
       const int oy = rng.uniform(0, std::max(1, up.rows - size.height));
       image += amplitude * up(cv::Rect(ox, oy, size.width, size.height));
       amplitude *= options.persistence;
     }
-    const int num_shapes = static_cast<int>(std::round(
-        options.shapes_per_10k_px * size.area() / 1e4));
+    const int num_shapes = static_cast<int>(
+        std::round(options.shapes_per_10k_px * size.area() / 1e4));
     for (int s = 0; s < num_shapes; ++s) {
       const double value = rng.uniform(-1.5, 1.5);
       const cv::Point centre(rng.uniform(0, size.width),
                              rng.uniform(0, size.height));
-      const int extent = rng.uniform(3, std::max(4, std::min(size.width,
-                                                              size.height) / 4));
+      const int extent =
+          rng.uniform(3, std::max(4, std::min(size.width, size.height) / 4));
       if (rng.uniform(0, 2) == 0) {
         cv::rectangle(image,
-                      cv::Rect(centre.x - extent / 2, centre.y - extent / 3,
-                               extent, std::max(2, 2 * extent / 3)),
-                      cv::Scalar(value), cv::FILLED);
+                      cv::Rect(centre.x - extent / 2,
+                               centre.y - extent / 3,
+                               extent,
+                               std::max(2, 2 * extent / 3)),
+                      cv::Scalar(value),
+                      cv::FILLED);
       } else {
-        cv::circle(image, centre, extent / 2, cv::Scalar(value), cv::FILLED,
+        cv::circle(image,
+                   centre,
+                   extent / 2,
+                   cv::Scalar(value),
+                   cv::FILLED,
                    cv::LINE_AA);
       }
     }
@@ -100,8 +111,8 @@ inline cv::Mat MakeTexture(const cv::Size& size, uint64_t seed,
   cv::minMaxLoc(texture.reshape(1), &lo, &hi);
   const double scale =
       hi > lo ? (options.max_value - options.min_value) / (hi - lo) : 0.0;
-  texture.convertTo(texture, texture.type(), scale,
-                    options.min_value - lo * scale);
+  texture.convertTo(
+      texture, texture.type(), scale, options.min_value - lo * scale);
   return texture;
 }
 
@@ -148,7 +159,8 @@ inline void FinishViews(const RenderOptions& options, DPPair* pair) {
 
 // Renders the DP views of an all-in-focus image (CV_32FC1 or CV_32FC3) at one
 // signed blur radius: left = sharp * H_l(r), right = sharp * H_r(r).
-inline DPPair RenderDP(const cv::Mat& sharp, const DPPsfModel& psf,
+inline DPPair RenderDP(const cv::Mat& sharp,
+                       const DPPsfModel& psf,
                        double signed_radius_px,
                        const RenderOptions& options = RenderOptions()) {
   const DPKernels kernels = psf.Kernels(signed_radius_px);
@@ -165,7 +177,8 @@ inline DPPair RenderDP(const cv::Mat& sharp, const DPPsfModel& psf,
 // constant radius, farther than that radius's kernel half-size from any other
 // region, this equals RenderDP at that radius exactly. At most 256 distinct
 // radii (each costs two full-image convolutions).
-inline DPPair RenderDP(const cv::Mat& sharp, const DPPsfModel& psf,
+inline DPPair RenderDP(const cv::Mat& sharp,
+                       const DPPsfModel& psf,
                        const cv::Mat& radius_map,
                        const RenderOptions& options = RenderOptions()) {
   DPSFM_CHECK(radius_map.size() == sharp.size())

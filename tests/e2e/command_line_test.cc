@@ -22,7 +22,8 @@ CommandResult RunEstimator(const std::vector<std::string>& args) {
 
 // A failed run: exit status 1, not killed, exactly one error line, no
 // crash report, and the error line contains `expected`.
-void ExpectCleanError(const CommandResult& result, const std::string& expected) {
+void ExpectCleanError(const CommandResult& result,
+                      const std::string& expected) {
   EXPECT_FALSE(result.signaled) << result.err;
   EXPECT_EQ(result.exit_code, 1) << result.err;
   const std::regex error_line("^(ERROR: |E[0-9]{8} ).*");
@@ -35,8 +36,11 @@ void ExpectCleanError(const CommandResult& result, const std::string& expected) 
     }
   }
   EXPECT_EQ(num_error_lines, 1) << result.err;
-  for (const char* crash : {"Check failed", "terminate called", "Aborted",
-                            "stack trace", "*** SIG"}) {
+  for (const char* crash : {"Check failed",
+                            "terminate called",
+                            "Aborted",
+                            "stack trace",
+                            "*** SIG"}) {
     EXPECT_EQ(result.err.find(crash), std::string::npos) << result.err;
   }
 }
@@ -67,12 +71,20 @@ TEST(CommandLine, HelpListsContractOptions) {
   const CommandResult result = RunEstimator({"--help"});
   EXPECT_EQ(result.exit_code, 0) << result.err;
   const std::string text = result.out + result.err;
-  for (const char* option :
-       {"--workspace_path", "--dp_image_path", "--input_path", "--image_path",
-        "--database_path", "--lens_path", "--DPScaleEstimator.focal_length_mm",
-        "--DPScaleEstimator.f_number", "--DPScaleEstimator.pixel_pitch_um",
-        "--DPScaleEstimator.swap_dp_views", "--input_type", "--report_path",
-        "--dry_run", "--output_path"}) {
+  for (const char* option : {"--workspace_path",
+                             "--dp_image_path",
+                             "--input_path",
+                             "--image_path",
+                             "--database_path",
+                             "--lens_path",
+                             "--DPScaleEstimator.focal_length_mm",
+                             "--DPScaleEstimator.f_number",
+                             "--DPScaleEstimator.pixel_pitch_um",
+                             "--DPScaleEstimator.swap_dp_views",
+                             "--input_type",
+                             "--report_path",
+                             "--dry_run",
+                             "--output_path"}) {
     EXPECT_NE(text.find(option), std::string::npos) << option;
   }
 }
@@ -89,8 +101,11 @@ TEST(CommandLine, UnknownOption) {
 
 TEST(CommandLine, BadBooleanValue) {
   WorkspaceFixture fixture;
-  ExpectCleanError(RunEstimator({"--workspace_path", fixture.workspace,
-                                 "--dp_image_path", fixture.dp, "--dry_run",
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp,
+                                 "--dry_run",
                                  "maybe"}),
                    "dry_run");
 }
@@ -103,98 +118,123 @@ TEST(CommandLine, NeitherWorkspaceNorModel) {
 
 TEST(CommandLine, BothWorkspaceAndModel) {
   WorkspaceFixture fixture;
-  ExpectCleanError(
-      RunEstimator({"--workspace_path", fixture.workspace, "--input_path",
-                    fixture.workspace + "/sparse", "--dp_image_path",
-                    fixture.dp}),
-      "exactly one");
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--input_path",
+                                 fixture.workspace + "/sparse",
+                                 "--dp_image_path",
+                                 fixture.dp}),
+                   "exactly one");
 }
 
 TEST(CommandLine, MissingWorkspace) {
   WorkspaceFixture fixture;
   const std::string missing = fixture.dir / "no_such_dir";
   ExpectCleanError(
-      RunEstimator({"--workspace_path", missing, "--dp_image_path", fixture.dp}),
+      RunEstimator(
+          {"--workspace_path", missing, "--dp_image_path", fixture.dp}),
       missing);
 }
 
 TEST(CommandLine, WorkspaceWithoutModel) {
   WorkspaceFixture fixture;
   boost::filesystem::remove(fixture.workspace + "/sparse/images.txt");
-  ExpectCleanError(RunEstimator({"--workspace_path", fixture.workspace,
-                                 "--dp_image_path", fixture.dp}),
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp}),
                    "no model");
 }
 
 TEST(CommandLine, WorkspaceWithoutDepthMaps) {
   WorkspaceFixture fixture;
   boost::filesystem::remove_all(fixture.workspace + "/stereo");
-  ExpectCleanError(RunEstimator({"--workspace_path", fixture.workspace,
-                                 "--dp_image_path", fixture.dp}),
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp}),
                    "depth maps");
 }
 
 TEST(CommandLine, DPFolderWithoutRightOrSum) {
   WorkspaceFixture fixture;
   boost::filesystem::remove_all(fixture.dp + "/right");
-  ExpectCleanError(RunEstimator({"--workspace_path", fixture.workspace,
-                                 "--dp_image_path", fixture.dp}),
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp}),
                    "neither right/ nor sum/");
 }
 
 TEST(CommandLine, BadInputType) {
   WorkspaceFixture fixture;
-  ExpectCleanError(
-      RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                    fixture.dp, "--input_type", "fused"}),
-      "--input_type");
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp,
+                                 "--input_type",
+                                 "fused"}),
+                   "--input_type");
 }
 
 TEST(CommandLine, NonPositiveLensValues) {
   WorkspaceFixture fixture;
-  for (const char* option :
-       {"f_number", "focal_length_mm", "pixel_pitch_um"}) {
-    ExpectCleanError(
-        RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                      fixture.dp, std::string("--DPScaleEstimator.") + option,
-                      "-2"}),
-        option);
+  for (const char* option : {"f_number", "focal_length_mm", "pixel_pitch_um"}) {
+    ExpectCleanError(RunEstimator({"--workspace_path",
+                                   fixture.workspace,
+                                   "--dp_image_path",
+                                   fixture.dp,
+                                   std::string("--DPScaleEstimator.") + option,
+                                   "-2"}),
+                     option);
   }
 }
 
 TEST(CommandLine, NonNumericLensValue) {
   WorkspaceFixture fixture;
-  ExpectCleanError(
-      RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                    fixture.dp, "--DPScaleEstimator.f_number", "wide"}),
-      "f_number");
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp,
+                                 "--DPScaleEstimator.f_number",
+                                 "wide"}),
+                   "f_number");
 }
 
 TEST(CommandLine, MissingDatabaseIsNotCreated) {
   WorkspaceFixture fixture;
   const std::string database = fixture.dir / "project.db";
-  ExpectCleanError(
-      RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                    fixture.dp, "--database_path", database}),
-      database);
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp,
+                                 "--database_path",
+                                 database}),
+                   database);
   EXPECT_FALSE(boost::filesystem::exists(database));
 }
 
 TEST(CommandLine, MissingLensFile) {
   WorkspaceFixture fixture;
   const std::string lens = fixture.dir / "lens.csv";
-  ExpectCleanError(
-      RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                    fixture.dp, "--lens_path", lens}),
-      lens);
+  ExpectCleanError(RunEstimator({"--workspace_path",
+                                 fixture.workspace,
+                                 "--dp_image_path",
+                                 fixture.dp,
+                                 "--lens_path",
+                                 lens}),
+                   lens);
 }
 
 TEST(CommandLine, FailedRunLeavesWorkspaceUnchanged) {
   WorkspaceFixture fixture;
   const auto before = SnapshotTree(fixture.dir.path());
-  const CommandResult result =
-      RunEstimator({"--workspace_path", fixture.workspace, "--dp_image_path",
-                    fixture.dp, "--report_path", fixture.dir / "report.json"});
+  const CommandResult result = RunEstimator({"--workspace_path",
+                                             fixture.workspace,
+                                             "--dp_image_path",
+                                             fixture.dp,
+                                             "--report_path",
+                                             fixture.dir / "report.json"});
   EXPECT_NE(result.exit_code, 0);
   EXPECT_FALSE(result.signaled);
   EXPECT_EQ(SnapshotTree(fixture.dir.path()), before);

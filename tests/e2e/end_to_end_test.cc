@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <fstream>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -86,8 +86,12 @@ CommandResult RunEstimator(const std::vector<std::string>& args,
 }
 
 std::vector<std::string> DenseArgs(const SceneCopy& scene) {
-  return {"--workspace_path", scene / "dense", "--dp_image_path", scene / "dp",
-          "--lens_path", scene / "lens.csv"};
+  return {"--workspace_path",
+          scene / "dense",
+          "--dp_image_path",
+          scene / "dp",
+          "--lens_path",
+          scene / "lens.csv"};
 }
 
 std::vector<std::string> With(std::vector<std::string> args,
@@ -133,8 +137,8 @@ void ExpectModelScaled(const std::string& before_dir,
   }
   ASSERT_EQ(before.NumPoints3D(), after.NumPoints3D());
   for (const auto& point : before.Points3D()) {
-    EXPECT_TRUE(
-        after.Point3D(point.first).xyz.isApprox(scale * point.second.xyz, 1e-12));
+    EXPECT_TRUE(after.Point3D(point.first)
+                    .xyz.isApprox(scale * point.second.xyz, 1e-12));
   }
 }
 
@@ -155,7 +159,8 @@ void ExpectDepthMapScaled(const std::string& before_path,
 }
 
 // fused.ply: binary little-endian, 27 bytes per vertex (xyz, normal, rgb).
-void ExpectFusedPlyScaled(const std::string& before, const std::string& after,
+void ExpectFusedPlyScaled(const std::string& before,
+                          const std::string& after,
                           double scale) {
   const std::string a = ReadTextFile(before), b = ReadTextFile(after);
   ASSERT_EQ(a.size(), b.size());
@@ -244,8 +249,10 @@ TEST(EndToEnd, DenseWorkspaceInPlace) {
 
   // A second run refuses and changes nothing; with --force it composes.
   const auto rescaled_tree = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "already rescaled",
-                rescaled_tree, scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)),
+                "already rescaled",
+                rescaled_tree,
+                scene.root());
   const std::string report2 = scene.temp() / "report2.json";
   const CommandResult forced = RunEstimator(
       With(DenseArgs(scene), {"--force", "1", "--report_path", report2}));
@@ -255,7 +262,8 @@ TEST(EndToEnd, DenseWorkspaceInPlace) {
   EXPECT_LT(std::abs(scale2 - 1.0), kMaxScaleError);
   const nlohmann::json record2 = ReadJson(scene / "dense/dp_scale_record.json");
   EXPECT_NEAR(ReadJson(report2).at("cumulative_scale").get<double>(),
-              scale * scale2, 1e-9 * scale * scale2)
+              scale * scale2,
+              1e-9 * scale * scale2)
       << record2.dump(2);
 }
 
@@ -283,7 +291,8 @@ TEST(EndToEnd, OutputPathWritesARescaledCopy) {
   ExpectModelScaled(scene / "dense/sparse", out + "/sparse", scale);
   ExpectDepthMapScaled(
       scene / "dense/stereo/depth_maps/DP_0001.jpg.geometric.bin",
-      out + "/stereo/depth_maps/DP_0001.jpg.geometric.bin", scale);
+      out + "/stereo/depth_maps/DP_0001.jpg.geometric.bin",
+      scale);
 }
 
 TEST(EndToEnd, SparseModelOnly) {
@@ -295,9 +304,14 @@ TEST(EndToEnd, SparseModelOnly) {
                   fs::path(original) / name);
   }
   const std::string report_path = scene.temp() / "report.json";
-  const CommandResult result = RunEstimator(
-      {"--input_path", scene / "sparse/0", "--dp_image_path", scene / "dp",
-       "--lens_path", scene / "lens.csv", "--report_path", report_path});
+  const CommandResult result = RunEstimator({"--input_path",
+                                             scene / "sparse/0",
+                                             "--dp_image_path",
+                                             scene / "dp",
+                                             "--lens_path",
+                                             scene / "lens.csv",
+                                             "--report_path",
+                                             report_path});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const double scale = ReadJson(report_path).at("scale").get<double>();
   const double true_scale =
@@ -313,18 +327,29 @@ TEST(EndToEnd, DistortedCamerasDenseAndSparse) {
       ReadJson(scene / "ground_truth.json").at("scale").get<double>();
   const std::string report_path = scene.temp() / "report.json";
   // Dense: the database's original cameras map depths into the DP frames.
-  CommandResult result = RunEstimator(
-      With(DenseArgs(scene), {"--database_path", scene / "database.db",
-                              "--dry_run", "1", "--report_path", report_path}));
+  CommandResult result = RunEstimator(With(DenseArgs(scene),
+                                           {"--database_path",
+                                            scene / "database.db",
+                                            "--dry_run",
+                                            "1",
+                                            "--report_path",
+                                            report_path}));
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.err.find("6 original cameras"), std::string::npos)
       << result.err;
   double scale = ReadJson(report_path).at("scale").get<double>();
   EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
   // Sparse: the model's own (distorted) 2D points are in frame geometry.
-  result = RunEstimator({"--input_path", scene / "sparse/0", "--dp_image_path",
-                         scene / "dp", "--lens_path", scene / "lens.csv",
-                         "--dry_run", "1", "--report_path", report_path});
+  result = RunEstimator({"--input_path",
+                         scene / "sparse/0",
+                         "--dp_image_path",
+                         scene / "dp",
+                         "--lens_path",
+                         scene / "lens.csv",
+                         "--dry_run",
+                         "1",
+                         "--report_path",
+                         report_path});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   scale = ReadJson(report_path).at("scale").get<double>();
   EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
@@ -339,23 +364,41 @@ TEST(EndToEnd, RealColmapPipelineSparseMode) {
   const std::string sparse = scene.temp() / "sparse";
   fs::create_directories(sparse);
   for (const std::vector<std::string>& step :
-       std::vector<std::vector<std::string>>{
-           {"feature_extractor", "--database_path", db, "--image_path",
-            scene / "images", "--ImageReader.single_camera", "1",
-            "--SiftExtraction.use_gpu", "0"},
-           {"exhaustive_matcher", "--database_path", db,
-            "--SiftMatching.use_gpu", "0"},
-           {"mapper", "--database_path", db, "--image_path", scene / "images",
-            "--output_path", sparse}}) {
+       std::vector<std::vector<std::string>>{{"feature_extractor",
+                                              "--database_path",
+                                              db,
+                                              "--image_path",
+                                              scene / "images",
+                                              "--ImageReader.single_camera",
+                                              "1",
+                                              "--SiftExtraction.use_gpu",
+                                              "0"},
+                                             {"exhaustive_matcher",
+                                              "--database_path",
+                                              db,
+                                              "--SiftMatching.use_gpu",
+                                              "0"},
+                                             {"mapper",
+                                              "--database_path",
+                                              db,
+                                              "--image_path",
+                                              scene / "images",
+                                              "--output_path",
+                                              sparse}}) {
     std::vector<std::string> command = {kColmap};
     command.insert(command.end(), step.begin(), step.end());
     const CommandResult result = RunCommand(command);
     ASSERT_EQ(result.exit_code, 0) << step[0] << "\n" << result.err;
   }
   ASSERT_TRUE(fs::is_directory(sparse + "/0"));
-  const CommandResult result = RunEstimator(
-      {"--input_path", sparse + "/0", "--dp_image_path", scene / "dp",
-       "--lens_path", scene / "lens.csv", "--database_path", db});
+  const CommandResult result = RunEstimator({"--input_path",
+                                             sparse + "/0",
+                                             "--dp_image_path",
+                                             scene / "dp",
+                                             "--lens_path",
+                                             scene / "lens.csv",
+                                             "--database_path",
+                                             db});
   ASSERT_EQ(result.exit_code, 0) << result.err;
 
   const nlohmann::json truth = ReadJson(scene / "ground_truth.json");
@@ -419,29 +462,31 @@ TEST(EndToEndErrors, MissingDPView) {
   SceneCopy scene("dslr");
   fs::remove(scene / "dp/left/DP_0003.png");
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0003.jpg", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "DP_0003.jpg", before, scene.root());
 }
 
 TEST(EndToEndErrors, UnreadableDPView) {
   SceneCopy scene("dslr");
   WriteTextFile(scene / "dp/right/DP_0002.png", "not a png");
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0002.png", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "DP_0002.png", before, scene.root());
 }
 
 TEST(EndToEndErrors, DPViewSizeMismatch) {
   // Both views cropped: they agree with each other but not with the camera.
   SceneCopy scene("dslr");
   for (const char* side : {"left", "right"}) {
-    const std::string path = scene / (std::string("dp/") + side + "/DP_0004.png");
+    const std::string path =
+        scene / (std::string("dp/") + side + "/DP_0004.png");
     const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-    cv::imwrite(path, image(cv::Rect(0, 0, image.cols - 7, image.rows)).clone());
+    cv::imwrite(path,
+                image(cv::Rect(0, 0, image.cols - 7, image.rows)).clone());
   }
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0004.jpg", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "DP_0004.jpg", before, scene.root());
 }
 
 TEST(EndToEndErrors, LeftRightSizeMismatch) {
@@ -450,8 +495,8 @@ TEST(EndToEndErrors, LeftRightSizeMismatch) {
   const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
   cv::imwrite(path, image(cv::Rect(0, 0, image.cols - 7, image.rows)).clone());
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "DP_0004.png", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "DP_0004.png", before, scene.root());
 }
 
 TEST(EndToEndErrors, TruncatedDepthMap) {
@@ -473,16 +518,20 @@ TEST(EndToEndErrors, NonFiniteDepthMap) {
   std::memcpy(&bytes[bytes.size() - 400], &nan, sizeof(nan));
   WriteTextFile(path, bytes);
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "non-finite", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "non-finite", before, scene.root());
 }
 
 TEST(EndToEndErrors, LensDataMissing) {
   SceneCopy scene("dslr");
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator({"--workspace_path", scene / "dense",
-                              "--dp_image_path", scene / "dp"}),
-                "--DPScaleEstimator.focal_length_mm", before, scene.root());
+  ExpectRefusal(RunEstimator({"--workspace_path",
+                              scene / "dense",
+                              "--dp_image_path",
+                              scene / "dp"}),
+                "--DPScaleEstimator.focal_length_mm",
+                before,
+                scene.root());
 }
 
 TEST(EndToEndErrors, ModelWithoutRegisteredImages) {
@@ -497,20 +546,23 @@ TEST(EndToEndErrors, ModelWithoutRegisteredImages) {
   fs::create_directories(scene / "dense/sparse");
   empty.WriteBinary(scene / "dense/sparse");
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "no registered images", before,
+  ExpectRefusal(RunEstimator(DenseArgs(scene)),
+                "no registered images",
+                before,
                 scene.root());
 }
 
 TEST(EndToEndErrors, PanFocusCaptureIsRefusedWithAReason) {
   SceneCopy scene("pan_focus");
   const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(RunEstimator(DenseArgs(scene)), "too little blur", before,
-                scene.root());
+  ExpectRefusal(
+      RunEstimator(DenseArgs(scene)), "too little blur", before, scene.root());
 }
 
 // A project database holding the model's cameras and images (or, with
 // `rename`, images of another project).
-void WriteDatabase(const std::string& model_dir, const std::string& path,
+void WriteDatabase(const std::string& model_dir,
+                   const std::string& path,
                    bool rename) {
   colmap::Reconstruction model;
   model.Read(model_dir);
@@ -532,8 +584,8 @@ TEST(EndToEnd, DatabaseIsOnlyRead) {
   const std::string database = scene.temp() / "project.db";
   WriteDatabase(scene / "sparse/0", database, false);
   const auto before = SnapshotTree(scene.temp().path());
-  const CommandResult result = RunEstimator(With(
-      DenseArgs(scene), {"--database_path", database, "--dry_run", "1"}));
+  const CommandResult result = RunEstimator(
+      With(DenseArgs(scene), {"--database_path", database, "--dry_run", "1"}));
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.err.find("Database: 8 images; 0 model images missing"),
             std::string::npos)
@@ -549,7 +601,8 @@ TEST(EndToEndErrors, DatabaseOfAnotherProject) {
   const auto before = SnapshotTree(scene.root());
   ExpectRefusal(
       RunEstimator(With(DenseArgs(scene), {"--database_path", database})),
-      "none of the model's 8 images is in the database", before,
+      "none of the model's 8 images is in the database",
+      before,
       scene.root());
 }
 
@@ -560,7 +613,9 @@ TEST(EndToEndErrors, NotADatabase) {
   const auto before = SnapshotTree(scene.root());
   ExpectRefusal(
       RunEstimator(With(DenseArgs(scene), {"--database_path", database})),
-      database, before, scene.root());
+      database,
+      before,
+      scene.root());
 }
 
 }  // namespace

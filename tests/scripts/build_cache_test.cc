@@ -67,24 +67,32 @@ TEST(BuildCache, KeyChangesWhenAPatchIsAdded) {
 TEST(BuildCache, KeyChangesWithBuildOptions) {
   const std::string patches = kRoot + "/colmap_patches";
   const std::string release = CacheKey(patches, "build");
-  const CommandResult debug =
-      RunCommand({"env", "DPSFM_BUILD_TYPE=Debug", "bash",
-                  kRoot + "/scripts/cache_key.sh", patches, "build"});
+  const CommandResult debug = RunCommand({"env",
+                                          "DPSFM_BUILD_TYPE=Debug",
+                                          "bash",
+                                          kRoot + "/scripts/cache_key.sh",
+                                          patches,
+                                          "build"});
   EXPECT_EQ(debug.exit_code, 0);
   EXPECT_NE(debug.out.substr(0, 16), release);
   // The source key does not depend on build options.
   const CommandResult debug_source =
-      RunCommand({"env", "DPSFM_BUILD_TYPE=Debug", "bash",
-                  kRoot + "/scripts/cache_key.sh", patches, "source"});
+      RunCommand({"env",
+                  "DPSFM_BUILD_TYPE=Debug",
+                  "bash",
+                  kRoot + "/scripts/cache_key.sh",
+                  patches,
+                  "source"});
   EXPECT_EQ(debug_source.out.substr(0, 16), CacheKey(patches, "source"));
 }
 
 TEST(BuildCache, TarballWithWrongChecksumIsRefused) {
   TempDir cache;
   WriteTextFile(cache / "downloads/colmap_3.10.orig.tar.gz", "not colmap");
-  const CommandResult result =
-      RunCommand({"env", "DPSFM_CACHE_DIR=" + cache.path(), "bash",
-                  kRoot + "/scripts/fetch_colmap.sh"});
+  const CommandResult result = RunCommand({"env",
+                                           "DPSFM_CACHE_DIR=" + cache.path(),
+                                           "bash",
+                                           kRoot + "/scripts/fetch_colmap.sh"});
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.err.find("sha256 mismatch"), std::string::npos)
       << result.err;

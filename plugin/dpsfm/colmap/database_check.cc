@@ -17,7 +17,8 @@ class ReadOnlyDatabase {
  public:
   explicit ReadOnlyDatabase(const std::string& path) : path_(path) {
     const std::string uri = "file:" + path + "?mode=ro&immutable=1";
-    if (sqlite3_open_v2(uri.c_str(), &db_,
+    if (sqlite3_open_v2(uri.c_str(),
+                        &db_,
                         SQLITE_OPEN_READONLY | SQLITE_OPEN_URI,
                         nullptr) != SQLITE_OK) {
       const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -69,8 +70,8 @@ DatabaseCheck CheckModelAgainstDatabase(
       "SELECT camera_id, model, width, height, params FROM cameras",
       [&](sqlite3_stmt* row) {
         colmap::Camera camera;
-        camera.camera_id = static_cast<colmap::camera_t>(
-            sqlite3_column_int64(row, 0));
+        camera.camera_id =
+            static_cast<colmap::camera_t>(sqlite3_column_int64(row, 0));
         camera.model_id =
             static_cast<colmap::CameraModelId>(sqlite3_column_int64(row, 1));
         camera.width = static_cast<size_t>(sqlite3_column_int64(row, 2));
@@ -108,8 +109,8 @@ DatabaseCheck CheckModelAgainstDatabase(
     // a different aspect ratio counts as a mismatch.
     if (original != cameras.end() && original->second.height > 0 &&
         camera.height > 0) {
-      const double db_aspect = static_cast<double>(original->second.width) /
-                               original->second.height;
+      const double db_aspect =
+          static_cast<double>(original->second.width) / original->second.height;
       const double model_aspect =
           static_cast<double>(camera.width) / camera.height;
       if (std::abs(db_aspect - model_aspect) > 0.05 * model_aspect) {

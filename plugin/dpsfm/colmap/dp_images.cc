@@ -87,7 +87,8 @@ cv::Mat ReadImageAsFloat(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
   }
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  const cv::Mat raw =
+      cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   if (raw.empty()) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
@@ -120,8 +121,8 @@ cv::Mat ReadImageAsFloat(const std::string& path) {
       throw InputError("DP view has an unsupported channel count: " + path);
   }
   cv::Mat result;
-  image.convertTo(result, image.channels() == 1 ? CV_32FC1 : CV_32FC3,
-                  1.0 / unit);
+  image.convertTo(
+      result, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
   return result;
 }
 
@@ -135,8 +136,8 @@ DPFrames LoadDPFrames(const DPFramePaths& paths, bool swap_views) {
     std::ostringstream message;
     message << "DP views differ in size or channels: " << paths.left << " is "
             << frames.left.cols << "x" << frames.left.rows << "x"
-            << frames.left.channels() << ", " << other << " is "
-            << second.cols << "x" << second.rows << "x" << second.channels();
+            << frames.left.channels() << ", " << other << " is " << second.cols
+            << "x" << second.rows << "x" << second.channels();
     throw InputError(message.str());
   }
   if (paths.right.empty()) {

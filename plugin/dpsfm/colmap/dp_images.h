@@ -40,7 +40,8 @@ class DPImageIndex {
     std::map<std::string, std::vector<std::string>> by_stem;
   };
   static Folder Scan(const std::string& root);
-  static std::string Lookup(const Folder& folder, const std::string& name,
+  static std::string Lookup(const Folder& folder,
+                            const std::string& name,
                             const std::string& what);
 
   Folder left_;

@@ -30,8 +30,11 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
   return cells;
 }
 
-double ParseCell(const std::string& cell, const std::string& path, int line,
-                 const char* column, bool allow_empty) {
+double ParseCell(const std::string& cell,
+                 const std::string& path,
+                 int line,
+                 const char* column,
+                 bool allow_empty) {
   if (cell.empty()) {
     if (allow_empty) return 0;
     throw InputError(path + ":" + std::to_string(line) + ": " + column +
@@ -75,8 +78,8 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
     throw InputError("lens file is empty: " + path);
   }
   const std::vector<std::string> header = SplitCsvLine(line);
-  const std::vector<std::string> expected = {"name", "focal_length_mm",
-                                             "f_number", "pixel_pitch_um"};
+  const std::vector<std::string> expected = {
+      "name", "focal_length_mm", "f_number", "pixel_pitch_um"};
   if (header != expected) {
     throw InputError("lens file " + path +
                      " must start with the header "
@@ -102,8 +105,8 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
             ? ParseCell(cells[3], path, line_number, "pixel_pitch_um", true)
             : 0;
     if (!rows.emplace(cells[0], row).second) {
-      throw InputError(path + ":" + std::to_string(line_number) +
-                       ": image " + cells[0] + " is listed twice");
+      throw InputError(path + ":" + std::to_string(line_number) + ": image " +
+                       cells[0] + " is listed twice");
     }
   }
   return rows;
@@ -116,8 +119,7 @@ ExifLens ReadExifLens(const std::string& path) {
     return exif;
   }
   // Metadata only: decoding the pixels of a large JPEG would cost far more.
-  FIBITMAP* bitmap =
-      FreeImage_Load(format, path.c_str(), FIF_LOAD_NOPIXELS);
+  FIBITMAP* bitmap = FreeImage_Load(format, path.c_str(), FIF_LOAD_NOPIXELS);
   if (bitmap == nullptr) {
     return exif;
   }
@@ -136,8 +138,11 @@ ResolvedLens ResolveLens(const std::string& image_name,
   const auto row = csv.find(image_name);
   const LensCsvRow* csv_row = row == csv.end() ? nullptr : &row->second;
 
-  auto pick = [&](double csv_value, double flag_value, double exif_value,
-                  double* out, std::string* source) {
+  auto pick = [&](double csv_value,
+                  double flag_value,
+                  double exif_value,
+                  double* out,
+                  std::string* source) {
     if (csv_value > 0) {
       *out = csv_value;
       *source = "lens.csv";
@@ -149,14 +154,21 @@ ResolvedLens ResolveLens(const std::string& image_name,
       *source = "EXIF";
     }
   };
-  pick(csv_row ? csv_row->focal_length_mm : 0, flags.focal_length_mm,
-       exif ? exif->focal_length_mm : 0, &resolved.lens.focal_length_mm,
+  pick(csv_row ? csv_row->focal_length_mm : 0,
+       flags.focal_length_mm,
+       exif ? exif->focal_length_mm : 0,
+       &resolved.lens.focal_length_mm,
        &resolved.focal_length_source);
-  pick(csv_row ? csv_row->f_number : 0, flags.f_number,
-       exif ? exif->f_number : 0, &resolved.lens.f_number,
+  pick(csv_row ? csv_row->f_number : 0,
+       flags.f_number,
+       exif ? exif->f_number : 0,
+       &resolved.lens.f_number,
        &resolved.f_number_source);
-  pick(csv_row ? csv_row->pixel_pitch_um : 0, flags.pixel_pitch_um, 0,
-       &resolved.lens.pixel_pitch_um, &resolved.pixel_pitch_source);
+  pick(csv_row ? csv_row->pixel_pitch_um : 0,
+       flags.pixel_pitch_um,
+       0,
+       &resolved.lens.pixel_pitch_um,
+       &resolved.pixel_pitch_source);
 
   const char* kHowTo =
       " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "

@@ -55,8 +55,8 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   intensity["ci"] = Interval(result.intensity_ci_low, result.intensity_ci_high);
   intensity["loss"] = result.intensity_loss;
   nlohmann::json curve = nlohmann::json::array();
-  for (size_t i = 0; i < result.candidate_scales.size() &&
-                     i < result.candidate_losses.size();
+  for (size_t i = 0;
+       i < result.candidate_scales.size() && i < result.candidate_losses.size();
        ++i) {
     curve.push_back({Number(result.candidate_scales[i]),
                      Number(result.candidate_losses[i])});
@@ -126,14 +126,15 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   nlohmann::json patches = nlohmann::json::array();
   for (const PatchSample& patch : result.patches) {
     if (!patch.selected) continue;
-    patches.push_back({{"view", result.views.at(patch.view).name},
-                       {"x", patch.x},
-                       {"y", patch.y},
-                       {"depth_model", patch.depth},
-                       {"radius_px", Number(patch.radius_px)},
-                       {"predicted_radius_px", Number(patch.predicted_radius_px)},
-                       {"confidence", Number(patch.confidence)},
-                       {"used", patch.used}});
+    patches.push_back(
+        {{"view", result.views.at(patch.view).name},
+         {"x", patch.x},
+         {"y", patch.y},
+         {"depth_model", patch.depth},
+         {"radius_px", Number(patch.radius_px)},
+         {"predicted_radius_px", Number(patch.predicted_radius_px)},
+         {"confidence", Number(patch.confidence)},
+         {"used", patch.used}});
   }
   report["patches"] = patches;
 

@@ -16,8 +16,8 @@ namespace dpsfm {
 std::string DPSFMVersion();
 
 struct RunTimings {
-  double read = 0;       // loading DP views and depths
-  double blur = 0;       // per-patch blur estimation (inside AddView)
+  double read = 0;  // loading DP views and depths
+  double blur = 0;  // per-patch blur estimation (inside AddView)
   double linear = 0;
   double intensity = 0;
   double rescale = 0;

@@ -47,14 +47,19 @@ void Store(size_t offset, T value, std::string* bytes) {
 }
 
 // Bytes [offset, offset + size) must exist.
-void Need(const std::string& bytes, size_t offset, uint64_t size,
-          const std::string& path, const char* what) {
+void Need(const std::string& bytes,
+          size_t offset,
+          uint64_t size,
+          const std::string& path,
+          const char* what) {
   if (offset > bytes.size() || size > bytes.size() - offset) {
     Corrupt(path, std::string("file is truncated (") + what + ")");
   }
 }
 
-double ScaleDouble(double value, double scale, const std::string& path,
+double ScaleDouble(double value,
+                   double scale,
+                   const std::string& path,
                    const char* what) {
   if (!std::isfinite(value)) {
     Corrupt(path, std::string("non-finite ") + what);
@@ -66,7 +71,9 @@ double ScaleDouble(double value, double scale, const std::string& path,
   return scaled;
 }
 
-float ScaleFloat(float value, double scale, const std::string& path,
+float ScaleFloat(float value,
+                 double scale,
+                 const std::string& path,
                  const char* what) {
   if (!std::isfinite(value)) {
     Corrupt(path, std::string("non-finite ") + what);
@@ -79,12 +86,15 @@ float ScaleFloat(float value, double scale, const std::string& path,
 }
 
 // Multiplies the three doubles at `offset` (already bounds-checked).
-void ScaleVector3d(size_t offset, double scale, const std::string& path,
-                   const char* what, std::string* bytes) {
+void ScaleVector3d(size_t offset,
+                   double scale,
+                   const std::string& path,
+                   const char* what,
+                   std::string* bytes) {
   for (int i = 0; i < 3; ++i) {
     const size_t at = offset + i * sizeof(double);
-    Store<double>(at, ScaleDouble(Load<double>(*bytes, at), scale, path, what),
-                  bytes);
+    Store<double>(
+        at, ScaleDouble(Load<double>(*bytes, at), scale, path, what), bytes);
   }
 }
 
@@ -128,8 +138,7 @@ struct Token {
 };
 
 // Maximal runs of non-blank characters of [begin, end).
-std::vector<Token> Tokenize(const std::string& text, size_t begin,
-                            size_t end) {
+std::vector<Token> Tokenize(const std::string& text, size_t begin, size_t end) {
   std::vector<Token> tokens;
   size_t i = begin;
   while (i < end) {
@@ -178,19 +187,23 @@ std::string TokenText(const std::string& text, const Token& token) {
 // Checks that the tokens [first, last) are numbers (integers if `integer`),
 // so a file cut in the middle of a line or edited into nonsense is refused
 // instead of being half understood.
-void CheckFields(const std::string& path, const std::string& where,
-                 const std::string& text, const std::vector<Token>& tokens,
-                 size_t first, size_t last, bool integer) {
+void CheckFields(const std::string& path,
+                 const std::string& where,
+                 const std::string& text,
+                 const std::vector<Token>& tokens,
+                 size_t first,
+                 size_t last,
+                 bool integer) {
   for (size_t i = first; i < last && i < tokens.size(); ++i) {
     const std::string token = TokenText(text, tokens[i]);
     double number = 0.0;
     long long whole = 0;
-    const bool ok = integer ? ParseInteger(token, &whole)
-                            : ParseDouble(token, &number);
+    const bool ok =
+        integer ? ParseInteger(token, &whole) : ParseDouble(token, &number);
     if (!ok) {
-      Corrupt(path, where + " field " + std::to_string(i + 1) + " \"" +
-                        token + "\" is not " +
-                        (integer ? "an integer" : "a number"));
+      Corrupt(path,
+              where + " field " + std::to_string(i + 1) + " \"" + token +
+                  "\" is not " + (integer ? "an integer" : "a number"));
     }
   }
 }
@@ -199,7 +212,9 @@ void CheckFields(const std::string& path, const std::string& where,
 // POINTS2D line "X Y POINT3D_ID ..."; TX TY TZ are scaled.
 // points3D.txt: "POINT3D_ID X Y Z R G B ERROR TRACK[]"; X Y Z are scaled.
 // Only the scaled tokens are replaced in the text; everything else is copied.
-void RescaleTextModel(double scale, const std::string& path, TextModel model,
+void RescaleTextModel(double scale,
+                      const std::string& path,
+                      TextModel model,
                       std::string* contents) {
   const bool images = model == TextModel::kImages;
   const size_t min_fields = images ? 10 : 8;
@@ -216,9 +231,9 @@ void RescaleTextModel(double scale, const std::string& path, TextModel model,
     const std::vector<Token> tokens = Tokenize(text, line.begin, line.end);
     const std::string where = "line " + std::to_string(line.number);
     if (tokens.size() < min_fields) {
-      Corrupt(path, where + " has " + std::to_string(tokens.size()) +
-                        " fields, expected at least " +
-                        std::to_string(min_fields));
+      Corrupt(path,
+              where + " has " + std::to_string(tokens.size()) +
+                  " fields, expected at least " + std::to_string(min_fields));
     }
     CheckFields(path, where, text, tokens, 0, 1, /*integer=*/true);
     if (images) {
@@ -230,8 +245,10 @@ void RescaleTextModel(double scale, const std::string& path, TextModel model,
       CheckFields(path, where, text, tokens, 7, 8, false);
       CheckFields(path, where, text, tokens, 8, tokens.size(), true);
       if ((tokens.size() - 8) % 2 != 0) {
-        Corrupt(path, where + " has an incomplete track (odd number of "
-                              "IMAGE_ID POINT2D_IDX fields)");
+        Corrupt(path,
+                where +
+                    " has an incomplete track (odd number of "
+                    "IMAGE_ID POINT2D_IDX fields)");
       }
     }
     for (size_t field = first_scaled; field < first_scaled + 3; ++field) {
@@ -283,14 +300,22 @@ bool ParsePlyScalar(const std::string& name, PlyScalar* type) {
     const char* name;
     PlyScalar type;
   } kTypes[] = {
-      {"char", {1, false, true}},    {"int8", {1, false, true}},
-      {"uchar", {1, false, false}},  {"uint8", {1, false, false}},
-      {"short", {2, false, true}},   {"int16", {2, false, true}},
-      {"ushort", {2, false, false}}, {"uint16", {2, false, false}},
-      {"int", {4, false, true}},     {"int32", {4, false, true}},
-      {"uint", {4, false, false}},   {"uint32", {4, false, false}},
-      {"float", {4, true, true}},    {"float32", {4, true, true}},
-      {"double", {8, true, true}},   {"float64", {8, true, true}},
+      {"char", {1, false, true}},
+      {"int8", {1, false, true}},
+      {"uchar", {1, false, false}},
+      {"uint8", {1, false, false}},
+      {"short", {2, false, true}},
+      {"int16", {2, false, true}},
+      {"ushort", {2, false, false}},
+      {"uint16", {2, false, false}},
+      {"int", {4, false, true}},
+      {"int32", {4, false, true}},
+      {"uint", {4, false, false}},
+      {"uint32", {4, false, false}},
+      {"float", {4, true, true}},
+      {"float32", {4, true, true}},
+      {"double", {8, true, true}},
+      {"float64", {8, true, true}},
   };
   for (const auto& entry : kTypes) {
     if (name == entry.name) {
@@ -372,15 +397,17 @@ PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
       stream >> element.name >> count;
       long long value = -1;
       if (element.name.empty() || !ParseInteger(count, &value) || value < 0) {
-        Corrupt(path, "bad PLY header line " + std::to_string(line_number) +
-                          ": \"" + line + "\"");
+        Corrupt(path,
+                "bad PLY header line " + std::to_string(line_number) + ": \"" +
+                    line + "\"");
       }
       element.count = static_cast<uint64_t>(value);
       header.elements.push_back(element);
     } else if (keyword == "property") {
       if (header.elements.empty()) {
-        Corrupt(path, "PLY property before any element (header line " +
-                          std::to_string(line_number) + ")");
+        Corrupt(path,
+                "PLY property before any element (header line " +
+                    std::to_string(line_number) + ")");
       }
       PlyProperty property;
       std::string type;
@@ -398,23 +425,26 @@ PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
         ok = ParsePlyScalar(type, &property.type);
       }
       if (!ok || property.name.empty()) {
-        Corrupt(path, "bad PLY header line " + std::to_string(line_number) +
-                          ": \"" + line + "\"");
+        Corrupt(path,
+                "bad PLY header line " + std::to_string(line_number) + ": \"" +
+                    line + "\"");
       }
       PlyElement& element = header.elements.back();
       if (element.name == "vertex" &&
           (property.name == "x" || property.name == "y" ||
            property.name == "z")) {
         if (property.is_list || !property.type.is_float) {
-          Corrupt(path, "vertex property " + property.name +
-                            " is not float or double");
+          Corrupt(
+              path,
+              "vertex property " + property.name + " is not float or double");
         }
         property.scaled = true;
       }
       element.properties.push_back(property);
     } else {
-      Corrupt(path, "unknown PLY header keyword \"" + keyword +
-                        "\" on line " + std::to_string(line_number));
+      Corrupt(path,
+              "unknown PLY header keyword \"" + keyword + "\" on line " +
+                  std::to_string(line_number));
     }
   }
   if (!have_end) Corrupt(path, "PLY header has no end_header line");
@@ -434,8 +464,10 @@ PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
 }
 
 // Little-endian integer of a PLY count type, as an unsigned count.
-uint64_t LoadPlyCount(const std::string& bytes, size_t offset,
-                      const PlyScalar& type, const std::string& path) {
+uint64_t LoadPlyCount(const std::string& bytes,
+                      size_t offset,
+                      const PlyScalar& type,
+                      const std::string& path) {
   int64_t value = 0;
   switch (type.size) {
     case 1:
@@ -455,8 +487,10 @@ uint64_t LoadPlyCount(const std::string& bytes, size_t offset,
   return static_cast<uint64_t>(value);
 }
 
-void RescaleBinaryPly(double scale, const std::string& path,
-                      const PlyHeader& header, std::string* bytes) {
+void RescaleBinaryPly(double scale,
+                      const std::string& path,
+                      const PlyHeader& header,
+                      std::string* bytes) {
   // Validate the whole layout before touching a byte, so a truncated file
   // leaves `bytes` as it was. Fixed-size elements are checked arithmetically;
   // elements with lists are walked.
@@ -490,8 +524,7 @@ void RescaleBinaryPly(double scale, const std::string& path,
           continue;
         }
         Need(*bytes, pos, property.count_type.size, path, what.c_str());
-        const uint64_t n =
-            LoadPlyCount(*bytes, pos, property.count_type, path);
+        const uint64_t n = LoadPlyCount(*bytes, pos, property.count_type, path);
         pos += property.count_type.size;
         Need(*bytes, pos, n * property.type.size, path, what.c_str());
         pos += n * property.type.size;
@@ -499,8 +532,9 @@ void RescaleBinaryPly(double scale, const std::string& path,
     }
   }
   if (pos != bytes->size()) {
-    Corrupt(path, std::to_string(bytes->size() - pos) +
-                      " unexpected bytes after the last PLY element");
+    Corrupt(path,
+            std::to_string(bytes->size() - pos) +
+                " unexpected bytes after the last PLY element");
   }
 
   // Scale; check all values first so nothing is half done on a bad value.
@@ -520,12 +554,12 @@ void RescaleBinaryPly(double scale, const std::string& path,
           }
           if (property.scaled) {
             if (property.type.size == 4) {
-              const float v = ScaleFloat(Load<float>(*bytes, pos), scale, path,
-                                         "vertex coordinate");
+              const float v = ScaleFloat(
+                  Load<float>(*bytes, pos), scale, path, "vertex coordinate");
               if (write) Store<float>(pos, v, bytes);
             } else {
-              const double v = ScaleDouble(Load<double>(*bytes, pos), scale,
-                                           path, "vertex coordinate");
+              const double v = ScaleDouble(
+                  Load<double>(*bytes, pos), scale, path, "vertex coordinate");
               if (write) Store<double>(pos, v, bytes);
             }
           }
@@ -536,8 +570,10 @@ void RescaleBinaryPly(double scale, const std::string& path,
   }
 }
 
-void RescaleAsciiPly(double scale, const std::string& path,
-                     const PlyHeader& header, std::string* contents) {
+void RescaleAsciiPly(double scale,
+                     const std::string& path,
+                     const PlyHeader& header,
+                     std::string* contents) {
   const std::string& text = *contents;
   const std::vector<Token> tokens =
       Tokenize(text, header.data_offset, text.size());
@@ -577,8 +613,8 @@ void RescaleAsciiPly(double scale, const std::string& path,
         const Token& token = tokens[t - 1];
         out.append(text, copied, token.begin - copied);
         if (property.type.size == 4) {
-          out += FormatFloat(ScaleFloat(static_cast<float>(value), scale, path,
-                                        "vertex coordinate"));
+          out += FormatFloat(ScaleFloat(
+              static_cast<float>(value), scale, path, "vertex coordinate"));
         } else {
           out += FormatDouble(
               ScaleDouble(value, scale, path, "vertex coordinate"));
@@ -588,8 +624,9 @@ void RescaleAsciiPly(double scale, const std::string& path,
     }
   }
   if (t != tokens.size()) {
-    Corrupt(path, std::to_string(tokens.size() - t) +
-                      " unexpected values after the last PLY element");
+    Corrupt(path,
+            std::to_string(tokens.size() - t) +
+                " unexpected values after the last PLY element");
   }
   out.append(text, copied, std::string::npos);
   contents->swap(out);
@@ -597,11 +634,12 @@ void RescaleAsciiPly(double scale, const std::string& path,
 
 // ---- listing -----------------------------------------------------------
 
-const char* const kModelFiles[] = {"images.bin", "points3D.bin", "images.txt",
-                                   "points3D.txt"};
-const ArtefactType kModelTypes[] = {
-    ArtefactType::kImagesBinary, ArtefactType::kPoints3DBinary,
-    ArtefactType::kImagesText, ArtefactType::kPoints3DText};
+const char* const kModelFiles[] = {
+    "images.bin", "points3D.bin", "images.txt", "points3D.txt"};
+const ArtefactType kModelTypes[] = {ArtefactType::kImagesBinary,
+                                    ArtefactType::kPoints3DBinary,
+                                    ArtefactType::kImagesText,
+                                    ArtefactType::kPoints3DText};
 
 bool HasModelFiles(const fs::path& dir) {
   if (!fs::is_directory(dir)) return false;
@@ -654,8 +692,10 @@ std::string Nth(const char* kind, uint64_t i, uint64_t n) {
 
 // Multiplies the xyz triples at `offsets`, after checking all of them, so a
 // bad value leaves the bytes unchanged.
-void ScaleTriples(const std::vector<size_t>& offsets, double scale,
-                  const std::string& path, const char* what,
+void ScaleTriples(const std::vector<size_t>& offsets,
+                  double scale,
+                  const std::string& path,
+                  const char* what,
                   std::string* bytes) {
   for (const size_t offset : offsets) {
     for (int i = 0; i < 3; ++i) {
@@ -669,7 +709,8 @@ void ScaleTriples(const std::vector<size_t>& offsets, double scale,
 
 }  // namespace
 
-void RescaleImagesBinary(double scale, const std::string& path,
+void RescaleImagesBinary(double scale,
+                         const std::string& path,
                          std::string* contents) {
   CheckScale(scale);
   const std::string& bytes = *contents;
@@ -686,8 +727,9 @@ void RescaleImagesBinary(double scale, const std::string& path,
     pos += 4 + 7 * 8 + 4;
     const void* nul = std::memchr(bytes.data() + pos, '\0', bytes.size() - pos);
     if (nul == nullptr) {
-      Corrupt(path, "file is truncated (name of " +
-                        Nth("image", i, num_images) + ")");
+      Corrupt(
+          path,
+          "file is truncated (name of " + Nth("image", i, num_images) + ")");
     }
     pos = static_cast<const char*>(nul) - bytes.data() + 1;
     if (bytes.size() - pos < 8) {
@@ -696,19 +738,22 @@ void RescaleImagesBinary(double scale, const std::string& path,
     const uint64_t num_points2D = Load<uint64_t>(bytes, pos);
     pos += 8;
     if (num_points2D > (bytes.size() - pos) / 24) {
-      Corrupt(path, "file is truncated (2D points of " +
-                        Nth("image", i, num_images) + ")");
+      Corrupt(path,
+              "file is truncated (2D points of " + Nth("image", i, num_images) +
+                  ")");
     }
     pos += num_points2D * 24;
   }
   if (pos != bytes.size()) {
-    Corrupt(path, std::to_string(bytes.size() - pos) +
-                      " unexpected bytes after the last image");
+    Corrupt(path,
+            std::to_string(bytes.size() - pos) +
+                " unexpected bytes after the last image");
   }
   ScaleTriples(offsets, scale, path, "image translation", contents);
 }
 
-void RescalePoints3DBinary(double scale, const std::string& path,
+void RescalePoints3DBinary(double scale,
+                           const std::string& path,
                            std::string* contents) {
   CheckScale(scale);
   const std::string& bytes = *contents;
@@ -726,31 +771,36 @@ void RescalePoints3DBinary(double scale, const std::string& path,
     const uint64_t track_length = Load<uint64_t>(bytes, pos);
     pos += 8;
     if (track_length > (bytes.size() - pos) / 8) {
-      Corrupt(path, "file is truncated (track of " +
-                        Nth("point", i, num_points) + ")");
+      Corrupt(
+          path,
+          "file is truncated (track of " + Nth("point", i, num_points) + ")");
     }
     pos += track_length * 8;
   }
   if (pos != bytes.size()) {
-    Corrupt(path, std::to_string(bytes.size() - pos) +
-                      " unexpected bytes after the last point");
+    Corrupt(path,
+            std::to_string(bytes.size() - pos) +
+                " unexpected bytes after the last point");
   }
   ScaleTriples(offsets, scale, path, "point coordinate", contents);
 }
 
-void RescaleImagesText(double scale, const std::string& path,
+void RescaleImagesText(double scale,
+                       const std::string& path,
                        std::string* contents) {
   CheckScale(scale);
   RescaleTextModel(scale, path, TextModel::kImages, contents);
 }
 
-void RescalePoints3DText(double scale, const std::string& path,
+void RescalePoints3DText(double scale,
+                         const std::string& path,
                          std::string* contents) {
   CheckScale(scale);
   RescaleTextModel(scale, path, TextModel::kPoints3D, contents);
 }
 
-void RescaleDepthMap(double scale, const std::string& path,
+void RescaleDepthMap(double scale,
+                     const std::string& path,
                      std::string* contents) {
   CheckScale(scale);
   std::string& bytes = *contents;
@@ -767,8 +817,9 @@ void RescaleDepthMap(double scale, const std::string& path,
     }
     if (pos == start || pos >= bytes.size() || bytes[pos] != '&' ||
         dims[i] == 0) {
-      Corrupt(path, "not a COLMAP depth map (bad \"width&height&channels&\" "
-                    "header)");
+      Corrupt(path,
+              "not a COLMAP depth map (bad \"width&height&channels&\" "
+              "header)");
     }
     ++pos;
   }
@@ -800,14 +851,13 @@ void RescaleDepthMap(double scale, const std::string& path,
     const size_t at = pos + i * 4;
     const float v = Load<float>(bytes, at);
     if (v > 0.0f) {
-      Store<float>(at, static_cast<float>(static_cast<double>(v) * scale),
-                   &bytes);
+      Store<float>(
+          at, static_cast<float>(static_cast<double>(v) * scale), &bytes);
     }
   }
 }
 
-void RescalePly(double scale, const std::string& path,
-                std::string* contents) {
+void RescalePly(double scale, const std::string& path, std::string* contents) {
   CheckScale(scale);
   const PlyHeader header = ParsePlyHeader(path, *contents);
   if (header.format == PlyFormat::kAscii) {
@@ -817,7 +867,9 @@ void RescalePly(double scale, const std::string& path,
   }
 }
 
-void RescaleContents(ArtefactType type, double scale, const std::string& path,
+void RescaleContents(ArtefactType type,
+                     double scale,
+                     const std::string& path,
                      std::string* contents) {
   switch (type) {
     case ArtefactType::kImagesBinary:
@@ -836,12 +888,13 @@ void RescaleContents(ArtefactType type, double scale, const std::string& path,
   throw std::logic_error("unknown artefact type");
 }
 
-void WriteRescaledArtefact(const Artefact& artefact, double scale,
+void WriteRescaledArtefact(const Artefact& artefact,
+                           double scale,
                            const std::string& output_path) {
   std::string contents = internal::ReadFileBytes(artefact.path);
   RescaleContents(artefact.type, scale, artefact.path, &contents);
-  internal::WriteFileDurably(output_path, contents,
-                             internal::FileMode(artefact.path));
+  internal::WriteFileDurably(
+      output_path, contents, internal::FileMode(artefact.path));
 }
 
 std::vector<Artefact> ListArtefactsToRescale(
@@ -938,9 +991,11 @@ std::string ReadFileBytes(const std::string& path) {
   return bytes;
 }
 
-void WriteFileDurably(const std::string& path, const std::string& contents,
+void WriteFileDurably(const std::string& path,
+                      const std::string& contents,
                       unsigned int mode) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
+  const int fd = ::open(path.c_str(),
+                        O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
                         static_cast<mode_t>(mode & 07777));
   if (fd < 0) {
     throw std::runtime_error("cannot create " + path + ": " +

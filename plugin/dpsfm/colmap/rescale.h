@@ -64,21 +64,26 @@ void CheckScale(double scale);
 //
 // Binary models: t of each image / xyz of each point multiplied in place,
 // all other bytes (and the order of records) identical.
-void RescaleImagesBinary(double scale, const std::string& path,
+void RescaleImagesBinary(double scale,
+                         const std::string& path,
                          std::string* contents);
-void RescalePoints3DBinary(double scale, const std::string& path,
+void RescalePoints3DBinary(double scale,
+                           const std::string& path,
                            std::string* contents);
 // Text models: only the TX TY TZ / X Y Z fields are rewritten, with %.17g
 // (round-trip precision); comments, blank lines, whitespace, line endings
 // and all other fields stay character for character.
-void RescaleImagesText(double scale, const std::string& path,
+void RescaleImagesText(double scale,
+                       const std::string& path,
                        std::string* contents);
-void RescalePoints3DText(double scale, const std::string& path,
+void RescalePoints3DText(double scale,
+                         const std::string& path,
                          std::string* contents);
 // COLMAP depth map ("W&H&C&" + W*H*C float32 LE): values > 0 are multiplied
 // (as float(double(d) * s)); values <= 0 mean "invalid" and stay, as does
 // the header.
-void RescaleDepthMap(double scale, const std::string& path,
+void RescaleDepthMap(double scale,
+                     const std::string& path,
                      std::string* contents);
 // PLY (binary_little_endian or ascii; big endian is refused): the x, y, z
 // properties (float or double) of the "vertex" element are multiplied;
@@ -88,14 +93,17 @@ void RescaleDepthMap(double scale, const std::string& path,
 void RescalePly(double scale, const std::string& path, std::string* contents);
 
 // Dispatches on type.
-void RescaleContents(ArtefactType type, double scale, const std::string& path,
+void RescaleContents(ArtefactType type,
+                     double scale,
+                     const std::string& path,
                      std::string* contents);
 
 // Reads artefact.path, rescales it and writes the result to `output_path`
 // (created or truncated, fsync'd, with the original's permission bits).
 // The original is never written. Throws InputError for a bad input file and
 // std::runtime_error if `output_path` cannot be written.
-void WriteRescaledArtefact(const Artefact& artefact, double scale,
+void WriteRescaledArtefact(const Artefact& artefact,
+                           double scale,
                            const std::string& output_path);
 
 // Small file helpers shared with transaction.cc.
@@ -104,7 +112,8 @@ namespace internal {
 std::string ReadFileBytes(const std::string& path);
 // Creates/truncates `path`, writes `contents`, fsyncs and closes; `mode` are
 // the permission bits. std::runtime_error naming the file on failure.
-void WriteFileDurably(const std::string& path, const std::string& contents,
+void WriteFileDurably(const std::string& path,
+                      const std::string& contents,
                       unsigned int mode = 0644);
 // fsync of a directory, so renames/creations in it survive a power loss.
 void FsyncDirectory(const std::string& dir);

@@ -125,14 +125,16 @@ json ReadJsonFile(const fs::path& path, const char* what) {
   }
 }
 
-std::vector<fs::path> ReadPathList(const fs::path& file, const char* key,
-                                   const fs::path& root, const char* what) {
+std::vector<fs::path> ReadPathList(const fs::path& file,
+                                   const char* key,
+                                   const fs::path& root,
+                                   const char* what) {
   const json document = ReadJsonFile(file, what);
   std::vector<fs::path> paths;
   if (!document.is_object() || !document.contains(key) ||
       !document[key].is_array()) {
-    throw InputError(std::string(what) + " " + file.string() +
-                     " has no \"" + key + "\" list");
+    throw InputError(std::string(what) + " " + file.string() + " has no \"" +
+                     key + "\" list");
   }
   for (const json& entry : document[key]) {
     if (!entry.is_string()) {
@@ -205,7 +207,8 @@ void CopyFileDurably(const fs::path& from, const fs::path& to) {
     throw InputError("cannot open " + from.string() + " for reading");
   }
   const unsigned int mode = internal::FileMode(from.string());
-  const int out = ::open(to.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
+  const int out = ::open(to.c_str(),
+                         O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
                          static_cast<mode_t>(mode));
   if (out < 0) {
     const std::string reason = std::strerror(errno);
@@ -250,14 +253,15 @@ std::string FormatScale(double value) {
   return buffer;
 }
 
-void RefuseIfRescaled(const ScaleRecord& record, const std::string& root,
+void RefuseIfRescaled(const ScaleRecord& record,
+                      const std::string& root,
                       bool force) {
   if (record.IsRescaled() && !force) {
-    throw InputError(
-        "workspace " + root + " was already rescaled to metres (cumulative " +
-        "scale " + FormatScale(record.CumulativeScale()) + ", see " +
-        ScaleRecordPath(root) +
-        "); force it to apply another scale on top of that one");
+    throw InputError("workspace " + root +
+                     " was already rescaled to metres (cumulative " + "scale " +
+                     FormatScale(record.CumulativeScale()) + ", see " +
+                     ScaleRecordPath(root) +
+                     "); force it to apply another scale on top of that one");
   }
 }
 
@@ -279,7 +283,8 @@ double ScaleRecord::CumulativeScale() const {
 }
 
 const ScaleRecordEntry& ScaleRecord::Append(
-    double scale, const std::vector<std::string>& inputs,
+    double scale,
+    const std::vector<std::string>& inputs,
     const std::string& tool_version) {
   CheckScale(scale);
   ScaleRecordEntry entry;
@@ -313,8 +318,8 @@ ScaleRecord ScaleRecord::FromJson(const std::string& text,
   try {
     document = json::parse(text);
   } catch (const std::exception& e) {
-    throw InputError("scale record " + path + " is not valid JSON: " +
-                     e.what());
+    throw InputError("scale record " + path +
+                     " is not valid JSON: " + e.what());
   }
   const auto bad = [&path](const std::string& what) {
     return InputError("scale record " + path + " is invalid: " + what);
@@ -436,11 +441,12 @@ void CommitTransaction::Stage(
 }
 
 void CommitTransaction::StageContents(const std::string& target_path,
-                                      const std::string& contents, int mode) {
+                                      const std::string& contents,
+                                      int mode) {
   const unsigned int bits =
-      mode >= 0 ? static_cast<unsigned int>(mode)
-                : (Exists(target_path) ? internal::FileMode(target_path)
-                                       : 0644u);
+      mode >= 0
+          ? static_cast<unsigned int>(mode)
+          : (Exists(target_path) ? internal::FileMode(target_path) : 0644u);
   Stage(target_path, [&](const std::string& staged) {
     internal::WriteFileDurably(staged, contents, bits);
   });
@@ -454,8 +460,9 @@ void CommitTransaction::Commit() {
   // The record goes last: a workspace whose record says "rescaled" has all
   // its files rescaled, even to a reader that ignores the journal.
   std::vector<std::string> order = targets_;
-  std::stable_partition(order.begin(), order.end(),
-                        [&](const std::string& t) { return t != record; });
+  std::stable_partition(order.begin(), order.end(), [&](const std::string& t) {
+    return t != record;
+  });
 
   std::set<std::string> dirs;
   for (const std::string& target : order) {
@@ -532,8 +539,7 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
 
   std::vector<fs::path> outside_dirs;
   if (Exists(staging_list)) {
-    outside_dirs =
-        ReadPathList(staging_list, "dirs", root, "staging list");
+    outside_dirs = ReadPathList(staging_list, "dirs", root, "staging list");
   }
 
   if (Exists(journal)) {
@@ -546,10 +552,10 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
         RenameOrThrow(staged, target);
         report.completed.push_back(target.string());
       } else if (!Exists(target)) {
-        throw std::runtime_error(
-            "cannot finish the interrupted rescale of " + root.string() +
-            ": neither " + target.string() + " nor its staged version " +
-            staged.string() + " exists");
+        throw std::runtime_error("cannot finish the interrupted rescale of " +
+                                 root.string() + ": neither " +
+                                 target.string() + " nor its staged version " +
+                                 staged.string() + " exists");
       }
       dirs.insert(target.parent_path().string());
     }
@@ -575,7 +581,8 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
 // ---- rescaling a workspace -------------------------------------------------
 
 RescaleWorkspaceResult RescaleWorkspaceInPlace(
-    const std::string& workspace_root, double scale,
+    const std::string& workspace_root,
+    double scale,
     const RescaleWorkspaceOptions& options) {
   CheckScale(scale);
   if (!fs::is_directory(workspace_root)) {
@@ -603,8 +610,10 @@ RescaleWorkspaceResult RescaleWorkspaceInPlace(
 }
 
 RescaleWorkspaceResult WriteRescaledCopy(
-    const std::string& workspace_root, const std::string& output_path,
-    double scale, const RescaleWorkspaceOptions& options) {
+    const std::string& workspace_root,
+    const std::string& output_path,
+    double scale,
+    const RescaleWorkspaceOptions& options) {
   CheckScale(scale);
   if (!fs::is_directory(workspace_root)) {
     throw InputError("workspace is not a directory: " + workspace_root);
@@ -632,8 +641,8 @@ RescaleWorkspaceResult WriteRescaledCopy(
   std::vector<std::string> extra_dirs;
   for (const std::string& dir : options.extra_model_dirs) {
     if (!fs::is_directory(dir) || !IsWithin(fs::canonical(dir), input)) {
-      throw InputError("model folder " + dir +
-                       " is not inside the workspace " + workspace_root +
+      throw InputError("model folder " + dir + " is not inside the workspace " +
+                       workspace_root +
                        ", so it cannot be part of the rescaled copy");
     }
     extra_dirs.push_back(fs::canonical(dir).string());
@@ -670,8 +679,7 @@ RescaleWorkspaceResult WriteRescaledCopy(
         dirs.push_back(to.string());
       } else if (fs::is_regular_file(status)) {
         const std::string name = from.filename().string();
-        if (EndsWith(name, kStagedSuffix) ||
-            relative == kScaleRecordFileName ||
+        if (EndsWith(name, kStagedSuffix) || relative == kScaleRecordFileName ||
             relative == kStagingListFileName ||
             relative == std::string(kJournalFileName) + kTmpSuffix ||
             relative == std::string(kStagingListFileName) + kTmpSuffix) {
@@ -679,8 +687,8 @@ RescaleWorkspaceResult WriteRescaledCopy(
         }
         const auto artefact = artefacts.find(relative);
         if (artefact != artefacts.end()) {
-          WriteRescaledArtefact({artefact->second, from.string()}, scale,
-                                to.string());
+          WriteRescaledArtefact(
+              {artefact->second, from.string()}, scale, to.string());
           result.rescaled_files.push_back((output / relative).string());
         } else {
           CopyFileDurably(from, to);

@@ -27,7 +27,7 @@
 namespace dpsfm {
 
 // Suffix of a staged file, next to its target.
-extern const char kStagedSuffix[];         // ".dpsfm-staged"
+extern const char kStagedSuffix[];  // ".dpsfm-staged"
 // In the workspace root.
 extern const char kJournalFileName[];      // "dp_scale_journal.json"
 extern const char kStagingListFileName[];  // "dp_scale_staging.json"
@@ -100,13 +100,14 @@ class CommitTransaction {
   // path and must create that file; it is then fsync'd. If `write_staged`
   // throws, the staged file is removed and the exception propagates.
   // Staging the same target twice replaces the first staged version.
-  void Stage(const std::string& target_path,
-             const std::function<void(const std::string& staged_path)>&
-                 write_staged);
+  void Stage(
+      const std::string& target_path,
+      const std::function<void(const std::string& staged_path)>& write_staged);
   // Stage() with the bytes of the new file; `mode` are its permission bits
   // (default: those of the existing target, else 0644).
   void StageContents(const std::string& target_path,
-                     const std::string& contents, int mode = -1);
+                     const std::string& contents,
+                     int mode = -1);
 
   // Commits every staged file (protocol steps 2-4). After a failure inside
   // the renames the journal stays and RecoverInterruptedCommit() finishes.
@@ -183,7 +184,8 @@ struct RescaleWorkspaceResult {
 // and !force, if a journal is present, or if any artefact is invalid (the
 // error names the file). Call RecoverInterruptedCommit() before it.
 RescaleWorkspaceResult RescaleWorkspaceInPlace(
-    const std::string& workspace_root, double scale,
+    const std::string& workspace_root,
+    double scale,
     const RescaleWorkspaceOptions& options);
 
 // --output_path mode: copies the workspace to `output_path` with every
@@ -195,7 +197,9 @@ RescaleWorkspaceResult RescaleWorkspaceInPlace(
 // never a half copy at `output_path`. Symbolic links are copied as links;
 // staged files and journals of the input are not copied.
 RescaleWorkspaceResult WriteRescaledCopy(
-    const std::string& workspace_root, const std::string& output_path,
-    double scale, const RescaleWorkspaceOptions& options);
+    const std::string& workspace_root,
+    const std::string& output_path,
+    double scale,
+    const RescaleWorkspaceOptions& options);
 
 }  // namespace dpsfm

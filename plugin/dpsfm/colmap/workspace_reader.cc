@@ -66,8 +66,9 @@ cv::Mat ReadColmapDepthMap(const std::string& path) {
       static_cast<std::streamoff>(width) * height * sizeof(float);
   if (payload != expected) {
     std::ostringstream message;
-    message << "depth map is " << (payload < expected ? "truncated" : "too long")
-            << " (" << payload << " data bytes for " << width << "x" << height
+    message << "depth map is "
+            << (payload < expected ? "truncated" : "too long") << " ("
+            << payload << " data bytes for " << width << "x" << height
             << ", expected " << expected << "): " << path;
     throw InputError(message.str());
   }
@@ -107,7 +108,8 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
                      layout_.model_path);
   }
   // Name order: deterministic logs and reports whatever the file order.
-  std::sort(image_ids.begin(), image_ids.end(),
+  std::sort(image_ids.begin(),
+            image_ids.end(),
             [this](colmap::image_t a, colmap::image_t b) {
               return reconstruction_.Image(a).Name() <
                      reconstruction_.Image(b).Name();
@@ -163,8 +165,8 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
         exif_ptr = &exif;
       }
     }
-    source.lens = ResolveLens(image.Name(), lens_csv, flags, exif_ptr,
-                              camera.MeanFocalLength());
+    source.lens = ResolveLens(
+        image.Name(), lens_csv, flags, exif_ptr, camera.MeanFocalLength());
 
     if (layout_.dense) {
       source.depth_source = DepthMapPath(image.Name());
@@ -178,7 +180,8 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
 
 std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
   const fs::path base = fs::path(layout_.depth_maps_path) / image_name;
-  const std::string preferred = base.string() + "." + options_.input_type + ".bin";
+  const std::string preferred =
+      base.string() + "." + options_.input_type + ".bin";
   if (fs::is_regular_file(preferred)) {
     return preferred;
   }
@@ -205,8 +208,8 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
   for (int y = 0; y < frame_size.height; ++y) {
     for (int x = 0; x < frame_size.width; ++x) {
       // COLMAP puts the top-left pixel centre at 0.5.
-      const Eigen::Vector2d ray = original.CamFromImg(
-          Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
+      const Eigen::Vector2d ray =
+          original.CamFromImg(Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
       const Eigen::Vector2d uv = undistorted.ImgFromCam(ray);
       const int col = static_cast<int>(std::floor(uv.x() * sx));
       const int row = static_cast<int>(std::floor(uv.y() * sy));
@@ -229,8 +232,7 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   // the database) and different, depths are mapped through both cameras.
   const colmap::Camera* original = nullptr;
   if (layout_.dense) {
-    const auto entry =
-        database_check_.original_cameras.find(source.image_name);
+    const auto entry = database_check_.original_cameras.find(source.image_name);
     if (entry != database_check_.original_cameras.end() &&
         !SameGeometry(entry->second, camera)) {
       original = &entry->second;
@@ -264,8 +266,8 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   if (layout_.dense) {
     view.depth = ReadColmapDepthMap(source.depth_source);
     if (original != nullptr) {
-      view.depth = ResampleDepthToFrame(view.depth, camera, *original,
-                                        frames.left.size(), k);
+      view.depth = ResampleDepthToFrame(
+          view.depth, camera, *original, frames.left.size(), k);
     }
     // The depth map covers the camera's field at its own resolution; it
     // must keep the camera's aspect (PatchMatch scales both sides alike).
@@ -277,8 +279,8 @@ DPView WorkspaceReader::LoadView(size_t index) const {
       std::ostringstream message;
       message << "depth map is " << view.depth.cols << "x" << view.depth.rows
               << " but image " << source.image_name << " is " << camera.width
-              << "x" << camera.height << " (different aspect): "
-              << source.depth_source;
+              << "x" << camera.height
+              << " (different aspect): " << source.depth_source;
       throw InputError(message.str());
     }
   } else {

@@ -76,7 +76,8 @@ bool AllFinite(const cv::Mat& image) {
 // Sum over `rect` of (image * kernel) (true convolution), from the integral
 // image of `image`: sum_d kernel(d) * (sum of image over rect - d). Every
 // shifted rect must lie inside the image.
-double BlurredSum(const cv::Mat& integral, const cv::Mat& kernel,
+double BlurredSum(const cv::Mat& integral,
+                  const cv::Mat& kernel,
                   const cv::Rect& rect) {
   const int cy = kernel.rows / 2;
   const int cx = kernel.cols / 2;
@@ -110,8 +111,7 @@ double Dot(const std::vector<float>& a, const std::vector<float>& b) {
 bool BlurEstimationOptions::Check() const {
   const double eps = 1e-9;
   if (!(std::isfinite(max_radius_px) && max_radius_px >= 1)) return false;
-  if (!(std::isfinite(grid_step_px) && grid_step_px > 0 &&
-        grid_step_px <= 1)) {
+  if (!(std::isfinite(grid_step_px) && grid_step_px > 0 && grid_step_px <= 1)) {
     return false;
   }
   if (!(std::isfinite(coarse_step_px) && coarse_step_px >= grid_step_px &&
@@ -123,8 +123,7 @@ bool BlurEstimationOptions::Check() const {
   if (!(coarse_band > 0 && coarse_band <= 1)) return false;
   if (!(min_texture >= 0) || !std::isfinite(min_texture)) return false;
   if (!(min_fit_quality >= 0 && min_fit_quality <= 1)) return false;
-  if (!(fit_quality_offset_px > 0 &&
-        fit_quality_offset_px < max_radius_px)) {
+  if (!(fit_quality_offset_px > 0 && fit_quality_offset_px < max_radius_px)) {
     return false;
   }
   if (max_refinement_evaluations < 3) return false;
@@ -195,7 +194,8 @@ PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
       << "patch " << patch_size.width << "x" << patch_size.height
       << " too small for |r| <= " << t->bound << " (border " << t->border
       << " px each side, interior >= 8 px needed)";
-  t->interior = cv::Rect(t->border, t->border,
+  t->interior = cv::Rect(t->border,
+                         t->border,
                          patch_size.width - 2 * t->border,
                          patch_size.height - 2 * t->border);
   t->num_interior = t->interior.area();
@@ -473,7 +473,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     cv::mulSpectrums(spec_left, t.right_spectra[n], product_left, 0);
     cv::mulSpectrums(spec_right, t.left_spectra[n], product_right, 0);
     product_left -= product_right;
-    cv::dft(product_left, residual_image,
+    cv::dft(product_left,
+            residual_image,
             cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
             t.interior.y + t.interior.height);
     e.residual.resize(t.num_interior);
@@ -530,8 +531,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
       }
     };
     for (int n = lo; n <= hi; ++n) {
-      consider(t.Radius(n), raw_loss(n) - sigma2 * t.noise_gain[n],
-               raw_loss(n));
+      consider(
+          t.Radius(n), raw_loss(n) - sigma2 * t.noise_gain[n], raw_loss(n));
     }
     for (int n = lo; n < hi; ++n) {
       // L(t) = alpha (1-t)^2 + 2 beta t (1-t) + gamma t^2 (raw and noise
@@ -593,9 +594,10 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
   cv::Mat left_positive = gl + offset;
   cv::Mat right_positive = gr + offset;
   auto NearestNode = [&](double radius) {
-    return std::max(0, std::min(t.num_nodes - 1,
-                                static_cast<int>(std::round(radius / t.step)) +
-                                    t.half_nodes));
+    return std::max(
+        0,
+        std::min(t.num_nodes - 1,
+                 static_cast<int>(std::round(radius / t.step)) + t.half_nodes));
   };
   auto equalise_gain = [&](double radius) {
     cv::Mat integral_left, integral_right;
@@ -661,8 +663,7 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
   if (best.radius != 0 && std::isfinite(sigma2) && sigma2 > 0) {
     const int zero = t.half_nodes;
     evaluate(zero);
-    const double zero_corrected =
-        raw_loss(zero) - sigma2 * t.noise_gain[zero];
+    const double zero_corrected = raw_loss(zero) - sigma2 * t.noise_gain[zero];
     const double pos = best.radius / t.step + t.half_nodes;
     const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
     const double s = pos - n0;
@@ -710,8 +711,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     const int n = static_cast<int>(std::round(node_pos)) + side * offset_nodes;
     if (n < 0 || n >= t.num_nodes) continue;
     evaluate(n);
-    rise = std::min(rise, raw_loss(n) - sigma2 * t.noise_gain[n] -
-                              best.corrected);
+    rise =
+        std::min(rise, raw_loss(n) - sigma2 * t.noise_gain[n] - best.corrected);
   }
   // Sign ambiguity: the best coarse loss on the other sign, against the
   // coarse loss at the estimate.
@@ -748,7 +749,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
   return result;
 }
 
-PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left, const cv::Mat& right,
+PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
+                                    const cv::Mat& right,
                                     const DPPsfModel& psf,
                                     const BlurEstimationOptions& options) {
   DPSFM_CHECK(options.Check()) << "invalid BlurEstimationOptions";
@@ -760,11 +762,10 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left, const cv::Mat& right,
       << options.grid_step_px << '|' << options.coarse_step_px << '|'
       << options.coarse_band << '|' << options.normalize_gain << '|'
       << options.subtract_noise_floor << '|' << options.min_texture << '|'
-      << options.min_fit_quality << '|' << options.fit_quality_offset_px
-      << '|' << options.max_refinement_evaluations;
+      << options.min_fit_quality << '|' << options.fit_quality_offset_px << '|'
+      << options.max_refinement_evaluations;
   static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const PatchBlurEstimator>>
-      cache;
+  static std::map<std::string, std::shared_ptr<const PatchBlurEstimator>> cache;
   std::shared_ptr<const PatchBlurEstimator> estimator;
   {
     std::lock_guard<std::mutex> lock(mutex);
@@ -772,8 +773,9 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left, const cv::Mat& right,
     if (it == cache.end()) {
       if (cache.size() >= 8) cache.clear();  // in-use ones stay alive
       it = cache
-               .emplace(key.str(), std::make_shared<PatchBlurEstimator>(
-                                       psf, options, left.size()))
+               .emplace(key.str(),
+                        std::make_shared<PatchBlurEstimator>(
+                            psf, options, left.size()))
                .first;
     }
     estimator = it->second;
@@ -807,8 +809,7 @@ double EstimateNoiseSigma(const cv::Mat& gray_patch) {
     }
   }
   const size_t mid = responses.size() / 2;
-  std::nth_element(responses.begin(), responses.begin() + mid,
-                   responses.end());
+  std::nth_element(responses.begin(), responses.begin() + mid, responses.end());
   // |N(0, 36 sigma^2)| has median 0.6745 * 6 sigma.
   return responses[mid] / (0.67449 * 6.0);
 }

@@ -166,7 +166,8 @@ class PatchBlurEstimator {
 // loss ignores. Uses a process-wide cache of PatchBlurEstimator keyed by
 // psf.Name(), the options and the patch size (thread-safe); for many patches
 // a PatchBlurEstimator held by the caller avoids the lookup.
-PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left, const cv::Mat& right,
+PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
+                                    const cv::Mat& right,
                                     const DPPsfModel& psf,
                                     const BlurEstimationOptions& options);
 
@@ -182,10 +183,10 @@ double EstimateNoiseSigma(const cv::Mat& gray_patch);
 // Patch geometry on the working frame (the DP frame after resizing by
 // resize_factor).
 struct PatchGeometry {
-  int patch_size;          // odd, px of the working frame
-  int stride;              // px of the working frame
-  double max_radius_px;    // search bound, px of the working frame
-  double resize_factor;    // working frame = DP frame * resize_factor
+  int patch_size;        // odd, px of the working frame
+  int stride;            // px of the working frame
+  double max_radius_px;  // search bound, px of the working frame
+  double resize_factor;  // working frame = DP frame * resize_factor
 };
 
 // Defaults for a DP frame size, following the reference code: DSLR 6720x4480

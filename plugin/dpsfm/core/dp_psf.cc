@@ -19,7 +19,9 @@ namespace {
 // exact; along y a midpoint rule with `subsamples` rows per pixel. Every
 // sample depends continuously on R, so the kernel does too. Normalised to sum
 // `total`.
-cv::Mat IntegrateTranslatingDisk(double radius, int half_size, int subsamples,
+cv::Mat IntegrateTranslatingDisk(double radius,
+                                 int half_size,
+                                 int subsamples,
                                  double total) {
   const int side = 2 * half_size + 1;
   std::vector<double> weights(side * side, 0.0);
@@ -36,8 +38,10 @@ cv::Mat IntegrateTranslatingDisk(double radius, int half_size, int subsamples,
         continue;
       }
       const double a = std::sqrt(r2 - y2);  // half chord
-      const int j_begin = std::max(-half_size, static_cast<int>(std::floor(-a + 0.5)));
-      const int j_end = std::min(half_size, static_cast<int>(std::ceil(a - 0.5)));
+      const int j_begin =
+          std::max(-half_size, static_cast<int>(std::floor(-a + 0.5)));
+      const int j_end =
+          std::min(half_size, static_cast<int>(std::ceil(a - 0.5)));
       for (int j = j_begin; j <= j_end; ++j) {
         const double lo = std::max(j - 0.5, -a);
         const double hi = std::min(j + 0.5, a);
@@ -131,8 +135,8 @@ cv::Mat ConvolvePsf(const cv::Mat& image, const cv::Mat& psf) {
   cv::Mat flipped;
   cv::flip(psf, flipped, -1);
   cv::Mat result;
-  cv::filter2D(image, result, -1, flipped, cv::Point(-1, -1), 0,
-               cv::BORDER_REFLECT_101);
+  cv::filter2D(
+      image, result, -1, flipped, cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
   return result;
 }
 

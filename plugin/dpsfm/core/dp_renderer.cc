@@ -88,7 +88,7 @@ void RenderDPViews(const cv::Mat& sharp,
   for (const auto& entry : order) {
     const int bin = entry.second;
     const double radius = bin * options.radius_step_px;
-    const cv::Mat lower = (bin_low == bin);    // weight 1 - fraction (or 1)
+    const cv::Mat lower = (bin_low == bin);      // weight 1 - fraction (or 1)
     const cv::Mat upper = (bin_low == bin - 1);  // weight fraction
     const cv::Mat support = additive ? (lower | upper) : lower;
     // Layers are compact (one surface at one depth), so convolve only around

@@ -89,8 +89,8 @@ std::string CountsToString(
 
 // Whether `value` lies in [lo, hi] widened by a relative systematic term
 // (in quadrature with each half).
-bool IntervalContains(double centre, double lo, double hi, double relative,
-                      double value) {
+bool IntervalContains(
+    double centre, double lo, double hi, double relative, double value) {
   const double sys = relative * centre;
   const double dl = std::max(0.0, centre - lo), dh = std::max(0.0, hi - centre);
   return value >= centre - std::sqrt(dl * dl + sys * sys) &&
@@ -353,9 +353,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       std::nth_element(residuals.begin(),
                        residuals.begin() + residuals.size() / 2,
                        residuals.end());
-      residual_threshold =
-          std::max(residual_threshold, options_.relative_residual_factor *
-                                           residuals[residuals.size() / 2]);
+      residual_threshold = std::max(
+          residual_threshold,
+          options_.relative_residual_factor * residuals[residuals.size() / 2]);
     }
   }
   auto usable = [&](int k) {
@@ -385,8 +385,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       continue;
     }
     if (e.relative_residual > residual_threshold) {
-      rejections["not fitted by one blur (blur beyond the search bound or "
-                 "depth varying inside)"]++;
+      rejections
+          ["not fitted by one blur (blur beyond the search bound or "
+           "depth varying inside)"]++;
       continue;
     }
     PatchSample s;
@@ -563,8 +564,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     std::ostringstream s;
     if (linear.num_rows < options_.min_total_patches) {
       s << "too few usable patches for a scale (" << linear.num_rows
-        << " in the joint solve, need " << options_.min_total_patches
-        << ")";
+        << " in the joint solve, need " << options_.min_total_patches << ")";
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
       s << "the data do not determine the scale: its bootstrap interval ["
         << linear.scale_ci_low << ", " << linear.scale_ci_high << "] spans "
@@ -681,7 +681,8 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         status << "minimum not stable under resampling (support "
                << intensity.bootstrap_support << "); linear estimate kept";
       } else if (search.num_bootstrap > 0 &&
-                 !IntervalContains(intensity.scale, intensity.scale_ci_low,
+                 !IntervalContains(intensity.scale,
+                                   intensity.scale_ci_low,
                                    intensity.scale_ci_high,
                                    options_.scale_systematic_uncertainty,
                                    linear.scale)) {
@@ -692,9 +693,8 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         // pull).
         status << "disagrees with the linear estimate (intensity "
                << intensity.scale << ", interval [" << intensity.scale_ci_low
-               << ", " << intensity.scale_ci_high
-               << "] excludes the linear " << linear.scale
-               << "); linear estimate kept";
+               << ", " << intensity.scale_ci_high << "] excludes the linear "
+               << linear.scale << "); linear estimate kept";
       } else {
         status << "used (moved the scale by " << std::showpos << std::fixed
                << std::setprecision(2)

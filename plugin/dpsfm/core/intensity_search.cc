@@ -141,8 +141,7 @@ double LossOfPrepared(const Prepared& p,
           t.power = own_power;
           t.noise = noise;
         }
-        if (c < static_cast<int>(p.channel_used.size()) &&
-            !p.channel_used[c]) {
+        if (c < static_cast<int>(p.channel_used.size()) && !p.channel_used[c]) {
           continue;
         }
         const double power = c < static_cast<int>(p.reference_power.size())
@@ -446,8 +445,10 @@ IntensitySearchResult SearchScaleByIntensity(
     for (int j = 0; j < num_patches; ++j) {
       const IntensityView& view = views[patches[j].view];
       Prepared& p = prepared[j];
-      double r = PredictBlurRadiusPx(view.lens, view.pixel_pitch_mm,
-                                     initial_scale, view.focus_distance_model,
+      double r = PredictBlurRadiusPx(view.lens,
+                                     view.pixel_pitch_mm,
+                                     initial_scale,
+                                     view.focus_distance_model,
                                      patches[j].depth);
       if (!std::isfinite(r)) r = r > 0 ? p.max_abs_radius : -p.max_abs_radius;
       std::vector<ChannelTerms> terms;
@@ -530,8 +531,7 @@ IntensitySearchResult SearchScaleByIntensity(
   };
   if (robust) {
     for (int j = 0; j < num_patches; ++j) {
-      patch_minimum[j] =
-          *std::min_element(curves[j].begin(), curves[j].end());
+      patch_minimum[j] = *std::min_element(curves[j].begin(), curves[j].end());
     }
     robustify(&curves);
   }

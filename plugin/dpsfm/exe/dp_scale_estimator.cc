@@ -38,50 +38,60 @@ std::string FormatSeconds(double seconds) {
 void AddCommandOptions(colmap::OptionManager* manager,
                        DPScaleEstimatorOptions* options,
                        DPScaleOptions* core) {
-  manager->AddDefaultOption("workspace_path", &options->workspace_path,
+  manager->AddDefaultOption("workspace_path",
+                            &options->workspace_path,
                             "COLMAP dense workspace to rescale");
-  manager->AddDefaultOption("input_path", &options->input_path,
+  manager->AddDefaultOption("input_path",
+                            &options->input_path,
                             "sparse model to use instead of a dense workspace");
   manager->AddRequiredOption(
-      "dp_image_path", &options->dp_image_path,
+      "dp_image_path",
+      &options->dp_image_path,
       "DP views: left/<name> with right/<name> or sum/<name>");
-  manager->AddDefaultOption("image_path", &options->image_path,
-                            "original images (EXIF lens data)");
-  manager->AddDefaultOption("database_path", &options->database_path,
-                            "project database, read only");
-  manager->AddDefaultOption("lens_path", &options->lens_path,
-                            "lens.csv with per-image lens data");
-  manager->AddDefaultOption("input_type", &options->input_type,
-                            "{geometric, photometric} depth maps");
-  manager->AddDefaultOption("report_path", &options->report_path,
-                            "JSON report to write");
-  manager->AddDefaultOption("dry_run", &options->dry_run,
-                            "estimate and report, change nothing");
   manager->AddDefaultOption(
-      "output_path", &options->output_path,
+      "image_path", &options->image_path, "original images (EXIF lens data)");
+  manager->AddDefaultOption(
+      "database_path", &options->database_path, "project database, read only");
+  manager->AddDefaultOption(
+      "lens_path", &options->lens_path, "lens.csv with per-image lens data");
+  manager->AddDefaultOption("input_type",
+                            &options->input_type,
+                            "{geometric, photometric} depth maps");
+  manager->AddDefaultOption(
+      "report_path", &options->report_path, "JSON report to write");
+  manager->AddDefaultOption(
+      "dry_run", &options->dry_run, "estimate and report, change nothing");
+  manager->AddDefaultOption(
+      "output_path",
+      &options->output_path,
       "write a rescaled copy here instead of rescaling in place");
   manager->AddDefaultOption(
-      "extra_model_paths", &options->extra_model_paths,
+      "extra_model_paths",
+      &options->extra_model_paths,
       "comma-separated sparse model folders in the same frame to rescale too");
   manager->AddDefaultOption(
-      "force", &options->force,
+      "force",
+      &options->force,
       "rescale a workspace that was already rescaled (composes the scales)");
   manager->AddDefaultOption("DPScaleEstimator.focal_length_mm",
                             &options->focal_length_mm,
                             "focal length in mm for every image");
-  manager->AddDefaultOption("DPScaleEstimator.f_number", &options->f_number,
+  manager->AddDefaultOption("DPScaleEstimator.f_number",
+                            &options->f_number,
                             "f-number for every image");
+  manager->AddDefaultOption("DPScaleEstimator.pixel_pitch_um",
+                            &options->pixel_pitch_um,
+                            "pixel pitch in um of the model camera's pixels");
   manager->AddDefaultOption(
-      "DPScaleEstimator.pixel_pitch_um", &options->pixel_pitch_um,
-      "pixel pitch in um of the model camera's pixels");
-  manager->AddDefaultOption(
-      "DPScaleEstimator.swap_dp_views", &options->swap_dp_views,
+      "DPScaleEstimator.swap_dp_views",
+      &options->swap_dp_views,
       "swap left and right DP views (sensor with the opposite convention)");
   // The method's parameters (paper names in brackets).
-  manager->AddDefaultOption("DPScaleEstimator.patch_size", &core->patch_size,
+  manager->AddDefaultOption("DPScaleEstimator.patch_size",
+                            &core->patch_size,
                             "patch side in px of the working frame (0: auto)");
-  manager->AddDefaultOption("DPScaleEstimator.stride", &core->stride,
-                            "patch stride in px (0: auto)");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.stride", &core->stride, "patch stride in px (0: auto)");
   manager->AddDefaultOption("DPScaleEstimator.max_radius_px",
                             &core->max_radius_px,
                             "blur radius search bound in px (0: auto)");
@@ -105,7 +115,8 @@ void AddCommandOptions(colmap::OptionManager* manager,
                             "run the intensity-based search after the "
                             "linear estimate");
   manager->AddDefaultOption("DPScaleEstimator.num_threads",
-                            &core->num_threads, "threads (-1: all cores)");
+                            &core->num_threads,
+                            "threads (-1: all cores)");
 }
 
 }  // namespace
@@ -178,8 +189,8 @@ int RunDPScaleEstimator(int argc, char** argv) {
     const WorkspaceReader reader(options, layout);
     if (!options.database_path.empty()) {
       const DatabaseCheck& check = reader.database_check();
-      LOG(INFO) << "Database: " << check.num_database_images
-                << " images; " << check.missing_images.size()
+      LOG(INFO) << "Database: " << check.num_database_images << " images; "
+                << check.missing_images.size()
                 << " model images missing from it, "
                 << check.camera_mismatches.size()
                 << " with a different camera aspect; "
@@ -234,8 +245,8 @@ int RunDPScaleEstimator(int argc, char** argv) {
         cv::Mat(0.5 * (view.left + view.right)).convertTo(image, CV_8U, 255.0);
         overlay_images.emplace_back(index, image);
       }
-      LOG(INFO) << "[" << i + 1 << "/" << reader.NumViews() << "] "
-                << view.name << ": " << summary.patches_valid << " of "
+      LOG(INFO) << "[" << i + 1 << "/" << reader.NumViews() << "] " << view.name
+                << ": " << summary.patches_valid << " of "
                 << summary.patches_tried << " patches with a blur estimate, "
                 << summary.patches_kept << " kept ("
                 << FormatSeconds(summary.seconds) << ")";
@@ -256,7 +267,9 @@ int RunDPScaleEstimator(int argc, char** argv) {
     timings.total = total_timer.ElapsedSeconds();
     if (!options.report_path.empty()) {
       for (const std::string& plot :
-           WriteReportPlots(result, overlay_images, options.report_path,
+           WriteReportPlots(result,
+                            overlay_images,
+                            options.report_path,
                             summaries.empty() ? 0 : summaries[0].patch_size)) {
         LOG(INFO) << "Plot: " << plot;
       }
@@ -294,16 +307,18 @@ int RunDPScaleEstimator(int argc, char** argv) {
         colmap::CSVToVector<std::string>(options.extra_model_paths);
     rescale_options.force = options.force;
     rescale_options.tool_version = "dp-sfm " + DPSFMVersion();
-    for (const std::string* input :
-         {&options.workspace_path, &options.input_path, &options.dp_image_path,
-          &options.lens_path, &options.image_path}) {
+    for (const std::string* input : {&options.workspace_path,
+                                     &options.input_path,
+                                     &options.dp_image_path,
+                                     &options.lens_path,
+                                     &options.image_path}) {
       if (!input->empty()) rescale_options.inputs.push_back(*input);
     }
     const RescaleWorkspaceResult rescaled =
         options.output_path.empty()
             ? RescaleWorkspaceInPlace(root, result.scale, rescale_options)
-            : WriteRescaledCopy(root, options.output_path, result.scale,
-                                rescale_options);
+            : WriteRescaledCopy(
+                  root, options.output_path, result.scale, rescale_options);
     timings.rescale = rescale_timer.ElapsedSeconds();
     for (const std::string& file : rescaled.rescaled_files) {
       VLOG(1) << "  rescaled " << file;
@@ -317,8 +332,9 @@ int RunDPScaleEstimator(int argc, char** argv) {
       WriteJsonFile(options.report_path, report);
       LOG(INFO) << "Report: " << options.report_path;
     }
-    LOG(INFO) << "Scale " << result.scale << " metres per model unit: "
-              << rescaled.rescaled_files.size() << " files rescaled "
+    LOG(INFO) << "Scale " << result.scale
+              << " metres per model unit: " << rescaled.rescaled_files.size()
+              << " files rescaled "
               << (options.output_path.empty() ? "in place in " + root
                                               : "into " + options.output_path)
               << " (" << FormatSeconds(timings.rescale)
