@@ -72,6 +72,15 @@ class SceneCopy {
   std::string root_;
 };
 
+// A copy of a binary model, to compare with after the run.
+std::string CopyModel(const std::string& model_dir, const std::string& copy) {
+  fs::create_directories(copy);
+  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
+    fs::copy_file(fs::path(model_dir) / name, fs::path(copy) / name);
+  }
+  return copy;
+}
+
 CommandResult RunEstimator(const std::vector<std::string>& args,
                            const std::vector<std::string>& env = {}) {
   std::vector<std::string> command;
@@ -189,12 +198,8 @@ bool IsRescaledArtefact(const std::string& relative) {
 TEST(EndToEnd, DenseWorkspaceInPlace) {
   SceneCopy scene("dslr");
   const auto before = SnapshotTree(scene.root());
-  const std::string original = scene.temp() / "original";
-  fs::create_directories(original);
-  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
-    fs::copy_file(scene / (std::string("dense/sparse/") + name),
-                  fs::path(original) / name);
-  }
+  const std::string original =
+      CopyModel(scene / "dense/sparse", scene.temp() / "original");
   const std::string report_path = scene.temp() / "report.json";
   const CommandResult result =
       RunEstimator(With(DenseArgs(scene), {"--report_path", report_path}));
@@ -297,12 +302,8 @@ TEST(EndToEnd, OutputPathWritesARescaledCopy) {
 
 TEST(EndToEnd, SparseModelOnly) {
   SceneCopy scene("dslr");
-  const std::string original = scene.temp() / "original";
-  fs::create_directories(original);
-  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
-    fs::copy_file(scene / (std::string("sparse/0/") + name),
-                  fs::path(original) / name);
-  }
+  const std::string original =
+      CopyModel(scene / "sparse/0", scene.temp() / "original");
   const std::string report_path = scene.temp() / "report.json";
   const CommandResult result = RunEstimator({"--input_path",
                                              scene / "sparse/0",
@@ -428,12 +429,8 @@ TEST(EndToEnd, KillDuringCommitThenRerunFinishes) {
   // Kill the process right after its 5th rename, then run again: every file
   // must end up fully rescaled exactly once.
   SceneCopy scene("dslr");
-  const std::string original = scene.temp() / "original";
-  fs::create_directories(original);
-  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
-    fs::copy_file(scene / (std::string("dense/sparse/") + name),
-                  fs::path(original) / name);
-  }
+  const std::string original =
+      CopyModel(scene / "dense/sparse", scene.temp() / "original");
   const std::string report_path = scene.temp() / "report.json";
   const CommandResult killed =
       RunEstimator(With(DenseArgs(scene), {"--report_path", report_path}),
