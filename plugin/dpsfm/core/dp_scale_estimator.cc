@@ -528,23 +528,29 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       result.patches.push_back(copy);
     }
   }
-  if (!linear.success) {
-    // Say where the patches went, summed over views.
+  // Where the patches went, summed over views, for refusal messages.
+  int patches_tried = 0, patches_valid = 0;
+  std::string patch_rejections;
+  {
     std::map<std::string, int> rejections;
-    int tried = 0, valid = 0;
     for (const auto& v : views_) {
-      tried += v->summary.patches_tried;
-      valid += v->summary.patches_valid;
+      patches_tried += v->summary.patches_tried;
+      patches_valid += v->summary.patches_valid;
       for (const auto& r : v->summary.rejections)
         rejections[r.first] += r.second;
     }
-    std::ostringstream s;
-    s << linear.failure_reason << " (patches over all views: " << tried
-      << " tried, " << valid << " usable";
     if (!rejections.empty()) {
-      s << "; "
-        << CountsToString(std::vector<std::pair<std::string, int>>(
-               rejections.begin(), rejections.end()));
+      patch_rejections =
+          CountsToString(std::vector<std::pair<std::string, int>>(
+              rejections.begin(), rejections.end()));
+    }
+  }
+  if (!linear.success) {
+    std::ostringstream s;
+    s << linear.failure_reason << " (patches over all views: " << patches_tried
+      << " tried, " << patches_valid << " usable";
+    if (!patch_rejections.empty()) {
+      s << "; " << patch_rejections;
     }
     s << ")";
     result.failure_reason = s.str();
@@ -574,21 +580,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         << 100 * options_.max_scale_ci_relative_width << " %)";
     }
     if (!s.str().empty()) {
-      std::map<std::string, int> rejections;
-      int tried = 0, valid = 0;
-      for (const auto& v : views_) {
-        tried += v->summary.patches_tried;
-        valid += v->summary.patches_valid;
-        for (const auto& r : v->summary.rejections)
-          rejections[r.first] += r.second;
-      }
-      s << "; patches over all views: " << tried << " tried, " << valid
-        << " usable";
-      if (!rejections.empty()) {
-        s << " ("
-          << CountsToString(std::vector<std::pair<std::string, int>>(
-                 rejections.begin(), rejections.end()))
-          << ")";
+      s << "; patches over all views: " << patches_tried << " tried, "
+        << patches_valid << " usable";
+      if (!patch_rejections.empty()) {
+        s << " (" << patch_rejections << ")";
       }
       s << ". Typical causes: sensor noise too strong for the texture, "
            "too little defocus blur (small aperture, distant subjects), "

@@ -122,14 +122,16 @@ double LossOfPrepared(const Prepared& p,
         }
       }
       acc /= n;
+      // E ||n_l * H_r||^2 per pixel = sigma_l^2 ||H_r||^2 (white noise), in
+      // the same normalisation: the floor both noise-aware losses remove.
+      const double ql = c < static_cast<int>(p.sigma_left.size())
+                            ? p.sigma_left[c] * al
+                            : 0.0;
+      const double qr = c < static_cast<int>(p.sigma_right.size())
+                            ? p.sigma_right[c] * ar
+                            : 0.0;
+      const double noise = ql * ql * hr2 + qr * qr * hl2;
       if (loss == IntensityLoss::kRelativeL2) {
-        const double ql = c < static_cast<int>(p.sigma_left.size())
-                              ? p.sigma_left[c] * al
-                              : 0.0;
-        const double qr = c < static_cast<int>(p.sigma_right.size())
-                              ? p.sigma_right[c] * ar
-                              : 0.0;
-        const double noise = ql * ql * hr2 + qr * qr * hl2;
         // The denominator keeps its noise: subtracting it too would divide
         // by ~0 on heavily blurred patches.
         const double own_power = (power_l + power_r) / n;
@@ -154,15 +156,7 @@ double LossOfPrepared(const Prepared& p,
         continue;
       }
       if (loss == IntensityLoss::kNoiseCorrectedL2) {
-        // E ||n_l * H_r||^2 per pixel = sigma_l^2 ||H_r||^2 (white noise),
-        // in the same normalisation.
-        const double ql = c < static_cast<int>(p.sigma_left.size())
-                              ? p.sigma_left[c] * al
-                              : 0.0;
-        const double qr = c < static_cast<int>(p.sigma_right.size())
-                              ? p.sigma_right[c] * ar
-                              : 0.0;
-        acc -= ql * ql * hr2 + qr * qr * hl2;
+        acc -= noise;
       }
       total += acc;
     }
