@@ -799,11 +799,9 @@ void RescalePoints3DText(double scale,
   RescaleTextModel(scale, path, TextModel::kPoints3D, contents);
 }
 
-void RescaleDepthMap(double scale,
-                     const std::string& path,
-                     std::string* contents) {
-  CheckScale(scale);
-  std::string& bytes = *contents;
+bool ParseDepthMapLayout(const std::string& bytes,
+                         DepthMapLayout* layout,
+                         std::string* problem) {
   // Header "W&H&C&" with positive decimal integers, as colmap::mvs::Mat
   // writes it.
   uint64_t dims[3] = {0, 0, 0};
@@ -817,9 +815,9 @@ void RescaleDepthMap(double scale,
     }
     if (pos == start || pos >= bytes.size() || bytes[pos] != '&' ||
         dims[i] == 0) {
-      Corrupt(path,
-              "not a COLMAP depth map (bad \"width&height&channels&\" "
-              "header)");
+      *problem =
+          "not a COLMAP depth map (bad \"width&height&channels&\" header)";
+      return false;
     }
     ++pos;
   }
@@ -837,8 +835,28 @@ void RescaleDepthMap(double scale,
             << "&" << dims[2] << "& (expected "
             << static_cast<long double>(dims[0]) * dims[1] * dims[2] * 4
             << " data bytes, found " << data_bytes << ")";
-    Corrupt(path, message.str());
+    *problem = message.str();
+    return false;
   }
+  layout->width = dims[0];
+  layout->height = dims[1];
+  layout->channels = dims[2];
+  layout->data_offset = pos;
+  return true;
+}
+
+void RescaleDepthMap(double scale,
+                     const std::string& path,
+                     std::string* contents) {
+  CheckScale(scale);
+  std::string& bytes = *contents;
+  DepthMapLayout layout;
+  std::string problem;
+  if (!ParseDepthMapLayout(bytes, &layout, &problem)) {
+    Corrupt(path, problem);
+  }
+  const size_t pos = layout.data_offset;
+  const uint64_t num_values = layout.width * layout.height * layout.channels;
   // Check every value before changing any.
   for (uint64_t i = 0; i < num_values; ++i) {
     const float v = Load<float>(bytes, pos + i * 4);

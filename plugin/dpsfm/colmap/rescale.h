@@ -12,6 +12,8 @@
 // (the transaction in transaction.h stages them and commits all at once).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -82,6 +84,19 @@ void RescalePoints3DText(double scale,
 // COLMAP depth map ("W&H&C&" + W*H*C float32 LE): values > 0 are multiplied
 // (as float(double(d) * s)); values <= 0 mean "invalid" and stay, as does
 // the header.
+// The layout of a COLMAP depth or normal map: ASCII header "W&H&C&", then
+// W*H*C float32 little endian. False, with `problem` saying what is wrong,
+// for a malformed header or a data size that does not match it.
+struct DepthMapLayout {
+  uint64_t width = 0;
+  uint64_t height = 0;
+  uint64_t channels = 0;
+  size_t data_offset = 0;
+};
+bool ParseDepthMapLayout(const std::string& bytes,
+                         DepthMapLayout* layout,
+                         std::string* problem);
+
 void RescaleDepthMap(double scale,
                      const std::string& path,
                      std::string* contents);

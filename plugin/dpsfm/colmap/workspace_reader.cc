@@ -2,29 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include <boost/filesystem.hpp>
 
+#include "dpsfm/colmap/rescale.h"
+
 namespace dpsfm {
 namespace {
 
 namespace fs = boost::filesystem;
-
-// Parses one "N&" field of the depth map header.
-bool ReadHeaderField(std::istream* stream, long long* value) {
-  std::string digits;
-  char c;
-  while (stream->get(c)) {
-    if (c == '&') break;
-    if (c < '0' || c > '9' || digits.size() > 9) return false;
-    digits.push_back(c);
-  }
-  if (c != '&' || digits.empty()) return false;
-  *value = std::stoll(digits);
-  return true;
-}
 
 // True if two cameras map pixels to rays identically (no distortion to
 // undo between them).
@@ -44,41 +33,27 @@ bool SameGeometry(const colmap::Camera& a, const colmap::Camera& b) {
 }  // namespace
 
 cv::Mat ReadColmapDepthMap(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
+  if (!fs::is_regular_file(path)) {
     throw InputError("cannot read depth map " + path);
   }
-  long long width = 0, height = 0, channels = 0;
-  if (!ReadHeaderField(&file, &width) || !ReadHeaderField(&file, &height) ||
-      !ReadHeaderField(&file, &channels) || width <= 0 || height <= 0 ||
-      channels <= 0) {
-    throw InputError("depth map has a malformed header (expected W&H&C&): " +
-                     path);
+  const std::string bytes = internal::ReadFileBytes(path);
+  DepthMapLayout layout;
+  std::string problem;
+  if (!ParseDepthMapLayout(bytes, &layout, &problem)) {
+    throw InputError("depth map is corrupt or truncated (" + problem +
+                     "): " + path);
   }
-  if (channels != 1) {
-    throw InputError("depth map has " + std::to_string(channels) +
+  if (layout.channels != 1) {
+    throw InputError("depth map has " + std::to_string(layout.channels) +
                      " channels, expected 1: " + path);
   }
-  const std::streamoff header_end = file.tellg();
-  file.seekg(0, std::ios::end);
-  const std::streamoff payload = file.tellg() - header_end;
-  const std::streamoff expected =
-      static_cast<std::streamoff>(width) * height * sizeof(float);
-  if (payload != expected) {
-    std::ostringstream message;
-    message << "depth map is "
-            << (payload < expected ? "truncated" : "too long") << " ("
-            << payload << " data bytes for " << width << "x" << height
-            << ", expected " << expected << "): " << path;
-    throw InputError(message.str());
-  }
-  file.seekg(header_end);
   // Row-major, width varying fastest (mvs::Mat<T>: data[row * width + col]).
-  cv::Mat depth(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
-  file.read(reinterpret_cast<char*>(depth.data), expected);
-  if (!file) {
-    throw InputError("cannot read depth map data: " + path);
-  }
+  cv::Mat depth(static_cast<int>(layout.height),
+                static_cast<int>(layout.width),
+                CV_32FC1);
+  std::memcpy(depth.data,
+              bytes.data() + layout.data_offset,
+              layout.width * layout.height * sizeof(float));
   for (int r = 0; r < depth.rows; ++r) {
     const float* row = depth.ptr<float>(r);
     for (int c = 0; c < depth.cols; ++c) {
