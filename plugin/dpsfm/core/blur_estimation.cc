@@ -13,38 +13,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Places a centred kernel into a zero matrix of `size` with its centre at
-// (0, 0) and negative offsets wrapped around, so that the DFT product with a
-// zero-padded image is the (circular) true convolution.
-cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
-  cv::Mat wrapped = cv::Mat::zeros(size, CV_32FC1);
-  const int cy = kernel.rows / 2;
-  const int cx = kernel.cols / 2;
-  for (int i = 0; i < kernel.rows; ++i) {
-    const int y = ((i - cy) % size.height + size.height) % size.height;
-    for (int j = 0; j < kernel.cols; ++j) {
-      const int x = ((j - cx) % size.width + size.width) % size.width;
-      wrapped.at<float>(y, x) += kernel.at<float>(i, j);
-    }
-  }
-  return wrapped;
-}
-
-// Embeds a centred kernel in a (2 half + 1)^2 frame (for inner products of
-// kernels of different sizes).
-cv::Mat EmbedKernel(const cv::Mat& kernel, int half) {
-  cv::Mat frame = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
-  const int oy = half - kernel.rows / 2;
-  const int ox = half - kernel.cols / 2;
-  kernel.copyTo(frame(cv::Rect(ox, oy, kernel.cols, kernel.rows)));
-  return frame;
-}
 
 // 1-D Tukey window: 1 inside, a raised-cosine taper over `taper` samples at
 // both ends. Tapering the border band (where the exact loss is not evaluated
@@ -139,17 +113,12 @@ struct PatchBlurEstimator::Tables {
   cv::Rect interior;
   int num_interior = 0;
 
-  // Kernel grid: node n <-> r = (n - half_nodes) * step.
+  // Kernels and spectra on the radius grid (node n <-> r = Radius(n)).
+  std::unique_ptr<DPKernelGrid> grid;
   double step = 0;
   int half_nodes = 0;
   int num_nodes = 0;
   double bound = 0;  // half_nodes * step
-  // CCS-packed spectra of the wrapped kernels.
-  std::vector<cv::Mat> left_spectra;
-  std::vector<cv::Mat> right_spectra;
-  // Spatial kernels (for the interior means of the blurred views).
-  std::vector<cv::Mat> left_kernels;
-  std::vector<cv::Mat> right_kernels;
   // Noise gain |h_l|^2 + |h_r|^2 per node, and <h_l(n), h_l(n+1)> +
   // <h_r(n), h_r(n+1)> per interval, for the noise floor of interpolated
   // kernels.
@@ -182,13 +151,20 @@ PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
   std::unique_ptr<Tables> t(new Tables);
   t->options = options;
   t->patch_size = patch_size;
-  t->step = options.grid_step_px;
-  // The bound is rounded up to a multiple of the grid step.
-  t->half_nodes =
-      static_cast<int>(std::ceil(options.max_radius_px / t->step - 1e-9));
-  t->num_nodes = 2 * t->half_nodes + 1;
-  t->bound = t->half_nodes * t->step;
-  t->border = psf.KernelRadius(t->bound);
+  // The grid's bound is max_radius_px rounded up to a multiple of the step.
+  // Spectra need a DFT size >= the patch only: every interior output reads
+  // inputs within `border` of itself, inside the patch, so circular
+  // wrap-around never reaches it.
+  t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
+                         cv::getOptimalDFTSize(patch_size.height));
+  t->grid.reset(new DPKernelGrid(
+      psf, options.grid_step_px, options.max_radius_px, t->dft_size));
+  const DPKernelGrid& grid = *t->grid;
+  t->step = grid.Step();
+  t->half_nodes = grid.HalfNodes();
+  t->num_nodes = grid.NumNodes();
+  t->bound = grid.Bound();
+  t->border = grid.Border();
   DPSFM_CHECK(patch_size.width >= 2 * t->border + 8 &&
               patch_size.height >= 2 * t->border + 8)
       << "patch " << patch_size.width << "x" << patch_size.height
@@ -199,11 +175,6 @@ PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
                          patch_size.width - 2 * t->border,
                          patch_size.height - 2 * t->border);
   t->num_interior = t->interior.area();
-  // Exact valid-region residuals need a DFT size >= the patch only: every
-  // interior output reads inputs within `border` of itself, inside the patch,
-  // so circular wrap-around never reaches it.
-  t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
-                         cv::getOptimalDFTSize(patch_size.height));
   const int nr = t->dft_size.height;
   const int nc = t->dft_size.width;
 
@@ -241,41 +212,17 @@ PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
   }
   t->coarse_table.resize(t->coarse_nodes.size(), 4 * num_band);
 
-  t->left_kernels.resize(t->num_nodes);
-  t->right_kernels.resize(t->num_nodes);
-  t->left_spectra.resize(t->num_nodes);
-  t->right_spectra.resize(t->num_nodes);
   t->noise_gain.resize(t->num_nodes);
   t->noise_cross.resize(t->num_nodes - 1);
-  cv::Mat previous_left, previous_right;
   for (int n = 0; n < t->num_nodes; ++n) {
-    const DPKernels kernels = psf.Kernels(t->Radius(n));
-    DPSFM_CHECK(kernels.left.type() == CV_32FC1 &&
-                kernels.right.type() == CV_32FC1 &&
-                kernels.left.size() == kernels.right.size() &&
-                kernels.left.rows % 2 == 1 && kernels.left.cols % 2 == 1)
-        << psf.Name() << ": kernels must be CV_32FC1, odd, of equal size";
-    DPSFM_CHECK(kernels.left.rows <= 2 * t->border + 1 &&
-                kernels.left.cols <= 2 * t->border + 1)
-        << psf.Name() << ": kernel at r = " << t->Radius(n)
-        << " exceeds KernelRadius(" << t->bound << ")";
-    const cv::Mat left = EmbedKernel(kernels.left, t->border);
-    const cv::Mat right = EmbedKernel(kernels.right, t->border);
-    t->noise_gain[n] = left.dot(left) + right.dot(right);
-    if (n > 0) {
-      t->noise_cross[n - 1] =
-          left.dot(previous_left) + right.dot(previous_right);
+    t->noise_gain[n] = grid.LeftEnergy(n) + grid.RightEnergy(n);
+    if (n + 1 < t->num_nodes) {
+      t->noise_cross[n] = grid.LeftCross(n) + grid.RightCross(n);
     }
-    previous_left = left;
-    previous_right = right;
-
-    t->left_kernels[n] = kernels.left;
-    t->right_kernels[n] = kernels.right;
-    const cv::Mat wrapped_left = WrapKernel(kernels.left, t->dft_size);
-    const cv::Mat wrapped_right = WrapKernel(kernels.right, t->dft_size);
-    cv::dft(wrapped_left, t->left_spectra[n]);
-    cv::dft(wrapped_right, t->right_spectra[n]);
     if (coarse_row[n] >= 0) {
+      const cv::Mat wrapped_left = WrapKernel(grid.LeftKernel(n), t->dft_size);
+      const cv::Mat wrapped_right =
+          WrapKernel(grid.RightKernel(n), t->dft_size);
       cv::Mat hl, hr;
       cv::dft(wrapped_left, hl, cv::DFT_COMPLEX_OUTPUT);
       cv::dft(wrapped_right, hr, cv::DFT_COMPLEX_OUTPUT);
@@ -470,8 +417,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     if (e.done) return;
     ++num_evaluations;
     // Residual G_l * H_r - G_r * H_l.
-    cv::mulSpectrums(spec_left, t.right_spectra[n], product_left, 0);
-    cv::mulSpectrums(spec_right, t.left_spectra[n], product_right, 0);
+    cv::mulSpectrums(spec_left, t.grid->RightSpectrum(n), product_left, 0);
+    cv::mulSpectrums(spec_right, t.grid->LeftSpectrum(n), product_right, 0);
     product_left -= product_right;
     cv::dft(product_left,
             residual_image,
@@ -611,8 +558,8 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     double a = 0, b = 0;
     for (const int n : {n0, n0 + 1}) {
       const double w = n == n0 ? 1 - s : s;
-      a += w * BlurredSum(integral_left, t.right_kernels[n], t.interior);
-      b += w * BlurredSum(integral_right, t.left_kernels[n], t.interior);
+      a += w * BlurredSum(integral_left, t.grid->RightKernel(n), t.interior);
+      b += w * BlurredSum(integral_right, t.grid->LeftKernel(n), t.interior);
     }
     if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
     const double half_log_ratio = 0.5 * std::log(a / b);
@@ -668,12 +615,12 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
     const double s = pos - n0;
     const int half = t.border;
-    cv::Mat dl = (1 - s) * EmbedKernel(t.left_kernels[n0], half) +
-                 s * EmbedKernel(t.left_kernels[n0 + 1], half) -
-                 EmbedKernel(t.left_kernels[zero], half);
-    cv::Mat dr = (1 - s) * EmbedKernel(t.right_kernels[n0], half) +
-                 s * EmbedKernel(t.right_kernels[n0 + 1], half) -
-                 EmbedKernel(t.right_kernels[zero], half);
+    cv::Mat dl = (1 - s) * EmbedKernel(t.grid->LeftKernel(n0), half) +
+                 s * EmbedKernel(t.grid->LeftKernel(n0 + 1), half) -
+                 EmbedKernel(t.grid->LeftKernel(zero), half);
+    cv::Mat dr = (1 - s) * EmbedKernel(t.grid->RightKernel(n0), half) +
+                 s * EmbedKernel(t.grid->RightKernel(n0 + 1), half) -
+                 EmbedKernel(t.grid->RightKernel(zero), half);
     const double d = dl.dot(dl) + dr.dot(dr);
     const double threshold =
         3 * 2 * sigma2 * std::sqrt(t.noise_gain[zero] * d * inv_m);
