@@ -76,6 +76,52 @@ double TextureSnr(const PatchBlurEstimate& e) {
   return e.texture / noise_texture;
 }
 
+// Per-view maps for the cheap screening of patches before the blur search,
+// computed once per view instead of once per patch: the horizontal texture
+// (HorizontalTexture's |Sobel x| of left + right, as an integral image) and
+// the absolute responses of EstimateNoiseSigma's mask on left, right and
+// left - right.
+struct ScreeningMaps {
+  cv::Mat texture_integral;                     // CV_64FC1
+  cv::Mat noise_left, noise_right, noise_diff;  // CV_32FC1, |response|
+};
+
+ScreeningMaps MakeScreeningMaps(const cv::Mat& gray_left,
+                                const cv::Mat& gray_right) {
+  ScreeningMaps maps;
+  cv::Mat sum, diff, gx;
+  cv::add(gray_left, gray_right, sum);
+  cv::subtract(gray_left, gray_right, diff);
+  cv::Sobel(sum, gx, CV_32F, 1, 0, 3, 1, 0, cv::BORDER_REFLECT_101);
+  cv::integral(cv::abs(gx), maps.texture_integral, CV_64F);
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::filter2D(gray_left, maps.noise_left, CV_32F, mask);
+  cv::filter2D(gray_right, maps.noise_right, CV_32F, mask);
+  cv::filter2D(diff, maps.noise_diff, CV_32F, mask);
+  maps.noise_left = cv::abs(maps.noise_left);
+  maps.noise_right = cv::abs(maps.noise_right);
+  maps.noise_diff = cv::abs(maps.noise_diff);
+  return maps;
+}
+
+// EstimateNoiseSigma over `rect` (without its outer ring) from a response
+// map, on every other pixel in both directions: the median of ~5000
+// responses is as good as that of all of them for a screening decision.
+double ScreeningNoiseSigma(const cv::Mat& response, const cv::Rect& rect) {
+  std::vector<float> values;
+  values.reserve((rect.width / 2 + 1) * (rect.height / 2 + 1));
+  for (int y = rect.y + 1; y + 1 < rect.y + rect.height; y += 2) {
+    const float* row = response.ptr<float>(y);
+    for (int x = rect.x + 1; x + 1 < rect.x + rect.width; x += 2) {
+      values.push_back(row[x]);
+    }
+  }
+  if (values.empty()) return 0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  return values[mid] / (0.67449 * 6.0);
+}
+
 std::string CountsToString(
     const std::vector<std::pair<std::string, int>>& counts) {
   std::ostringstream s;
@@ -108,6 +154,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK(top_patch_fraction > 0 && top_patch_fraction <= 1);
   DPSFM_CHECK_GE(min_patches_per_view, 0);
   DPSFM_CHECK_GE(depth_strata, 1);
+  DPSFM_CHECK_GE(blur_search_factor, 0);
   DPSFM_CHECK_GE(max_stored_patches_per_view, 0);
   DPSFM_CHECK_GE(max_stored_megabytes_per_view, 0);
   DPSFM_CHECK(min_depth_coverage > 0 && min_depth_coverage <= 1);
@@ -285,53 +332,122 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     }
   }
 
-  // Blur per patch (the expensive part), in parallel.
+  // Screening (cheap, every patch with depth): texture against noise, and
+  // the part of the confidence known before the blur search.
   const int num = static_cast<int>(candidates.size());
   std::vector<PatchBlurEstimate> estimates(num);
   int with_depth = 0;
   for (const Candidate& c : candidates) with_depth += c.reject.empty();
   summary.patches_with_depth = with_depth;
-  if (with_depth > 0) {
-    const PatchBlurEstimator estimator(*psf_, blur, cv::Size(crop, crop));
-    const int crop_border = estimator.Border();
 #ifdef _OPENMP
-    const int threads =
-        options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+  const int threads =
+      options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+#endif
+  const int crop_border = border;
+  auto crop_of = [&](int k) {
+    return cv::Rect(candidates[k].interior.x - crop_border,
+                    candidates[k].interior.y - crop_border,
+                    p + 2 * crop_border,
+                    p + 2 * crop_border);
+  };
+  std::vector<int> screened;  // candidates that pass, in grid order
+  std::vector<double> screening_confidence, screening_inverse_depth;
+  if (with_depth > 0) {
+    const ScreeningMaps maps = MakeScreeningMaps(gray_left, gray_right);
+    std::vector<char> pass(num, 0);
+#ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
     for (int k = 0; k < num; ++k) {
       if (!candidates[k].reject.empty()) continue;
-      const cv::Rect r(candidates[k].interior.x - crop_border,
-                       candidates[k].interior.y - crop_border,
-                       p + 2 * crop_border,
-                       p + 2 * crop_border);
+      const cv::Rect r = crop_of(k);
+      const cv::Mat& ti = maps.texture_integral;
+      const double texture =
+          (ti.at<double>(r.y + r.height, r.x + r.width) -
+           ti.at<double>(r.y, r.x + r.width) -
+           ti.at<double>(r.y + r.height, r.x) + ti.at<double>(r.y, r.x)) /
+          r.area();
+      // A patch whose horizontal texture does not clear what noise alone
+      // gives would be dropped after the search anyway (the estimator's
+      // measures, with a 10 % margin for its gain equalisation).
+      const double sl = ScreeningNoiseSigma(maps.noise_left, r);
+      const double sr = ScreeningNoiseSigma(maps.noise_right, r);
+      const double sd =
+          ScreeningNoiseSigma(maps.noise_diff, r) / std::sqrt(2.0);
+      const double sigma =
+          std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
+      estimates[k].texture = texture;
+      estimates[k].noise_sigma = sigma;
+      if (options_.min_texture_snr > 0 &&
+          texture / (3.91 * std::max(sigma, 1e-6)) <
+              0.9 * options_.min_texture_snr) {
+        estimates[k].reject_reason = "with texture too weak for the noise";
+        continue;
+      }
+      pass[k] = 1;
+    }
+    for (int k = 0; k < num; ++k) {
+      if (!pass[k]) continue;
+      screened.push_back(k);
+      // The confidence below without its fit quality (<= 1): an upper bound
+      // of each patch's final confidence.
+      screening_confidence.push_back(
+          estimates[k].texture /
+          (candidates[k].depth.relative_variance + 1e-4));
+      screening_inverse_depth.push_back(1.0 / candidates[k].depth.median);
+    }
+  }
+
+  // Which patches the blur search runs on. The paper searches them all and
+  // keeps the top T_c by confidence; the search is the core's cost, and a
+  // patch's confidence never exceeds its screening confidence, so searching
+  // the best blur_search_factor x T_c share by screening confidence (spread
+  // over depth like the final selection) and keeping the best third of the
+  // usable ones finds the same kind of patches at a fraction of the cost.
+  std::vector<char> search(num, 0);
+  int num_searched = 0;
+  if (!screened.empty()) {
+    std::vector<int> chosen;
+    if (options_.blur_search_factor > 0 &&
+        options_.blur_search_factor * options_.top_patch_fraction < 1) {
+      chosen = SelectTopFractionStratified(
+          screening_confidence,
+          screening_inverse_depth,
+          options_.blur_search_factor * options_.top_patch_fraction,
+          static_cast<int>(std::ceil(options_.blur_search_factor *
+                                     options_.min_patches_per_view)),
+          options_.depth_strata);
+    } else {
+      chosen.resize(screened.size());
+      for (size_t i = 0; i < screened.size(); ++i) {
+        chosen[i] = static_cast<int>(i);
+      }
+    }
+    for (int i : chosen) search[screened[i]] = 1;
+    num_searched = static_cast<int>(chosen.size());
+    for (int k : screened) {
+      if (!search[k]) {
+        estimates[k].reject_reason =
+            "left unsearched (ranked below the blur-search share by texture "
+            "and depth flatness)";
+      }
+    }
+  }
+  summary.patches_searched = num_searched;
+
+  // Blur per searched patch (the expensive part), in parallel.
+  if (num_searched > 0) {
+    const PatchBlurEstimator estimator(*psf_, blur, cv::Size(crop, crop));
+    DPSFM_CHECK_EQ(estimator.Border(), crop_border);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+    for (int k = 0; k < num; ++k) {
+      if (!search[k]) continue;
+      const cv::Rect r = crop_of(k);
       try {
-        const cv::Mat patch_left = gray_left(r).clone();
-        const cv::Mat patch_right = gray_right(r).clone();
-        // Cheap pre-selection: a patch whose horizontal texture does not
-        // clear what noise alone gives would be dropped after the search
-        // anyway (same measures as the estimator's, with a 10 % margin for
-        // its gain equalisation); skip the search.
-        if (options_.min_texture_snr > 0) {
-          cv::Mat sum, diff;
-          cv::add(patch_left, patch_right, sum);
-          cv::subtract(patch_left, patch_right, diff);
-          const double sl = EstimateNoiseSigma(patch_left);
-          const double sr = EstimateNoiseSigma(patch_right);
-          const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
-          const double sigma =
-              std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
-          const double snr =
-              HorizontalTexture(sum) / (3.91 * std::max(sigma, 1e-6));
-          if (snr < 0.9 * options_.min_texture_snr) {
-            estimates[k].valid = false;
-            estimates[k].texture = HorizontalTexture(sum);
-            estimates[k].noise_sigma = sigma;
-            estimates[k].reject_reason = "with texture too weak for the noise";
-            continue;
-          }
-        }
-        estimates[k] = estimator.Estimate(patch_left, patch_right);
+        estimates[k] =
+            estimator.Estimate(gray_left(r).clone(), gray_right(r).clone());
       } catch (const std::exception& e) {
         estimates[k].valid = false;
         estimates[k].reject_reason = e.what();
@@ -421,10 +537,17 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     confidence.push_back(s.confidence);
     inverse_depth.push_back(1.0 / s.depth);
   }
+  // T_c of all screened patches, taken from the searched ones (all of them
+  // when blur_search_factor is 0).
+  const double keep_fraction =
+      num_searched > 0 ? std::min(1.0,
+                                  options_.top_patch_fraction *
+                                      screened.size() / num_searched)
+                       : options_.top_patch_fraction;
   const std::vector<int> top =
       SelectTopFractionStratified(confidence,
                                   inverse_depth,
-                                  options_.top_patch_fraction,
+                                  keep_fraction,
                                   options_.min_patches_per_view,
                                   options_.depth_strata);
   for (int i : top) data->samples[i].selected = true;

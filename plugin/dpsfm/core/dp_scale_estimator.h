@@ -66,6 +66,13 @@ struct DPScaleOptions {
   // The T_c patches are shared among this many equal-width bins of inverse
   // depth (see SelectTopFractionStratified); 1 = the paper's plain top T_c.
   int depth_strata = 4;
+  // The blur search runs on this many times T_c of the patches that pass
+  // the depth and texture checks, the best by the part of the confidence
+  // known before the search (texture / depth variance; fit quality, the
+  // rest, is <= 1), spread over depth like the final selection; the top
+  // T_c share of all is then kept from the searched ones. 0 = search every
+  // patch (the paper's order; ~1 / (factor T_c) times slower).
+  double blur_search_factor = 3;
   // Memory bound: at most this many patches per view keep their image crops
   // for the intensity stage (the highest-confidence ones), and at most
   // `max_stored_megabytes_per_view` of crops. The intensity stage should see
@@ -152,8 +159,9 @@ struct DPViewSummary {
   double max_radius_px = 0;
   int patches_tried = 0;  // grid positions
   int patches_with_depth = 0;
-  int patches_valid = 0;  // usable blur estimates
-  int patches_kept = 0;   // top-T_c
+  int patches_searched = 0;  // blur search run (see blur_search_factor)
+  int patches_valid = 0;     // usable blur estimates
+  int patches_kept = 0;      // top-T_c
   double seconds = 0;
   // Patch rejection counts by reason (e.g. {"without depth", 12}).
   std::vector<std::pair<std::string, int>> rejections;

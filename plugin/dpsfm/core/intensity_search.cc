@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
 #include <random>
+#include <tuple>
 
 #include <opencv2/imgproc.hpp>
 
@@ -12,6 +15,7 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
 namespace {
@@ -37,10 +41,24 @@ double MaxSupportedRadius(const DPPsfModel& psf,
   return std::max(r, 0.0);
 }
 
+// Sums and inner products over the interior of one channel's cross-blurred
+// views A = G_l * H_r(r_n), B = G_r * H_l(r_n) at kernel-grid node n, and
+// with node n + 1. Kernels interpolated linearly in r make A and B linear in
+// t inside the interval, so these give the L2-family losses at any r in it
+// exactly (DPKernelGrid).
+struct NodeChannelStats {
+  double sum_a = 0, sum_b = 0;
+  double aa = 0, bb = 0, ab = 0;
+  // <A_n, A_n+1>, <B_n, B_n+1>, <A_n, B_n+1>, <B_n, A_n+1>.
+  double aa_next = 0, bb_next = 0, ab_next = 0, ba_next = 0;
+};
+
 // A patch converted once for the whole search.
 struct Prepared {
-  cv::Mat left, right;  // CV_32FC(n)
+  cv::Mat left, right;  // CV_32FC(n); released once `stats` are computed
   int border = 0;
+  int channels = 0;
+  double num_interior = 0;
   double max_abs_radius = 0;
   std::vector<double> sigma_left, sigma_right;
   // kRelativeL2: per-channel signal power the loss is divided by, fixed per
@@ -52,6 +70,16 @@ struct Prepared {
   // rise above their noise carry no information and are skipped (empty =
   // all used).
   std::vector<char> channel_used;
+  // L2-family losses: statistics of the grid nodes computed so far, per
+  // channel (the nodes of the intervals the patch's radii fall in; an entry
+  // with has_next also holds the cross terms with the next node). Null grid
+  // = the exact path (convolution with the model's kernel at r itself).
+  const DPKernelGrid* grid = nullptr;
+  struct NodeEntry {
+    bool has_next = false;
+    std::vector<NodeChannelStats> channel;
+  };
+  std::map<int, NodeEntry> stats;
 };
 
 double SumSquares(const cv::Mat& kernel) { return kernel.dot(kernel); }
@@ -63,11 +91,78 @@ struct ChannelTerms {
   double acc = 0, gain = 0, power = 0, noise = 0;
 };
 
-double LossOfPrepared(const Prepared& p,
-                      double radius_px,
-                      const DPPsfModel& psf,
-                      IntensityLoss loss,
-                      std::vector<ChannelTerms>* terms = nullptr) {
+// What the L2-family losses need of one channel at one radius: the mean
+// squared difference of the cross-blurred patches normalised to mean 1,
+// their summed variance, and the normalisers al = n / sum(A), ar = n /
+// sum(B). ok = false: a dark channel (no alignment information).
+struct ChannelMoments {
+  bool ok = false;
+  double acc = 0, own_power = 0, al = 0, ar = 0;
+};
+
+// The L2-family losses from per-channel moments; hr2 = |H_r|^2, hl2 =
+// |H_l|^2 of the kernels used.
+double CombineChannels(const Prepared& p,
+                       IntensityLoss loss,
+                       const std::vector<ChannelMoments>& moments,
+                       double hr2,
+                       double hl2,
+                       std::vector<ChannelTerms>* terms) {
+  const int channels = static_cast<int>(moments.size());
+  double total = 0;
+  int relative_channels = 0;
+  for (int c = 0; c < channels; ++c) {
+    const ChannelMoments& m = moments[c];
+    if (!m.ok) continue;
+    // E ||n_l * H_r||^2 per pixel = sigma_l^2 ||H_r||^2 (white noise), in
+    // the same normalisation: the floor both noise-aware losses remove.
+    const double ql =
+        c < static_cast<int>(p.sigma_left.size()) ? p.sigma_left[c] * m.al : 0;
+    const double qr = c < static_cast<int>(p.sigma_right.size())
+                          ? p.sigma_right[c] * m.ar
+                          : 0;
+    const double noise = ql * ql * hr2 + qr * qr * hl2;
+    if (loss == IntensityLoss::kRelativeL2) {
+      // The denominator keeps its noise: subtracting it too would divide
+      // by ~0 on heavily blurred patches.
+      if (terms != nullptr) {
+        terms->resize(channels);
+        ChannelTerms& t = (*terms)[c];
+        t.acc = m.acc;
+        t.gain = m.al * m.al * hr2 + m.ar * m.ar * hl2;
+        t.power = m.own_power;
+        t.noise = noise;
+      }
+      if (c < static_cast<int>(p.channel_used.size()) && !p.channel_used[c]) {
+        continue;
+      }
+      const double power = c < static_cast<int>(p.reference_power.size())
+                               ? p.reference_power[c]
+                               : m.own_power;
+      if (power > 1e-12) {
+        total += (m.acc - noise) / power;
+        ++relative_channels;
+      }
+    } else if (loss == IntensityLoss::kNoiseCorrectedL2) {
+      total += m.acc - noise;
+    } else {
+      total += m.acc;
+    }
+  }
+  // kRelativeL2: the mean over the informative channels, so that every
+  // patch weighs alike whatever its colour.
+  if (loss == IntensityLoss::kRelativeL2 && relative_channels > 0) {
+    total /= relative_channels;
+  }
+  return total;
+}
+
+// Exact path: the model's kernels at r itself, convolved in the image domain.
+double ExactLoss(const Prepared& p,
+                 double radius_px,
+                 const DPPsfModel& psf,
+                 IntensityLoss loss,
+                 std::vector<ChannelTerms>* terms) {
   const double r =
       std::max(-p.max_abs_radius, std::min(p.max_abs_radius, radius_px));
   const DPKernels kernels = psf.Kernels(r);
@@ -85,17 +180,15 @@ double LossOfPrepared(const Prepared& p,
   const double n = static_cast<double>(w) * h;
   const cv::Scalar sum_l = cv::sum(xl);
   const cv::Scalar sum_r = cv::sum(xr);
-  const double hr2 = SumSquares(kernels.right);
-  const double hl2 = SumSquares(kernels.left);
-  double total = 0;
-  int relative_channels = 0;
+  std::vector<ChannelMoments> moments(channels);
+  double total_l1 = 0;
   for (int c = 0; c < channels; ++c) {
     // eta(X) = X / ||X||_1; intensities are >= 0 so ||X||_1 = sum X. A dark
     // channel carries no alignment information.
     const double sl = sum_l[c], sr = sum_r[c];
     if (!(sl > 1e-9 * n) || !(sr > 1e-9 * n)) continue;
-    double acc = 0;
     if (loss == IntensityLoss::kPaperL1) {
+      double acc = 0;
       for (int y = 0; y < h; ++y) {
         const float* a = xl.ptr<float>(y);
         const float* b = xr.ptr<float>(y);
@@ -103,70 +196,213 @@ double LossOfPrepared(const Prepared& p,
           acc += std::abs(a[x * channels + c] / sl - b[x * channels + c] / sr);
         }
       }
-      total += acc;
-    } else {
-      // Normalised to mean 1 so the loss reads as a relative contrast.
-      const double al = n / sl, ar = n / sr;
-      double power_l = 0, power_r = 0;
-      for (int y = 0; y < h; ++y) {
-        const float* a = xl.ptr<float>(y);
-        const float* b = xr.ptr<float>(y);
-        for (int x = 0; x < w; ++x) {
-          const double va = a[x * channels + c] * al;
-          const double vb = b[x * channels + c] * ar;
-          const double d = va - vb;
-          acc += d * d;
-          // Both normalised patches have mean 1.
-          power_l += (va - 1) * (va - 1);
-          power_r += (vb - 1) * (vb - 1);
-        }
+      total_l1 += acc;
+      continue;
+    }
+    // Normalised to mean 1 so the loss reads as a relative contrast.
+    ChannelMoments& m = moments[c];
+    m.ok = true;
+    m.al = n / sl;
+    m.ar = n / sr;
+    double acc = 0, power_l = 0, power_r = 0;
+    for (int y = 0; y < h; ++y) {
+      const float* a = xl.ptr<float>(y);
+      const float* b = xr.ptr<float>(y);
+      for (int x = 0; x < w; ++x) {
+        const double va = a[x * channels + c] * m.al;
+        const double vb = b[x * channels + c] * m.ar;
+        const double d = va - vb;
+        acc += d * d;
+        // Both normalised patches have mean 1.
+        power_l += (va - 1) * (va - 1);
+        power_r += (vb - 1) * (vb - 1);
       }
-      acc /= n;
-      // E ||n_l * H_r||^2 per pixel = sigma_l^2 ||H_r||^2 (white noise), in
-      // the same normalisation: the floor both noise-aware losses remove.
-      const double ql = c < static_cast<int>(p.sigma_left.size())
-                            ? p.sigma_left[c] * al
-                            : 0.0;
-      const double qr = c < static_cast<int>(p.sigma_right.size())
-                            ? p.sigma_right[c] * ar
-                            : 0.0;
-      const double noise = ql * ql * hr2 + qr * qr * hl2;
-      if (loss == IntensityLoss::kRelativeL2) {
-        // The denominator keeps its noise: subtracting it too would divide
-        // by ~0 on heavily blurred patches.
-        const double own_power = (power_l + power_r) / n;
-        if (terms != nullptr) {
-          terms->resize(channels);
-          ChannelTerms& t = (*terms)[c];
-          t.acc = acc;
-          t.gain = al * al * hr2 + ar * ar * hl2;
-          t.power = own_power;
-          t.noise = noise;
-        }
-        if (c < static_cast<int>(p.channel_used.size()) && !p.channel_used[c]) {
-          continue;
-        }
-        const double power = c < static_cast<int>(p.reference_power.size())
-                                 ? p.reference_power[c]
-                                 : own_power;
-        if (power > 1e-12) {
-          total += (acc - noise) / power;
-          ++relative_channels;
-        }
-        continue;
-      }
-      if (loss == IntensityLoss::kNoiseCorrectedL2) {
-        acc -= noise;
-      }
-      total += acc;
+    }
+    m.acc = acc / n;
+    m.own_power = (power_l + power_r) / n;
+  }
+  if (loss == IntensityLoss::kPaperL1) return total_l1;
+  return CombineChannels(p,
+                         loss,
+                         moments,
+                         SumSquares(kernels.right),
+                         SumSquares(kernels.left),
+                         terms);
+}
+
+// Grid path: the same L2-family losses with kernels interpolated between
+// grid nodes, from the node statistics (no convolution per radius).
+double GridLoss(const Prepared& p,
+                double radius_px,
+                IntensityLoss loss,
+                std::vector<ChannelTerms>* terms) {
+  const DPKernelGrid& grid = *p.grid;
+  int node = 0;
+  double t = 0;
+  grid.Locate(radius_px, &node, &t);
+  const auto e0 = p.stats.find(node);
+  const auto e1 = p.stats.find(node + 1);
+  DPSFM_CHECK(e0 != p.stats.end() && e0->second.has_next && e1 != p.stats.end())
+      << "kernel-grid interval " << node << " was not prepared";
+  const std::vector<NodeChannelStats>& s0 = e0->second.channel;
+  const std::vector<NodeChannelStats>& s1 = e1->second.channel;
+  const double n = p.num_interior;
+  const double u = 1 - t;
+  std::vector<ChannelMoments> moments(p.channels);
+  for (int c = 0; c < p.channels; ++c) {
+    const NodeChannelStats& a = s0[c];
+    const NodeChannelStats& b = s1[c];
+    const double sl = u * a.sum_a + t * b.sum_a;
+    const double sr = u * a.sum_b + t * b.sum_b;
+    if (!(sl > 1e-9 * n) || !(sr > 1e-9 * n)) continue;
+    const double aa = InterpolatedEnergy(a.aa, a.aa_next, b.aa, t);
+    const double bb = InterpolatedEnergy(a.bb, a.bb_next, b.bb, t);
+    const double ab =
+        u * u * a.ab + t * u * (a.ab_next + a.ba_next) + t * t * b.ab;
+    ChannelMoments& m = moments[c];
+    m.ok = true;
+    m.al = n / sl;
+    m.ar = n / sr;
+    const double la = m.al * m.al * aa, lb = m.ar * m.ar * bb;
+    m.acc = std::max(0.0, (la - 2 * m.al * m.ar * ab + lb) / n);
+    // sum (va - 1)^2 = al^2 |A|^2 - n, as va has mean 1.
+    m.own_power = std::max(0.0, (la + lb) / n - 2);
+  }
+  const double hr2 = InterpolatedEnergy(grid.RightEnergy(node),
+                                        grid.RightCross(node),
+                                        grid.RightEnergy(node + 1),
+                                        t);
+  const double hl2 = InterpolatedEnergy(grid.LeftEnergy(node),
+                                        grid.LeftCross(node),
+                                        grid.LeftEnergy(node + 1),
+                                        t);
+  return CombineChannels(p, loss, moments, hr2, hl2, terms);
+}
+
+double LossOfPrepared(const Prepared& p,
+                      double radius_px,
+                      const DPPsfModel& psf,
+                      IntensityLoss loss,
+                      std::vector<ChannelTerms>* terms = nullptr) {
+  return p.grid != nullptr ? GridLoss(p, radius_px, loss, terms)
+                           : ExactLoss(p, radius_px, psf, loss, terms);
+}
+
+// Grid intervals (node n <-> [r_n, r_n+1]) that the radii fall in.
+std::vector<int> IntervalsOf(const DPKernelGrid& grid,
+                             const std::vector<double>& radii) {
+  std::vector<int> intervals;
+  for (const double r : radii) {
+    int node = 0;
+    double t = 0;
+    grid.Locate(r, &node, &t);
+    intervals.push_back(node);
+  }
+  std::sort(intervals.begin(), intervals.end());
+  intervals.erase(std::unique(intervals.begin(), intervals.end()),
+                  intervals.end());
+  return intervals;
+}
+
+// Adds to p->stats the nodes of the given intervals that are not ready yet,
+// from the patch's crops: per channel one forward DFT of each view, then per
+// node one product and inverse DFT per view (only the interior is kept; the
+// grid's kernels fit the crop's border, so circular wrap-around never
+// reaches it).
+void AddIntervals(const IntensityPatch& patch,
+                  const std::vector<int>& intervals,
+                  Prepared* p) {
+  std::vector<int> nodes;
+  for (const int n : intervals) {
+    const auto it = p->stats.find(n);
+    if (it == p->stats.end() || !it->second.has_next) {
+      nodes.push_back(n);
+      nodes.push_back(n + 1);
     }
   }
-  // kRelativeL2: the mean over the informative channels, so that every
-  // patch weighs alike whatever its colour.
-  if (loss == IntensityLoss::kRelativeL2 && relative_channels > 0) {
-    total /= relative_channels;
+  if (nodes.empty()) return;
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+
+  const DPKernelGrid& grid = *p->grid;
+  const cv::Size dft = grid.DftSize();
+  const cv::Mat left = ToFloat(patch.left), right = ToFloat(patch.right);
+  const int channels = left.channels();
+  const cv::Rect interior(p->border,
+                          p->border,
+                          left.cols - 2 * p->border,
+                          left.rows - 2 * p->border);
+  std::vector<cv::Mat> left_channels, right_channels;
+  cv::split(left, left_channels);
+  cv::split(right, right_channels);
+  std::vector<cv::Mat> spec_left(channels), spec_right(channels);
+  cv::Mat padded = cv::Mat::zeros(dft, CV_32FC1);
+  const cv::Rect area(0, 0, left.cols, left.rows);
+  for (int c = 0; c < channels; ++c) {
+    left_channels[c].copyTo(padded(area));
+    cv::dft(padded, spec_left[c], 0, left.rows);
+    right_channels[c].copyTo(padded(area));
+    cv::dft(padded, spec_right[c], 0, left.rows);
   }
-  return total;
+  // Rows of the inverse transforms that are needed (up to the interior's
+  // last one).
+  const int output_rows = interior.y + interior.height;
+  std::vector<cv::Mat> previous_a(channels), previous_b(channels);
+  int previous_node = -2;
+  cv::Mat product, image;
+  // The interior of a view's spectrum times a kernel's, back in space.
+  auto blurred = [&](const cv::Mat& view_spectrum,
+                     const cv::Mat& kernel_spectrum) {
+    cv::mulSpectrums(view_spectrum, kernel_spectrum, product, 0);
+    cv::dft(product,
+            image,
+            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
+            output_rows);
+    return cv::Mat(image(interior).clone());
+  };
+  for (const int n : nodes) {
+    Prepared::NodeEntry& entry = p->stats[n];
+    entry.channel.assign(channels, NodeChannelStats());
+    Prepared::NodeEntry* before =
+        previous_node == n - 1 ? &p->stats[n - 1] : nullptr;
+    for (int c = 0; c < channels; ++c) {
+      const cv::Mat a = blurred(spec_left[c], grid.RightSpectrum(n));
+      const cv::Mat b = blurred(spec_right[c], grid.LeftSpectrum(n));
+      NodeChannelStats& s = entry.channel[c];
+      s.sum_a = cv::sum(a)[0];
+      s.sum_b = cv::sum(b)[0];
+      s.aa = a.dot(a);
+      s.bb = b.dot(b);
+      s.ab = a.dot(b);
+      if (before != nullptr) {
+        NodeChannelStats& prev = before->channel[c];
+        prev.aa_next = previous_a[c].dot(a);
+        prev.bb_next = previous_b[c].dot(b);
+        prev.ab_next = previous_a[c].dot(b);
+        prev.ba_next = previous_b[c].dot(a);
+      }
+      previous_a[c] = a;
+      previous_b[c] = b;
+    }
+    if (before != nullptr) before->has_next = true;
+    previous_node = n;
+  }
+}
+
+// Radii of a patch under the given scales (eq. (solution01) with s g_i' and
+// s z'_ij); non-finite ones (a depth at the focal plane's pole) at the bound.
+std::vector<double> PatchRadii(const IntensityView& view,
+                               double depth,
+                               const std::vector<double>& scales,
+                               double bound) {
+  std::vector<double> radii;
+  for (const double s : scales) {
+    double r = PredictBlurRadiusPx(
+        view.lens, view.pixel_pitch_mm, s, view.focus_distance_model, depth);
+    if (!std::isfinite(r)) r = r > 0 ? bound : -bound;
+    radii.push_back(r);
+  }
+  return radii;
 }
 
 Prepared Prepare(const IntensityPatch& patch,
@@ -183,6 +419,9 @@ Prepared Prepare(const IntensityPatch& patch,
   p.right = ToFloat(patch.right);
   p.border = patch.border;
   p.max_abs_radius = MaxSupportedRadius(psf, patch.border, max_radius_px);
+  p.channels = p.left.channels();
+  p.num_interior = static_cast<double>(p.left.cols - 2 * p.border) *
+                   (p.left.rows - 2 * p.border);
   return p;
 }
 
@@ -240,6 +479,8 @@ bool IntensitySearchOptions::Check() const {
   DPSFM_CHECK_GE(num_refine_candidates, 0);
   DPSFM_CHECK_GT(robust_loss_scale, 0);
   DPSFM_CHECK_GT(max_radius_px, 0);
+  DPSFM_CHECK(grid_step_px >= 0 && grid_step_px <= 1)
+      << "grid_step_px must lie in [0, 1], got " << grid_step_px;
   DPSFM_CHECK_GE(num_bootstrap, 0);
   DPSFM_CHECK(confidence_level > 0 && confidence_level < 1);
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
@@ -346,19 +587,80 @@ IntensitySearchResult SearchScaleByIntensity(
       options.num_threads > 0 ? options.num_threads : omp_get_max_threads();
 #endif
 
-  // Convert crops and estimate noise once per patch.
+  // First-pass candidates: the paper's set, s* (1 +- T_s).
+  const int num = options.num_candidates;
+  const double lo = initial_scale * (1 - options.relative_range);
+  const double hi = initial_scale * (1 + options.relative_range);
+  const double step = (hi - lo) / (num - 1);
+  std::vector<double> scales(num);
+  for (int k = 0; k < num; ++k) scales[k] = lo + step * k;
+
+  // Kernel grids, one per crop geometry (L2-family losses only; the paper's
+  // L1 needs the pixels at every radius). Built before the parallel loop.
+  const bool use_grid =
+      options.grid_step_px > 0 && options.loss != IntensityLoss::kPaperL1;
+  std::map<std::tuple<int, int, int>, std::unique_ptr<DPKernelGrid>> grids;
+  std::vector<const DPKernelGrid*> patch_grid(num_patches, nullptr);
+  if (use_grid) {
+    for (int j = 0; j < num_patches; ++j) {
+      const IntensityPatch& patch = patches[j];
+      const auto key =
+          std::make_tuple(patch.left.cols, patch.left.rows, patch.border);
+      auto it = grids.find(key);
+      if (it == grids.end()) {
+        // Nodes only where the crop's border supports the kernels.
+        const double supported =
+            std::floor(
+                MaxSupportedRadius(psf, patch.border, options.max_radius_px) /
+                options.grid_step_px) *
+            options.grid_step_px;
+        std::unique_ptr<DPKernelGrid> grid;
+        if (supported >= options.grid_step_px) {
+          grid.reset(new DPKernelGrid(
+              psf,
+              options.grid_step_px,
+              supported,
+              cv::Size(cv::getOptimalDFTSize(patch.left.cols),
+                       cv::getOptimalDFTSize(patch.left.rows))));
+        }
+        it = grids.emplace(key, std::move(grid)).first;
+      }
+      patch_grid[j] = it->second.get();
+    }
+  }
+
+  // Convert crops, estimate noise, and (grid path) reduce each patch to its
+  // node statistics over the radii its candidates reach.
   std::vector<Prepared> prepared(num_patches);
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
   for (int j = 0; j < num_patches; ++j) {
-    prepared[j] = Prepare(patches[j], psf, options.max_radius_px);  // checked
+    Prepared& p = prepared[j];
+    p = Prepare(patches[j], psf, options.max_radius_px);  // checked
     if (options.loss == IntensityLoss::kNoiseCorrectedL2 ||
         options.loss == IntensityLoss::kRelativeL2) {
-      prepared[j].sigma_left =
-          EstimatePairNoiseSigma(prepared[j].left, prepared[j].right);
-      prepared[j].sigma_right = prepared[j].sigma_left;
+      p.sigma_left = EstimatePairNoiseSigma(p.left, p.right);
+      p.sigma_right = p.sigma_left;
     }
+    const DPKernelGrid* grid = patch_grid[j];
+    if (grid == nullptr) continue;
+    // Nodes for the first-pass candidates and the initial scale (the
+    // reference radius of kRelativeL2); the refine pass adds its own.
+    std::vector<double> needed = scales;
+    needed.push_back(initial_scale);
+    p.grid = grid;
+    p.max_abs_radius = grid->Bound();
+    AddIntervals(patches[j],
+                 IntervalsOf(*grid,
+                             PatchRadii(views[patches[j].view],
+                                        patches[j].depth,
+                                        needed,
+                                        grid->Bound())),
+                 &p);
+    // The float crops are no longer needed: the statistics are the patch.
+    p.left.release();
+    p.right.release();
   }
   if (options.loss == IntensityLoss::kNoiseCorrectedL2 ||
       options.loss == IntensityLoss::kRelativeL2) {
@@ -407,12 +709,22 @@ IntensitySearchResult SearchScaleByIntensity(
 #endif
     for (int j = 0; j < num_patches; ++j) {
       Prepared& p = prepared[j];
-      const double step = 0.5;
-      const int half = static_cast<int>(std::floor(p.max_abs_radius / step));
-      for (int k = -half; k <= half; ++k) {
+      // Radii: the patch's grid nodes (they span every radius its
+      // candidates reach, where the minimum lies for a patch that fits),
+      // or every 0.5 px of the supported range on the exact path.
+      std::vector<double> radii;
+      if (p.grid != nullptr) {
+        for (const auto& entry : p.stats) {
+          radii.push_back(p.grid->Radius(entry.first));
+        }
+      } else {
+        const int half = static_cast<int>(std::floor(p.max_abs_radius / 0.5));
+        for (int k = -half; k <= half; ++k) radii.push_back(0.5 * k);
+      }
+      for (const double radius : radii) {
         std::vector<ChannelTerms> terms;
         try {
-          LossOfPrepared(p, k * step, psf, options.loss, &terms);
+          LossOfPrepared(p, radius, psf, options.loss, &terms);
         } catch (...) {
           continue;
         }
@@ -468,18 +780,21 @@ IntensitySearchResult SearchScaleByIntensity(
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
     for (int j = 0; j < num_patches; ++j) {
-      const IntensityView& view = views[patches[j].view];
-      const Prepared& p = prepared[j];
+      Prepared& p = prepared[j];
+      // r_ij(s) from eq. (solution01) with s g_i' and s z'_ij.
+      const std::vector<double> radii = PatchRadii(
+          views[patches[j].view], patches[j].depth, scales, p.max_abs_radius);
+      if (p.grid != nullptr) {
+        try {
+          AddIntervals(patches[j], IntervalsOf(*p.grid, radii), &p);
+        } catch (...) {
+          // Evaluated as unprepared below (contributes nothing).
+        }
+      }
       double last_radius = kInf, last_loss = 0;
       for (size_t k = 0; k < scales.size(); ++k) {
-        // r_ij(s) from eq. (solution01) with s g_i' and s z'_ij.
-        double r = PredictBlurRadiusPx(view.lens,
-                                       view.pixel_pitch_mm,
-                                       scales[k],
-                                       view.focus_distance_model,
-                                       patches[j].depth);
-        if (!std::isfinite(r)) r = r > 0 ? p.max_abs_radius : -p.max_abs_radius;
-        r = std::max(-p.max_abs_radius, std::min(p.max_abs_radius, r));
+        const double r =
+            std::max(-p.max_abs_radius, std::min(p.max_abs_radius, radii[k]));
         if (r != last_radius) {
           try {
             last_loss = LossOfPrepared(p, r, psf, options.loss);
@@ -498,12 +813,6 @@ IntensitySearchResult SearchScaleByIntensity(
   };
 
   // First pass: the paper's candidate set.
-  const int num = options.num_candidates;
-  const double lo = initial_scale * (1 - options.relative_range);
-  const double hi = initial_scale * (1 + options.relative_range);
-  const double step = (hi - lo) / (num - 1);
-  std::vector<double> scales(num);
-  for (int k = 0; k < num; ++k) scales[k] = lo + step * k;
   std::vector<std::vector<double>> curves = evaluate(scales);
   // kRelativeL2: each patch's curve relative to its own minimum, through a
   // saturating function d / (d + c). A patch the model fits has a minimum

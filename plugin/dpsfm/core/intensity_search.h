@@ -59,6 +59,14 @@ struct IntensitySearchOptions {
   // patch's structure left unexplained). Small c: robust to patches the
   // model does not fit; large c: closer to the plain sum.
   double robust_loss_scale = 0.01;
+  // Spacing in px of the kernel grid the L2-family losses are evaluated on
+  // (DPKernelGrid: kernels interpolated linearly in r between nodes, so a
+  // patch is reduced once to inner products at the nodes its candidates
+  // reach and every candidate then costs O(channels), not a convolution;
+  // the blur search uses the same grid). 0 = the model's exact kernels at
+  // every candidate radius (the slow reference path; kPaperL1 always uses
+  // it).
+  double grid_step_px = 0.25;
   // Blur radii are clamped to this (px); also never beyond what a patch's
   // border supports.
   double max_radius_px = 20;
