@@ -227,6 +227,47 @@ TEST(DPScaleEstimator, WholeCoreOnSyntheticMultiViewSet) {
   }
 }
 
+// The blur search on the best blur_search_factor x T_c share (by screening
+// confidence) instead of every patch: fewer searches, the same kind of
+// patches kept, the same scale.
+TEST(DPScaleEstimator, BlurSearchShareKeepsTheScale) {
+  const double scale = 0.0731;
+  std::vector<CaptureSpec> specs;
+  for (int i = 0; i < 6; ++i) {
+    CaptureSpec spec;
+    spec.position = i;
+    spec.lens = i % 2 ? Lens(50, 4) : Lens(35, 2.8);
+    spec.focus_m = 1.8 + 0.1 * i;
+    spec.noise_seed = 30 + i;
+    specs.push_back(spec);
+  }
+  const std::vector<DPView> views = RenderAll(specs, scale);
+  DPScaleOptions all = SmallFrameOptions();
+  all.blur_search_factor = 0;
+  DPScaleOptions share = SmallFrameOptions();
+  ASSERT_EQ(share.blur_search_factor, 3);
+  const RunOutput every = RunPipeline(views, all);
+  const RunOutput best = RunPipeline(views, share);
+  ASSERT_TRUE(every.result.success) << every.result.failure_reason;
+  ASSERT_TRUE(best.result.success) << best.result.failure_reason;
+  Print("every patch searched", every.result, scale);
+  Print("best 3 x T_c searched", best.result, scale);
+  int searched_all = 0, searched_share = 0, kept_all = 0, kept_share = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    searched_all += every.summaries[i].patches_searched;
+    searched_share += best.summaries[i].patches_searched;
+    kept_all += every.summaries[i].patches_kept;
+    kept_share += best.summaries[i].patches_kept;
+    EXPECT_LE(best.summaries[i].patches_kept,
+              best.summaries[i].patches_searched);
+  }
+  EXPECT_LT(searched_share, 0.5 * searched_all);
+  // About as many patches kept (T_c of the screened ones either way).
+  EXPECT_NEAR(kept_share, kept_all, 0.35 * kept_all);
+  EXPECT_LT(std::abs(best.result.scale / scale - 1), 0.02);
+  EXPECT_NEAR(best.result.scale / every.result.scale, 1.0, 0.015);
+}
+
 // Several apertures from the same tripod positions are more views: the
 // pooled estimate is at least as good as the worst single aperture, its
 // interval no wider than the widest single one, and it is accurate. (With

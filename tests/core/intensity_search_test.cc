@@ -1,5 +1,6 @@
 #include "dpsfm/core/intensity_search.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -157,6 +158,49 @@ TEST(SearchScaleByIntensity, RecoversScaleOnNoiselessPatches) {
                              result.candidate_scales.end()));
   EXPECT_NEAR(result.candidate_scales.front(), scale * 1.12 * 0.2, 1e-12);
   EXPECT_NEAR(result.candidate_scales.back(), scale * 1.12 * 1.8, 1e-12);
+}
+
+// The kernel-grid path (node inner products, kernels interpolated in r)
+// and the exact path (the model's kernel at every candidate radius) give
+// the same loss curve and minimum on a noisy scene.
+TEST(SearchScaleByIntensity, KernelGridMatchesExactKernels) {
+  const TranslatingDiskPsf psf;
+  const double scale = 0.25;
+  test::RenderOptions render;
+  render.noise_sigma = 0.01;
+  const Scene scene = MakeScene(psf, scale, 3, 5, render);
+  IntensitySearchOptions grid_options;
+  grid_options.num_bootstrap = 0;
+  IntensitySearchOptions exact_options = grid_options;
+  exact_options.grid_step_px = 0;
+  for (const IntensityLoss loss :
+       {IntensityLoss::kRelativeL2, IntensityLoss::kNoiseCorrectedL2}) {
+    grid_options.loss = exact_options.loss = loss;
+    const IntensitySearchResult grid = SearchScaleByIntensity(
+        scene.views, scene.patches, scale * 0.93, psf, grid_options);
+    const IntensitySearchResult exact = SearchScaleByIntensity(
+        scene.views, scene.patches, scale * 0.93, psf, exact_options);
+    ASSERT_TRUE(grid.success && exact.success) << IntensityLossName(loss);
+    EXPECT_NEAR(grid.scale / exact.scale, 1.0, 0.002)
+        << IntensityLossName(loss);
+    EXPECT_NEAR(grid.scale / scale, 1.0, 0.01) << IntensityLossName(loss);
+    // The first-pass curves agree point by point (relative to their span).
+    ASSERT_GE(grid.candidate_losses.size(), 100u);
+    const auto span = std::minmax_element(exact.candidate_losses.begin(),
+                                          exact.candidate_losses.end());
+    const double range = *span.second - *span.first;
+    ASSERT_GT(range, 0);
+    for (size_t k = 0; k < 100; k += 9) {
+      const size_t g = std::find(grid.candidate_scales.begin(),
+                                 grid.candidate_scales.end(),
+                                 exact.candidate_scales[k]) -
+                       grid.candidate_scales.begin();
+      if (g == grid.candidate_scales.size()) continue;
+      EXPECT_NEAR(
+          grid.candidate_losses[g], exact.candidate_losses[k], 0.03 * range)
+          << IntensityLossName(loss) << " at s = " << exact.candidate_scales[k];
+    }
+  }
 }
 
 // Notes sec. 5: on noisy data the paper's loss drifts towards larger blur
