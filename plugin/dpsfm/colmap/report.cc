@@ -85,6 +85,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);
     entry["median_abs_residual_px"] = Number(view.median_abs_residual_px);
     entry["patches"] = {{"tried", view.patches_tried},
+                        {"searched", view.patches_searched},
                         {"valid", view.patches_valid},
                         {"selected", view.patches_selected}};
     entry["lens"] = {{"focal_length_mm", view.lens.focal_length_mm},

@@ -642,6 +642,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     out.predicted_blur_range_px = lv.predicted_blur_range_px;
     out.median_abs_residual_px = lv.median_abs_residual_px;
     out.patches_tried = v.summary.patches_tried;
+    out.patches_searched = v.summary.patches_searched;
     out.patches_valid = v.summary.patches_valid;
     out.patches_selected = v.summary.patches_kept;
     out.focus_distance_m = kNaN;

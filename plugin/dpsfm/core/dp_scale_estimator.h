@@ -194,6 +194,7 @@ struct DPViewResult {
   double predicted_blur_range_px = 0;
   double median_abs_residual_px = 0;
   int patches_tried = 0;
+  int patches_searched = 0;
   int patches_valid = 0;
   int patches_selected = 0;
   DPLensData lens;

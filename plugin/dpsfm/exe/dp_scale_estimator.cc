@@ -98,6 +98,10 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption("DPScaleEstimator.top_patch_fraction",
                             &core->top_patch_fraction,
                             "[T_c] fraction of patches kept per view");
+  manager->AddDefaultOption("DPScaleEstimator.blur_search_factor",
+                            &core->blur_search_factor,
+                            "blur search on the best this x T_c share of "
+                            "patches (0: all, the paper's order)");
   manager->AddDefaultOption("DPScaleEstimator.min_blur_range_px",
                             &core->linear.min_blur_range_px,
                             "[T_p] views need a wider blur range (px)");
