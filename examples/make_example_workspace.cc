@@ -1,4 +1,4 @@
-// Generates a synthetic dual-pixel capture of a tabletop scene with a known
+// Generates a synthetic dual-pixel capture of a parametric scene with a known
 // metric scale, written as a complete COLMAP workspace:
 //
 //   <out>/images/<name>.jpg          "original" images (DP left + right)
@@ -8,14 +8,23 @@
 //   <out>/dense/stereo/depth_maps/<name>.jpg.{geometric,photometric}.bin
 //   <out>/dense/fused.ply            points from the depth maps
 //   <out>/dp/left/<name>.png, <out>/dp/right/<name>.png   16-bit DP views
-//   <out>/lens.csv, <out>/ground_truth.json
+//   <out>/database.db, <out>/lens.csv, <out>/ground_truth.json
 //
 // Model units are metres / s_true: the estimator should recover s_true.
+// Scenes: tabletop, facade, planes. Cameras: a full-frame DSLR (DP frames
+// at the image size) or a phone (4.38 mm f/1.73, DP frames at half the
+// image size). With --f_numbers, every tripod position is captured at
+// several apertures (same pose and focus, one image per aperture).
+// Everything is drawn from --seed.
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -37,7 +46,7 @@
 namespace fs = boost::filesystem;
 using dpsfm::examples::PinholeView;
 using dpsfm::examples::RenderedView;
-using dpsfm::examples::TabletopScene;
+using dpsfm::examples::SyntheticScene;
 
 namespace {
 
@@ -45,11 +54,23 @@ struct GeneratorOptions {
   std::string output_path;
   int seed = 1;
   int num_views = 10;
-  int width = 1200;
-  int height = 800;
-  double focal_length_mm = 50.0;
-  double f_number = 2.8;
-  double sensor_width_mm = 36.0;
+  // tabletop | facade | planes.
+  std::string scene = "tabletop";
+  // dslr | phone: the defaults of every option below that is 0.
+  std::string camera = "dslr";
+  int width = 0;
+  int height = 0;
+  double focal_length_mm = 0;
+  double f_number = 0;
+  // Several apertures per tripod position ("2.8,5.6,11"): one image each,
+  // named <pose>_f<N>. Overrides f_number.
+  std::string f_numbers;
+  double sensor_width_mm = 0;
+  // DP frames are this many times smaller than the images.
+  int dp_factor = 0;
+  // Multiplies every length of the scene and of the camera rig: a phone
+  // photographs the same scene from closer up.
+  double scene_scale = 0;
   // Metres per model unit; 0 draws one at random from the seed.
   double scale = 0.0;
   // Gaussian noise sigma on [0, 1] intensities of each DP view.
@@ -57,8 +78,21 @@ struct GeneratorOptions {
   // Depth maps are this many times smaller than the images (PatchMatch's
   // max_image_size makes them so).
   int depth_map_factor = 1;
+  // Relative sigma of the depth maps' error: half of its variance
+  // per-pixel, half smooth over ~16 depth-map pixels (as PatchMatch's
+  // errors are partly correlated).
+  double depth_noise = 0;
+  // Fraction of depth-map pixels set to 0, in blobs (PatchMatch's filtered
+  // holes).
+  double depth_holes = 0;
   // Mean gain of the right view relative to the left one.
   double right_gain = 1.0;
+  // Opposite horizontal gain ramps of the two views (vignetting of the
+  // half apertures): the left view's gain goes from 1 + ramp/2 at the left
+  // edge to 1 - ramp/2 at the right edge, the right view's the other way.
+  double gain_ramp = 0.0;
+  // Texture contrast: 1 full, 0 flat surfaces (no texture).
+  double texture_contrast = 1.0;
   // Radial distortion k1 of the original images (COLMAP SIMPLE_RADIAL).
   // The DP views and sparse/0 are in the distorted geometry; dense/ is
   // undistorted (PINHOLE), as image_undistorter makes it.
@@ -68,27 +102,125 @@ struct GeneratorOptions {
   std::string compositing = "additive";
 };
 
-void WriteDepthMap(const cv::Mat& depth_model,
-                   int factor,
-                   const std::string& path) {
-  cv::Mat small = depth_model;
-  if (factor > 1) {
-    cv::resize(depth_model,
-               small,
-               cv::Size(depth_model.cols / factor, depth_model.rows / factor),
-               0,
-               0,
-               cv::INTER_NEAREST);
+// Fills the options left at 0 with the camera's defaults.
+void ApplyCameraDefaults(GeneratorOptions* options) {
+  struct Defaults {
+    int width, height;
+    double focal_length_mm, f_number, sensor_width_mm;
+    int dp_factor;
+    double scene_scale;
+  };
+  Defaults defaults;
+  if (options->camera == "dslr") {
+    // A full-frame DSLR with a 50 mm lens, images downsized to 1200 px.
+    defaults = {1200, 800, 50.0, 2.8, 36.0, 1, 1.0};
+  } else if (options->camera == "phone") {
+    // A Pixel 4-like phone: 4.38 mm f/1.73 on a 5.6 mm wide sensor, 4:3
+    // images of 1600 px (3.5 um pixels), DP frames at half that.
+    defaults = {1600, 1200, 4.38, 1.73, 5.6, 2, 0.3};
+  } else {
+    throw std::invalid_argument("unknown camera '" + options->camera +
+                                "' (dslr or phone)");
   }
+  if (options->width == 0) options->width = defaults.width;
+  if (options->height == 0) options->height = defaults.height;
+  if (options->focal_length_mm == 0) {
+    options->focal_length_mm = defaults.focal_length_mm;
+  }
+  if (options->f_number == 0) options->f_number = defaults.f_number;
+  if (options->sensor_width_mm == 0) {
+    options->sensor_width_mm = defaults.sensor_width_mm;
+  }
+  if (options->dp_factor == 0) options->dp_factor = defaults.dp_factor;
+  if (options->scene_scale == 0) options->scene_scale = defaults.scene_scale;
+}
+
+std::vector<double> ParseFNumbers(const std::string& list) {
+  std::vector<double> values;
+  std::stringstream stream(list);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    size_t end = 0;
+    const double value = std::stod(item, &end);
+    if (end != item.size() || !(value > 0)) {
+      throw std::invalid_argument("bad f-number '" + item + "' in --f_numbers");
+    }
+    values.push_back(value);
+  }
+  if (values.empty()) throw std::invalid_argument("--f_numbers is empty");
+  return values;
+}
+
+// A seed for an image's own random numbers (noise), from the run's seed and
+// the image's name (FNV-1a): the same image gets the same noise whatever
+// else the run generates.
+uint64_t ImageSeed(int seed, const std::string& name) {
+  uint64_t hash = 1469598103934665603ull ^ static_cast<uint64_t>(seed);
+  for (const char c : name) {
+    hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  }
+  return hash;
+}
+
+// A smooth random field of unit variance over `size`, varying over about
+// `cell` pixels.
+cv::Mat SmoothNoise(const cv::Size& size, int cell, cv::RNG* rng) {
+  cv::Mat coarse(size.height / cell + 3, size.width / cell + 3, CV_32FC1);
+  rng->fill(coarse, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::Mat fine;
+  cv::resize(coarse,
+             fine,
+             cv::Size(coarse.cols * cell, coarse.rows * cell),
+             0,
+             0,
+             cv::INTER_CUBIC);
+  fine = fine(cv::Rect(cell, cell, size.width, size.height)).clone();
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(fine, mean, stddev);
+  return (fine - mean[0]) / std::max(stddev[0], 1e-9);
+}
+
+// PatchMatch-like depth-map errors: relative noise, then holes (0) in
+// blobs covering `hole_fraction` of the map.
+void DegradeDepthMap(double relative_sigma,
+                     double hole_fraction,
+                     cv::RNG* rng,
+                     cv::Mat* depth) {
+  if (relative_sigma > 0) {
+    cv::Mat white(depth->size(), CV_32FC1);
+    rng->fill(white, cv::RNG::NORMAL, 0.0, 1.0);
+    const cv::Mat error =
+        (white + SmoothNoise(depth->size(), 16, rng)) * (1 / std::sqrt(2.0));
+    for (int r = 0; r < depth->rows; ++r) {
+      for (int c = 0; c < depth->cols; ++c) {
+        float& z = depth->at<float>(r, c);
+        if (z > 0) {
+          z *= std::max(1 + relative_sigma * error.at<float>(r, c), 0.1);
+        }
+      }
+    }
+  }
+  if (hole_fraction > 0) {
+    const cv::Mat field = SmoothNoise(depth->size(), 12, rng);
+    std::vector<float> values(field.begin<float>(), field.end<float>());
+    const size_t k = std::min(
+        values.size() - 1, static_cast<size_t>(hole_fraction * values.size()));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    const float threshold = values[k];
+    depth->setTo(0.0f, field < threshold);
+  }
+}
+
+void WriteDepthMap(const cv::Mat& depth_model, const std::string& path) {
   double min_depth, max_depth;
-  cv::minMaxLoc(small, &min_depth, &max_depth);
-  colmap::mvs::DepthMap map(small.cols,
-                            small.rows,
+  cv::minMaxLoc(depth_model, &min_depth, &max_depth);
+  colmap::mvs::DepthMap map(depth_model.cols,
+                            depth_model.rows,
                             static_cast<float>(min_depth),
                             static_cast<float>(max_depth));
-  for (int r = 0; r < small.rows; ++r) {
-    for (int c = 0; c < small.cols; ++c) {
-      map.Set(r, c, small.at<float>(r, c));
+  for (int r = 0; r < depth_model.rows; ++r) {
+    for (int c = 0; c < depth_model.cols; ++c) {
+      map.Set(r, c, depth_model.at<float>(r, c));
     }
   }
   map.Write(path);
@@ -100,20 +232,93 @@ cv::Mat To16Bit(const cv::Mat& image) {
   return out;
 }
 
+// The gain of each column: 1 + slope * (x / (width - 1) - 0.5).
+void ApplyColumnGain(double gain, double slope, cv::Mat* image) {
+  for (int c = 0; c < image->cols; ++c) {
+    const double t = image->cols == 1 ? 0 : c / (image->cols - 1.0) - 0.5;
+    image->col(c) *= gain * (1 + slope * t);
+  }
+}
+
+void AddNoiseAndClamp(double sigma, cv::RNG* rng, cv::Mat* image) {
+  if (sigma > 0) {
+    cv::Mat noise(image->size(), image->type());
+    rng->fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+    *image += noise;
+  }
+  cv::max(*image, 0.0, *image);
+  cv::min(*image, 1.0, *image);
+}
+
+// "2.8" -> "2.8", "11" -> "11": the f-number as written in image names.
+std::string FNumberTag(double f_number) {
+  std::ostringstream tag;
+  tag << f_number;
+  return tag.str();
+}
+
+// fused.ply: every 4th depth pixel of every pose, in model units.
+void WriteFusedPly(const std::vector<PinholeView>& views,
+                   const std::vector<RenderedView>& renders,
+                   double true_scale,
+                   const std::string& path) {
+  std::vector<colmap::PlyPoint> ply_points;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const PinholeView& view = views[i];
+    const Eigen::Matrix3d world_from_cam = view.rotation.transpose();
+    for (int r = 0; r < view.height; r += 4) {
+      for (int c = 0; c < view.width; c += 4) {
+        const float z = renders[i].depth.at<float>(r, c);
+        if (z <= 0) continue;
+        const Eigen::Vector3d cam(
+            (c - (view.width - 1) / 2.0) / view.focal_px * z,
+            (r - (view.height - 1) / 2.0) / view.focal_px * z,
+            z);
+        const Eigen::Vector3d xyz =
+            world_from_cam * (cam - view.translation) / true_scale;
+        const Eigen::Vector3d normal = -(world_from_cam * cam).normalized();
+        const cv::Vec3f bgr = renders[i].image.at<cv::Vec3f>(r, c);
+        colmap::PlyPoint point;
+        point.x = xyz.x();
+        point.y = xyz.y();
+        point.z = xyz.z();
+        point.nx = normal.x();
+        point.ny = normal.y();
+        point.nz = normal.z();
+        point.r = static_cast<uint8_t>(255 * bgr[2]);
+        point.g = static_cast<uint8_t>(255 * bgr[1]);
+        point.b = static_cast<uint8_t>(255 * bgr[0]);
+        ply_points.push_back(point);
+      }
+    }
+  }
+  colmap::WriteBinaryPlyPoints(path,
+                               ply_points,
+                               /*write_normal=*/true,
+                               /*write_rgb=*/true);
+}
+
 int Run(const GeneratorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   std::mt19937 rng(options.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double true_scale =
       options.scale > 0 ? options.scale
                         : std::exp(std::log(0.3) + unit(rng) * std::log(10.0));
 
-  const TabletopScene scene = TabletopScene::Random(&rng, 6);
+  SyntheticScene scene = dpsfm::examples::RandomScene(options.scene, &rng);
+  scene.Scale(options.scene_scale);
+  scene.texture_contrast = options.texture_contrast;
   const double pitch_mm = options.sensor_width_mm / options.width;
   const double focal_px = options.focal_length_mm / pitch_mm;
-  dpsfm::DPLensData lens;
-  lens.focal_length_mm = options.focal_length_mm;
-  lens.f_number = options.f_number;
-  lens.pixel_pitch_um = pitch_mm * 1e3;
+  const bool multi_aperture = !options.f_numbers.empty();
+  const std::vector<double> f_numbers =
+      multi_aperture ? ParseFNumbers(options.f_numbers)
+                     : std::vector<double>{options.f_number};
+  const int num_apertures = static_cast<int>(f_numbers.size());
+  const int num_images = options.num_views * num_apertures;
+  const cv::Size dp_size(options.width / options.dp_factor,
+                         options.height / options.dp_factor);
 
   const fs::path out(options.output_path);
   for (const char* dir : {"images",
@@ -127,43 +332,38 @@ int Run(const GeneratorOptions& options) {
     fs::create_directories(out / dir);
   }
 
-  // Cameras on an arc in front of the scene, looking at its middle.
-  const Eigen::Vector3d target(0.0, scene.wall_y * 0.4, 0.08);
-  std::vector<PinholeView> views;
-  for (int i = 0; i < options.num_views; ++i) {
-    const double angle =
-        -0.45 +
-        0.9 * (options.num_views == 1 ? 0.5 : i / (options.num_views - 1.0));
-    const double distance = 0.75 + 0.2 * unit(rng);
-    const Eigen::Vector3d center =
-        target + Eigen::Vector3d(distance * std::sin(angle),
-                                 -distance * std::cos(angle),
-                                 0.3 + 0.15 * unit(rng));
-    views.push_back(PinholeView::LookAt(
-        center, target, options.width, options.height, focal_px));
-    views.back().k1 = options.radial_k1;
-  }
-
-  colmap::Reconstruction reconstruction;
-  colmap::Camera camera = colmap::Camera::CreateFromModelName(
-      1, "PINHOLE", focal_px, options.width, options.height);
-  reconstruction.AddCamera(camera);
+  // Cameras on the scene's arc, looking at its middle.
+  std::vector<PinholeView> views =
+      dpsfm::examples::PlaceViews(scene.rig,
+                                  options.num_views,
+                                  options.width,
+                                  options.height,
+                                  focal_px,
+                                  &rng);
+  for (PinholeView& view : views) view.k1 = options.radial_k1;
 
   const dpsfm::TranslatingDiskPsf psf;
-  std::normal_distribution<double> gauss(0.0, 1.0);
+  dpsfm::DPRenderOptions render_options;
+  render_options.compositing =
+      options.compositing == "layers"
+          ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
+          : dpsfm::DPRenderOptions::Compositing::kAdditive;
   std::ofstream lens_csv((out / "lens.csv").string());
   lens_csv << "name,focal_length_mm,f_number,pixel_pitch_um\n";
   nlohmann::json truth;
   truth["scale"] = true_scale;
   truth["model_unit"] = "metres / scale";
+  truth["scene"] = options.scene;
+  truth["camera"] = options.camera;
+  truth["dp_factor"] = options.dp_factor;
 
   // Renders in the undistorted (dense) geometry: depth maps, tracks, fused.
   std::vector<RenderedView> renders;
-  std::vector<std::string> names;
+  // Image names, per pose one per aperture.
+  std::vector<std::vector<std::string>> names(options.num_views);
   for (int i = 0; i < options.num_views; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "DP_%04d", i + 1);
-    names.push_back(name);
+    char pose_name[32];
+    std::snprintf(pose_name, sizeof(pose_name), "DP_%04d", i + 1);
     // The original (possibly distorted) image, and the undistorted one.
     const RenderedView render = dpsfm::examples::RenderView(scene, views[i]);
     PinholeView pinhole = views[i];
@@ -173,7 +373,7 @@ int Run(const GeneratorOptions& options) {
                           : dpsfm::examples::RenderView(scene, pinhole));
 
     // Focus somewhere inside the scene's depth range, as a photographer
-    // focusing on the subject would.
+    // focusing on the subject would; the same for every aperture.
     std::vector<float> depths;
     for (int r = 0; r < render.depth.rows; r += 4) {
       for (int c = 0; c < render.depth.cols; c += 4) {
@@ -182,76 +382,108 @@ int Run(const GeneratorOptions& options) {
         }
       }
     }
+    if (depths.empty()) {
+      throw std::runtime_error(std::string("view ") + pose_name +
+                               " sees nothing of the scene");
+    }
     std::sort(depths.begin(), depths.end());
     const double focus_m =
         depths[static_cast<size_t>((0.3 + 0.4 * unit(rng)) * depths.size())];
 
-    cv::Mat radius(render.depth.size(), CV_32FC1);
-    for (int r = 0; r < radius.rows; ++r) {
-      for (int c = 0; c < radius.cols; ++c) {
-        const float z = render.depth.at<float>(r, c);
-        const double b = dpsfm::SignedBlurDiameterMm(
-            lens, focus_m * 1e3, z > 0 ? z * 1e3 : 1e12);
-        radius.at<float>(r, c) =
-            static_cast<float>(dpsfm::BlurRadiusPxFromDiameterMm(b, pitch_mm));
+    // The depth map PatchMatch would give, in model units.
+    cv::Mat depth_model = renders.back().depth / true_scale;
+    if (options.depth_map_factor > 1) {
+      cv::resize(cv::Mat(depth_model),
+                 depth_model,
+                 cv::Size(options.width / options.depth_map_factor,
+                          options.height / options.depth_map_factor),
+                 0,
+                 0,
+                 cv::INTER_NEAREST);
+    }
+    cv::RNG depth_rng(ImageSeed(options.seed, std::string(pose_name) + "/z"));
+    DegradeDepthMap(
+        options.depth_noise, options.depth_holes, &depth_rng, &depth_model);
+
+    for (const double f_number : f_numbers) {
+      const std::string name =
+          multi_aperture ? std::string(pose_name) + "_f" + FNumberTag(f_number)
+                         : std::string(pose_name);
+      names[i].push_back(name);
+      dpsfm::DPLensData lens;
+      lens.focal_length_mm = options.focal_length_mm;
+      lens.f_number = f_number;
+      lens.pixel_pitch_um = pitch_mm * 1e3;
+      cv::Mat radius(render.depth.size(), CV_32FC1);
+      for (int r = 0; r < radius.rows; ++r) {
+        for (int c = 0; c < radius.cols; ++c) {
+          const float z = render.depth.at<float>(r, c);
+          const double b = dpsfm::SignedBlurDiameterMm(
+              lens, focus_m * 1e3, z > 0 ? z * 1e3 : 1e12);
+          radius.at<float>(r, c) = static_cast<float>(
+              dpsfm::BlurRadiusPxFromDiameterMm(b, pitch_mm));
+        }
       }
-    }
-    cv::Mat left, right;
-    dpsfm::DPRenderOptions render_options;
-    render_options.compositing =
-        options.compositing == "layers"
-            ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
-            : dpsfm::DPRenderOptions::Compositing::kAdditive;
-    dpsfm::RenderDPViews(
-        render.image, render.depth, radius, psf, render_options, &left, &right);
-    right *= options.right_gain;
-    for (cv::Mat* view : {&left, &right}) {
-      cv::Mat noise(view->size(), view->type());
-      cv::randn(noise, 0.0, options.noise);
-      *view += noise;
-      cv::max(*view, 0.0, *view);
-      cv::min(*view, 1.0, *view);
-    }
-    cv::imwrite((out / "dp/left" / (std::string(name) + ".png")).string(),
-                To16Bit(left));
-    cv::imwrite((out / "dp/right" / (std::string(name) + ".png")).string(),
-                To16Bit(right));
-    cv::Mat combined;
-    cv::Mat(left + right).convertTo(combined, CV_8U, 255.0);
-    const std::string image_name = std::string(name) + ".jpg";
-    cv::imwrite((out / "images" / image_name).string(), combined);
-    if (options.radial_k1 == 0) {
-      cv::imwrite((out / "dense/images" / image_name).string(), combined);
-    } else {
-      cv::Mat undistorted;
-      renders.back().image.convertTo(undistorted, CV_8U, 255.0);
-      cv::imwrite((out / "dense/images" / image_name).string(), undistorted);
-    }
+      cv::Mat left, right;
+      dpsfm::RenderDPViews(render.image,
+                           render.depth,
+                           radius,
+                           psf,
+                           render_options,
+                           &left,
+                           &right);
+      ApplyColumnGain(1.0, -options.gain_ramp, &left);
+      ApplyColumnGain(options.right_gain, options.gain_ramp, &right);
+      cv::RNG noise_rng(ImageSeed(options.seed, name));
+      // The ordinary image sums both halves at full resolution; the DP
+      // frames are binned down to their own size.
+      cv::Mat combined = left + right;
+      AddNoiseAndClamp(options.noise * std::sqrt(2.0), &noise_rng, &combined);
+      for (cv::Mat* view : {&left, &right}) {
+        if (options.dp_factor > 1) {
+          cv::resize(cv::Mat(*view), *view, dp_size, 0, 0, cv::INTER_AREA);
+        }
+        AddNoiseAndClamp(options.noise, &noise_rng, view);
+      }
+      cv::imwrite((out / "dp/left" / (name + ".png")).string(), To16Bit(left));
+      cv::imwrite((out / "dp/right" / (name + ".png")).string(),
+                  To16Bit(right));
+      cv::Mat combined_8bit;
+      combined.convertTo(combined_8bit, CV_8U, 255.0);
+      const std::string image_name = name + ".jpg";
+      cv::imwrite((out / "images" / image_name).string(), combined_8bit);
+      if (options.radial_k1 == 0) {
+        cv::imwrite((out / "dense/images" / image_name).string(),
+                    combined_8bit);
+      } else {
+        cv::Mat undistorted;
+        renders.back().image.convertTo(undistorted, CV_8U, 255.0);
+        cv::imwrite((out / "dense/images" / image_name).string(), undistorted);
+      }
+      const fs::path depth_dir = out / "dense/stereo/depth_maps";
+      for (const char* type : {".geometric.bin", ".photometric.bin"}) {
+        WriteDepthMap(depth_model, (depth_dir / (image_name + type)).string());
+      }
 
-    const cv::Mat depth_model = renders.back().depth / true_scale;
-    const fs::path depth_dir = out / "dense/stereo/depth_maps";
-    WriteDepthMap(depth_model,
-                  options.depth_map_factor,
-                  (depth_dir / (image_name + ".geometric.bin")).string());
-    WriteDepthMap(depth_model,
-                  options.depth_map_factor,
-                  (depth_dir / (image_name + ".photometric.bin")).string());
-
-    lens_csv << image_name << "," << options.focal_length_mm << ","
-             << options.f_number << "," << lens.pixel_pitch_um << "\n";
-    truth["views"][image_name]["focus_distance_m"] = focus_m;
-    const Eigen::Vector3d center = views[i].Center();
-    truth["views"][image_name]["center_m"] = {
-        center.x(), center.y(), center.z()};
+      lens_csv << image_name << "," << options.focal_length_mm << ","
+               << f_number << "," << lens.pixel_pitch_um << "\n";
+      nlohmann::json& entry = truth["views"][image_name];
+      entry["focus_distance_m"] = focus_m;
+      const Eigen::Vector3d center = views[i].Center();
+      entry["center_m"] = {center.x(), center.y(), center.z()};
+      entry["f_number"] = f_number;
+      entry["pose"] = i + 1;
+    }
   }
 
-  // Tracks: grid samples of every view, observed wherever they are visible.
-  std::vector<std::vector<colmap::Point2D>> points2D(options.num_views);
+  // Tracks: grid samples of every pose, observed wherever they are visible,
+  // in every image (aperture) of the poses that see them.
+  std::vector<std::vector<colmap::Point2D>> points2D(num_images);
   // The same observations in the original, distorted images (sparse/0).
-  std::vector<std::vector<Eigen::Vector2d>> distorted2D(options.num_views);
+  std::vector<std::vector<Eigen::Vector2d>> distorted2D(num_images);
   struct Track3D {
     Eigen::Vector3d xyz;
-    std::vector<std::pair<int, int>> observations;  // (view, point2D idx)
+    std::vector<std::pair<int, int>> observations;  // (image, point2D idx)
   };
   std::vector<Track3D> tracks;
   for (int i = 0; i < options.num_views; ++i) {
@@ -281,29 +513,39 @@ int Run(const GeneratorOptions& options) {
           }
           const float zj = renders[j].depth.at<float>(vi, ui);
           if (std::abs(zj - pc.z()) > 0.01 * pc.z()) continue;  // occluded
-          // COLMAP puts the top-left pixel centre at (0.5, 0.5).
-          colmap::Point2D point;
-          point.xy = Eigen::Vector2d(u + 0.5, v + 0.5);
-          track.observations.emplace_back(j, points2D[j].size());
-          points2D[j].push_back(point);
-          distorted2D[j].push_back(views[j].Project(pc) +
-                                   Eigen::Vector2d(0.5, 0.5));
+          for (int a = 0; a < num_apertures; ++a) {
+            const int image = j * num_apertures + a;
+            // COLMAP puts the top-left pixel centre at (0.5, 0.5).
+            colmap::Point2D point;
+            point.xy = Eigen::Vector2d(u + 0.5, v + 0.5);
+            track.observations.emplace_back(image, points2D[image].size());
+            points2D[image].push_back(point);
+            distorted2D[image].push_back(views[j].Project(pc) +
+                                         Eigen::Vector2d(0.5, 0.5));
+          }
         }
         if (track.observations.size() >= 2) tracks.push_back(track);
       }
     }
   }
+
+  colmap::Reconstruction reconstruction;
+  reconstruction.AddCamera(colmap::Camera::CreateFromModelName(
+      1, "PINHOLE", focal_px, options.width, options.height));
   for (int i = 0; i < options.num_views; ++i) {
-    colmap::Image image;
-    image.SetImageId(i + 1);
-    image.SetName(names[i] + ".jpg");
-    image.SetCameraId(1);
-    image.CamFromWorld() =
-        colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
-                        views[i].translation / true_scale);
-    image.SetPoints2D(points2D[i]);
-    reconstruction.AddImage(image);
-    reconstruction.RegisterImage(i + 1);
+    for (int a = 0; a < num_apertures; ++a) {
+      const int index = i * num_apertures + a;
+      colmap::Image image;
+      image.SetImageId(index + 1);
+      image.SetName(names[i][a] + ".jpg");
+      image.SetCameraId(1);
+      image.CamFromWorld() =
+          colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
+                          views[i].translation / true_scale);
+      image.SetPoints2D(points2D[index]);
+      reconstruction.AddImage(image);
+      reconstruction.RegisterImage(index + 1);
+    }
   }
   for (const Track3D& track : tracks) {
     colmap::Track colmap_track;
@@ -319,10 +561,10 @@ int Run(const GeneratorOptions& options) {
       1, "SIMPLE_RADIAL", focal_px, options.width, options.height);
   original.params[3] = options.radial_k1;
   reconstruction.Camera(1) = original;
-  for (int i = 0; i < options.num_views; ++i) {
-    colmap::Image& image = reconstruction.Image(i + 1);
-    for (size_t k = 0; k < distorted2D[i].size(); ++k) {
-      image.Point2D(k).xy = distorted2D[i][k];
+  for (int index = 0; index < num_images; ++index) {
+    colmap::Image& image = reconstruction.Image(index + 1);
+    for (size_t k = 0; k < distorted2D[index].size(); ++k) {
+      image.Point2D(k).xy = distorted2D[index][k];
     }
   }
   reconstruction.WriteBinary((out / "sparse/0").string());
@@ -331,53 +573,27 @@ int Run(const GeneratorOptions& options) {
     // images; no features are needed here).
     colmap::Database database((out / "database.db").string());
     database.WriteCamera(original, /*use_camera_id=*/true);
-    for (int i = 0; i < options.num_views; ++i) {
+    for (int index = 0; index < num_images; ++index) {
       colmap::Image image;
-      image.SetName(names[i] + ".jpg");
+      image.SetName(reconstruction.Image(index + 1).Name());
       image.SetCameraId(1);
       database.WriteImage(image);
     }
   }
-
-  // fused.ply: every 4th depth pixel of every view, in model units.
-  std::vector<colmap::PlyPoint> ply_points;
-  for (int i = 0; i < options.num_views; ++i) {
-    const Eigen::Matrix3d world_from_cam = views[i].rotation.transpose();
-    for (int r = 0; r < options.height; r += 4) {
-      for (int c = 0; c < options.width; c += 4) {
-        const float z = renders[i].depth.at<float>(r, c);
-        if (z <= 0) continue;
-        const Eigen::Vector3d cam(
-            (c - (options.width - 1) / 2.0) / focal_px * z,
-            (r - (options.height - 1) / 2.0) / focal_px * z,
-            z);
-        const Eigen::Vector3d xyz =
-            world_from_cam * (cam - views[i].translation) / true_scale;
-        const Eigen::Vector3d normal = -(world_from_cam * cam).normalized();
-        const cv::Vec3f bgr = renders[i].image.at<cv::Vec3f>(r, c);
-        colmap::PlyPoint point;
-        point.x = xyz.x();
-        point.y = xyz.y();
-        point.z = xyz.z();
-        point.nx = normal.x();
-        point.ny = normal.y();
-        point.nz = normal.z();
-        point.r = static_cast<uint8_t>(255 * bgr[2]);
-        point.g = static_cast<uint8_t>(255 * bgr[1]);
-        point.b = static_cast<uint8_t>(255 * bgr[0]);
-        ply_points.push_back(point);
-      }
-    }
-  }
-  colmap::WriteBinaryPlyPoints((out / "dense/fused.ply").string(),
-                               ply_points,
-                               /*write_normal=*/true,
-                               /*write_rgb=*/true);
+  WriteFusedPly(views, renders, true_scale, (out / "dense/fused.ply").string());
 
   std::ofstream((out / "ground_truth.json").string()) << truth.dump(2) << "\n";
-  std::cout << "Generated " << options.num_views << " views, " << tracks.size()
-            << " tracks, true scale " << true_scale << " m per model unit, in "
-            << options.output_path << std::endl;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  std::cout << "Generated " << options.scene << " scene, " << options.camera
+            << ": " << options.num_views << " poses x " << num_apertures
+            << " aperture(s), " << options.width << "x" << options.height
+            << " (DP " << dp_size.width << "x" << dp_size.height << "), "
+            << tracks.size() << " tracks, true scale " << true_scale
+            << " m per model unit, in " << options.output_path << " ("
+            << std::fixed << std::setprecision(1) << seconds << " s)"
+            << std::endl;
   return EXIT_SUCCESS;
 }
 
@@ -386,46 +602,60 @@ int Run(const GeneratorOptions& options) {
 int main(int argc, char** argv) {
   GeneratorOptions options;
   namespace po = boost::program_options;
-  po::options_description desc("dpsfm_make_example options");
-  desc.add_options()("help,h", "")("output_path",
-                                   po::value(&options.output_path)->required(),
-                                   "output folder")(
-      "seed",
-      po::value(&options.seed)->default_value(options.seed),
-      "random seed")(
-      "num_views",
-      po::value(&options.num_views)->default_value(options.num_views),
-      "")("width",
-          po::value(&options.width)->default_value(options.width),
-          "image width")(
-      "height",
-      po::value(&options.height)->default_value(options.height),
-      "image height")("focal_length_mm",
-                      po::value(&options.focal_length_mm)
-                          ->default_value(options.focal_length_mm),
-                      "")(
-      "f_number",
-      po::value(&options.f_number)->default_value(options.f_number),
-      "")("sensor_width_mm",
-          po::value(&options.sensor_width_mm)
-              ->default_value(options.sensor_width_mm),
-          "")("scale",
-              po::value(&options.scale)->default_value(options.scale),
-              "metres per model unit (0: random)")(
-      "noise",
-      po::value(&options.noise)->default_value(options.noise),
-      "noise sigma on [0,1]")("depth_map_factor",
-                              po::value(&options.depth_map_factor)
-                                  ->default_value(options.depth_map_factor),
-                              "")(
-      "right_gain",
-      po::value(&options.right_gain)->default_value(options.right_gain),
-      "")("radial_k1",
-          po::value(&options.radial_k1)->default_value(options.radial_k1),
-          "SIMPLE_RADIAL k1 of the original images")(
-      "compositing",
-      po::value(&options.compositing)->default_value(options.compositing),
-      "additive | layers");
+  po::options_description desc(
+      "dpsfm_make_example options (0: the camera's default)");
+  auto add = [&desc](const char* name, auto* value, const char* help) {
+    desc.add_options()(name, po::value(value)->default_value(*value), help);
+  };
+  desc.add_options()("help,h", "this help")(
+      "output_path",
+      po::value(&options.output_path)->required(),
+      "output folder");
+  add("seed", &options.seed, "random seed: everything is drawn from it");
+  add("num_views", &options.num_views, "tripod positions (poses)");
+  add("scene", &options.scene, "tabletop | facade | planes");
+  add("camera",
+      &options.camera,
+      "dslr (50 mm f/2.8, 36 mm sensor, 1200x800) | phone (4.38 mm f/1.73, 5.6 "
+      "mm sensor, 1600x1200, DP frames at half size)");
+  add("width", &options.width, "image width");
+  add("height", &options.height, "image height");
+  add("focal_length_mm", &options.focal_length_mm, "lens focal length");
+  add("f_number", &options.f_number, "aperture");
+  add("f_numbers",
+      &options.f_numbers,
+      "several apertures per pose, e.g. 2.8,5.6,11 (images <pose>_f<N>)");
+  add("sensor_width_mm",
+      &options.sensor_width_mm,
+      "sensor width (pixel pitch = width_mm / width)");
+  add("dp_factor",
+      &options.dp_factor,
+      "DP frames are this many times smaller than the images");
+  add("scene_scale",
+      &options.scene_scale,
+      "multiplies the scene's and the rig's lengths (dslr 1, phone 0.3)");
+  add("scale", &options.scale, "metres per model unit (0: random)");
+  add("noise", &options.noise, "noise sigma on [0,1] of each DP view");
+  add("depth_map_factor",
+      &options.depth_map_factor,
+      "depth maps are this many times smaller than the images");
+  add("depth_noise",
+      &options.depth_noise,
+      "relative sigma of the depth maps' error");
+  add("depth_holes",
+      &options.depth_holes,
+      "fraction of depth-map pixels missing (0), in blobs");
+  add("right_gain", &options.right_gain, "gain of the right DP view");
+  add("gain_ramp",
+      &options.gain_ramp,
+      "opposite horizontal gain ramps of the DP views (edge to edge)");
+  add("texture_contrast",
+      &options.texture_contrast,
+      "1: full texture, 0: flat surfaces");
+  add("radial_k1",
+      &options.radial_k1,
+      "SIMPLE_RADIAL k1 of the original images");
+  add("compositing", &options.compositing, "additive | layers");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -434,13 +664,22 @@ int main(int argc, char** argv) {
       return EXIT_SUCCESS;
     }
     po::notify(vm);
+    ApplyCameraDefaults(&options);
     if (options.num_views < 1 || options.width < 64 || options.height < 64 ||
-        options.depth_map_factor < 1 ||
+        options.depth_map_factor < 1 || options.dp_factor < 1 ||
+        options.dp_factor > 8 || options.focal_length_mm <= 0 ||
+        options.f_number <= 0 || options.sensor_width_mm <= 0 ||
+        options.scene_scale <= 0 || options.noise < 0 ||
+        options.depth_noise < 0 || options.depth_holes < 0 ||
+        options.depth_holes >= 1 || options.right_gain <= 0 ||
+        std::abs(options.gain_ramp) >= 2 || options.texture_contrast < 0 ||
         (options.compositing != "additive" &&
          options.compositing != "layers")) {
       throw std::invalid_argument(
           "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
-          "compositing additive or layers");
+          "dp_factor in 1..8, positive lens and scene numbers, noise >= 0, "
+          "depth_holes in [0, 1), right_gain > 0, |gain_ramp| < 2, "
+          "texture_contrast >= 0, compositing additive or layers");
     }
     return Run(options);
   } catch (const std::exception& error) {

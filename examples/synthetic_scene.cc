@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace dpsfm {
 namespace examples {
@@ -30,10 +31,10 @@ double ValueNoise(double x, double y, int seed) {
   return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy;
 }
 
-// Multi-scale texture on surface coordinates (u, v) in metres: octaves from
-// 5 cm down to about 1.5 mm with a 1/f-like amplitude falloff, like natural
-// surfaces; the finest octave stays above the pixel footprint at 0.5 m.
-double SurfaceTexture(double u, double v, int seed) {
+// Multi-scale value noise on surface coordinates (u, v) in texture units
+// (metres at texture_scale 1): octaves from 5 cm down to about 1.5 mm with
+// a 1/f-like amplitude falloff, like natural surfaces. In [0, 1].
+double MultiScaleNoise(double u, double v, int seed) {
   double value = 0, amplitude = 1, total = 0, frequency = 20.0;
   for (int octave = 0; octave < 6; ++octave) {
     value += amplitude *
@@ -42,7 +43,42 @@ double SurfaceTexture(double u, double v, int seed) {
     amplitude *= 0.75;
     frequency *= 2.0;
   }
-  return 0.15 + 0.8 * value / total;
+  return value / total;
+}
+
+// The texture of `material` at surface coordinates (u, v), in [0.15, 0.95]
+// for contrast 1; contrast c pulls it towards its mean 0.55 (c = 0: flat).
+double SurfaceTexture(
+    double u, double v, int seed, Material material, double contrast) {
+  double value = MultiScaleNoise(u, v, seed);
+  switch (material) {
+    case Material::kNoise:
+      break;
+    case Material::kBricks: {
+      // 21.5 x 6.5 cm bricks (with 1 cm joints), every other course offset
+      // by half a brick; each brick has its own tone.
+      const double course = std::floor(v / 0.075);
+      const double shifted = u / 0.225 + 0.5 * std::fmod(std::abs(course), 2);
+      const double column = std::floor(shifted);
+      const double in_u = (shifted - column) * 0.225;
+      const double in_v = v - course * 0.075;
+      if (in_u < 0.01 || in_v < 0.01) {
+        value = 0.75 + 0.2 * (value - 0.5);  // mortar
+      } else {
+        const double tone =
+            Hash(static_cast<int>(column), static_cast<int>(course), seed + 7);
+        value = 0.25 + 0.35 * tone + 0.6 * (value - 0.5);
+      }
+      break;
+    }
+    case Material::kGrain:
+      // Fibres along v: the noise stretched 8 times along v, over the
+      // isotropic noise.
+      value = 0.6 * MultiScaleNoise(u, v / 8.0, seed + 1) + 0.4 * value;
+      break;
+  }
+  value = std::min(std::max(0.15 + 0.8 * value, 0.0), 1.0);
+  return 0.55 + contrast * (value - 0.55);
 }
 
 // Ray/axis-aligned box intersection (slab method). Returns the entry
@@ -77,27 +113,255 @@ bool IntersectBox(const SceneBox& box,
   return true;
 }
 
+// Ray/rectangle intersection: distance along the ray and the point.
+bool IntersectQuad(const SceneQuad& quad,
+                   const Eigen::Vector3d& origin,
+                   const Eigen::Vector3d& direction,
+                   double* t_hit) {
+  const Eigen::Vector3d normal = quad.u_axis.cross(quad.v_axis);
+  const double denominator = normal.dot(direction);
+  if (std::abs(denominator) < 1e-12) return false;
+  const double t = normal.dot(quad.corner - origin) / denominator;
+  if (t <= 1e-9) return false;
+  const Eigen::Vector3d offset = origin + t * direction - quad.corner;
+  const double a = offset.dot(quad.u_axis);
+  const double b = offset.dot(quad.v_axis);
+  if (a < 0 || a > quad.u_size || b < 0 || b > quad.v_size) return false;
+  *t_hit = t;
+  return true;
+}
+
+// A pale random tint (each channel in [low, 1]).
+Eigen::Vector3d RandomTint(std::mt19937* rng, double low) {
+  std::uniform_real_distribution<double> channel(low, 1.0);
+  const double r = channel(*rng);
+  const double g = channel(*rng);
+  const double b = channel(*rng);
+  return Eigen::Vector3d(r, g, b);
+}
+
 }  // namespace
 
-TabletopScene TabletopScene::Random(std::mt19937* rng, int num_boxes) {
-  TabletopScene scene;
+void SyntheticScene::Scale(double factor) {
+  for (SceneQuad& quad : quads) {
+    quad.corner *= factor;
+    quad.u_size *= factor;
+    quad.v_size *= factor;
+  }
+  for (SceneBox& box : boxes) {
+    box.min_corner *= factor;
+    box.max_corner *= factor;
+  }
+  rig.target *= factor;
+  rig.min_distance *= factor;
+  rig.max_distance *= factor;
+  rig.min_height *= factor;
+  rig.max_height *= factor;
+  texture_scale *= factor;
+}
+
+SyntheticScene RandomTabletopScene(std::mt19937* rng, int num_boxes) {
+  SyntheticScene scene;
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  scene.wall_y = 0.45 + 0.2 * unit(*rng);
+  const double wall_y = 0.45 + 0.2 * unit(*rng);
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
+  // Floor z = 0 up to the back wall y = wall_y; both practically unbounded.
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, -50, 0),
+                                  x,
+                                  Eigen::Vector3d::UnitY(),
+                                  100,
+                                  50 + wall_y,
+                                  Eigen::Vector3d(0.9, 0.85, 0.75),
+                                  1,
+                                  Material::kNoise});
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, wall_y, 0),
+                                  x,
+                                  Eigen::Vector3d::UnitZ(),
+                                  100,
+                                  50,
+                                  Eigen::Vector3d(0.75, 0.8, 0.9),
+                                  2,
+                                  Material::kNoise});
   for (int i = 0; i < num_boxes; ++i) {
-    SceneBox box;
     const double sx = 0.06 + 0.12 * unit(*rng);
     const double sy = 0.06 + 0.12 * unit(*rng);
     const double sz = 0.05 + 0.25 * unit(*rng);
     const double cx = -0.35 + 0.7 * unit(*rng);
-    const double cy = -0.25 + (scene.wall_y + 0.1) * unit(*rng);
-    box.min_corner = Eigen::Vector3d(cx - sx / 2, cy - sy / 2, 0);
-    box.max_corner = Eigen::Vector3d(cx + sx / 2, cy + sy / 2, sz);
-    box.tint = Eigen::Vector3d(
-        0.6 + 0.4 * unit(*rng), 0.6 + 0.4 * unit(*rng), 0.6 + 0.4 * unit(*rng));
-    box.texture_seed = 100 + i;
-    scene.boxes.push_back(box);
+    const double cy = -0.25 + (wall_y + 0.1) * unit(*rng);
+    // Every other box is wood-like (grain), the others printed card.
+    scene.boxes.push_back(
+        SceneBox{Eigen::Vector3d(cx - sx / 2, cy - sy / 2, 0),
+                 Eigen::Vector3d(cx + sx / 2, cy + sy / 2, sz),
+                 RandomTint(rng, 0.6),
+                 100 + i,
+                 i % 2 == 0 ? Material::kNoise : Material::kGrain});
   }
+  scene.rig.target = Eigen::Vector3d(0.0, wall_y * 0.4, 0.08);
   return scene;
+}
+
+SyntheticScene RandomFacadeScene(std::mt19937* rng) {
+  SyntheticScene scene;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  // The wall's face is y = 0 (facing -y), 3 m high; openings recede to
+  // y = recess, where a dark back plane (glass, door leaf) closes them.
+  const double height = 3.0;
+  const double recess = 0.15 + 0.2 * unit(*rng);
+  const double pilaster = 0.2 + 0.1 * unit(*rng);
+  std::vector<double> bays;
+  for (int i = 0; i < 3; ++i) bays.push_back(0.55 + 0.25 * unit(*rng));
+  double width = 4 * pilaster;
+  for (const double bay : bays) width += bay;
+  const double left = -width / 2;
+
+  const Eigen::Vector3d wall_tint = RandomTint(rng, 0.75);
+  const Eigen::Vector3d stone_tint = RandomTint(rng, 0.8);
+  // Paving in front of the facade.
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, -50, 0),
+                                  x,
+                                  y,
+                                  100,
+                                  50 + recess,
+                                  Eigen::Vector3d(0.8, 0.8, 0.78),
+                                  1,
+                                  Material::kNoise});
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(left - 1, recess, 0),
+                                  x,
+                                  z,
+                                  width + 2,
+                                  height,
+                                  Eigen::Vector3d(0.45, 0.5, 0.55),
+                                  2,
+                                  Material::kGrain});
+  // Bays between pilasters: the middle one holds the door above the steps,
+  // the outer ones a window each.
+  const double step_height = 0.15;
+  const int num_steps = 3;
+  double bay_left = left + pilaster;
+  int seed = 10;
+  for (int i = 0; i < 3; ++i) {
+    const double bay_right = bay_left + bays[i];
+    const bool door = i == 1;
+    const double margin = door ? 0.08 : 0.1 + 0.05 * unit(*rng);
+    const double bottom =
+        door ? num_steps * step_height : 0.8 + 0.2 * unit(*rng);
+    const double top = door ? 2.1 : 1.8 + 0.2 * unit(*rng);
+    auto wall = [&](double x0, double x1, double z0, double z1) {
+      scene.boxes.push_back(SceneBox{Eigen::Vector3d(x0, 0, z0),
+                                     Eigen::Vector3d(x1, recess, z1),
+                                     wall_tint,
+                                     seed++,
+                                     Material::kBricks});
+    };
+    if (bottom > 0) wall(bay_left, bay_right, 0, bottom);
+    wall(bay_left, bay_right, top, height);
+    wall(bay_left, bay_left + margin, bottom, top);
+    wall(bay_right - margin, bay_right, bottom, top);
+    if (!door) {
+      // A stone sill under the window.
+      scene.boxes.push_back(SceneBox{
+          Eigen::Vector3d(bay_left + margin - 0.04, -0.06, bottom - 0.05),
+          Eigen::Vector3d(bay_right - margin + 0.04, 0.0, bottom),
+          stone_tint,
+          seed++,
+          Material::kNoise});
+    } else {
+      // Steps up to the door, each 30 cm deep.
+      for (int k = 0; k < num_steps; ++k) {
+        scene.boxes.push_back(SceneBox{
+            Eigen::Vector3d(
+                bay_left - 0.2, -0.3 * (num_steps - k), k * step_height),
+            Eigen::Vector3d(bay_right + 0.2, 0.0, (k + 1) * step_height),
+            stone_tint,
+            seed++,
+            Material::kNoise});
+      }
+    }
+    bay_left = bay_right + pilaster;
+  }
+  // Pilasters standing proud of the wall, and a cornice along the top.
+  for (int i = 0; i < 4; ++i) {
+    double x0 = left;
+    for (int k = 0; k < i; ++k) x0 += pilaster + bays[k];
+    scene.boxes.push_back(
+        SceneBox{Eigen::Vector3d(x0, -0.12, 0),
+                 Eigen::Vector3d(x0 + pilaster, recess, height),
+                 stone_tint,
+                 seed++,
+                 Material::kNoise});
+  }
+  scene.boxes.push_back(
+      SceneBox{Eigen::Vector3d(left - 0.1, -0.2, height - 0.3),
+               Eigen::Vector3d(-left + 0.1, 0.0, height - 0.12),
+               stone_tint,
+               seed++,
+               Material::kNoise});
+  // At eye level, 2 m or so from the door.
+  scene.rig =
+      CameraRig{Eigen::Vector3d(0.0, -0.2, 0.9), 0.4, 1.9, 2.4, 0.2, 0.5};
+  return scene;
+}
+
+SyntheticScene RandomPlanesScene(std::mt19937* rng, int num_planes) {
+  SyntheticScene scene;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  // A floor and a background wall 1.3 m behind the front of the planes.
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, -50, 0),
+                                  x,
+                                  Eigen::Vector3d::UnitY(),
+                                  100,
+                                  51.3,
+                                  Eigen::Vector3d(0.85, 0.85, 0.8),
+                                  1,
+                                  Material::kNoise});
+  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, 1.3, 0),
+                                  x,
+                                  z,
+                                  100,
+                                  50,
+                                  RandomTint(rng, 0.7),
+                                  2,
+                                  Material::kBricks});
+  const Material materials[] = {
+      Material::kNoise, Material::kGrain, Material::kBricks};
+  for (int i = 0; i < num_planes; ++i) {
+    const Eigen::Vector3d center(
+        -0.45 + 0.9 * unit(*rng), 0.9 * unit(*rng), 0.15 + 0.7 * unit(*rng));
+    const double u_size = 0.2 + 0.25 * unit(*rng);
+    const double v_size = 0.15 + 0.25 * unit(*rng);
+    const double yaw = -0.9 + 1.8 * unit(*rng);
+    const double pitch = -0.6 + 1.2 * unit(*rng);
+    const Eigen::Matrix3d rotation =
+        (Eigen::AngleAxisd(yaw, z) * Eigen::AngleAxisd(pitch, x))
+            .toRotationMatrix();
+    const Eigen::Vector3d u_axis = rotation * x;
+    const Eigen::Vector3d v_axis = rotation * z;
+    scene.quads.push_back(
+        SceneQuad{center - u_axis * u_size / 2 - v_axis * v_size / 2,
+                  u_axis,
+                  v_axis,
+                  u_size,
+                  v_size,
+                  RandomTint(rng, 0.55),
+                  10 + i,
+                  materials[i % 3]});
+  }
+  scene.rig =
+      CameraRig{Eigen::Vector3d(0.0, 0.45, 0.5), 0.35, 1.1, 1.35, 0.05, 0.3};
+  return scene;
+}
+
+SyntheticScene RandomScene(const std::string& type, std::mt19937* rng) {
+  if (type == "tabletop") return RandomTabletopScene(rng, 6);
+  if (type == "facade") return RandomFacadeScene(rng);
+  if (type == "planes") return RandomPlanesScene(rng, 7);
+  throw std::invalid_argument("unknown scene type '" + type +
+                              "' (tabletop, facade or planes)");
 }
 
 PinholeView PinholeView::LookAt(const Eigen::Vector3d& center,
@@ -142,31 +406,52 @@ Eigen::Vector2d PinholeView::Project(const Eigen::Vector3d& point_cam) const {
                          focal_px * yu * factor + (height - 1) / 2.0);
 }
 
-bool CastRay(const TabletopScene& scene,
+std::vector<PinholeView> PlaceViews(const CameraRig& rig,
+                                    int num_views,
+                                    int width,
+                                    int height,
+                                    double focal_px,
+                                    std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<PinholeView> views;
+  for (int i = 0; i < num_views; ++i) {
+    const double angle =
+        rig.arc_half_angle *
+        (2 * (num_views == 1 ? 0.5 : i / (num_views - 1.0)) - 1);
+    const double distance =
+        rig.min_distance + (rig.max_distance - rig.min_distance) * unit(*rng);
+    const double above =
+        rig.min_height + (rig.max_height - rig.min_height) * unit(*rng);
+    const Eigen::Vector3d center =
+        rig.target + Eigen::Vector3d(distance * std::sin(angle),
+                                     -distance * std::cos(angle),
+                                     above);
+    views.push_back(
+        PinholeView::LookAt(center, rig.target, width, height, focal_px));
+  }
+  return views;
+}
+
+bool CastRay(const SyntheticScene& scene,
              const Eigen::Vector3d& origin,
              const Eigen::Vector3d& direction,
              double* distance,
              Eigen::Vector3d* color) {
   double best = std::numeric_limits<double>::infinity();
   Eigen::Vector3d best_color = Eigen::Vector3d::Zero();
-  // Floor z = 0.
-  if (direction.z() < -1e-9) {
-    const double t = -origin.z() / direction.z();
-    const Eigen::Vector3d p = origin + t * direction;
-    if (t > 0 && t < best && p.y() < scene.wall_y) {
+  // Texture coordinates are the hit point's coordinates along the surface's
+  // two axes, in texture units.
+  const double to_texture = 1.0 / scene.texture_scale;
+  for (const SceneQuad& quad : scene.quads) {
+    double t;
+    if (IntersectQuad(quad, origin, direction, &t) && t < best) {
+      const Eigen::Vector3d p = origin + t * direction;
       best = t;
-      best_color =
-          Eigen::Vector3d(0.9, 0.85, 0.75) * SurfaceTexture(p.x(), p.y(), 1);
-    }
-  }
-  // Back wall y = wall_y.
-  if (direction.y() > 1e-9) {
-    const double t = (scene.wall_y - origin.y()) / direction.y();
-    const Eigen::Vector3d p = origin + t * direction;
-    if (t > 0 && t < best && p.z() >= 0) {
-      best = t;
-      best_color =
-          Eigen::Vector3d(0.75, 0.8, 0.9) * SurfaceTexture(p.x(), p.z(), 2);
+      best_color = quad.tint * SurfaceTexture(p.dot(quad.u_axis) * to_texture,
+                                              p.dot(quad.v_axis) * to_texture,
+                                              quad.texture_seed,
+                                              quad.material,
+                                              scene.texture_contrast);
     }
   }
   for (const SceneBox& box : scene.boxes) {
@@ -174,11 +459,17 @@ bool CastRay(const TabletopScene& scene,
     int axis;
     if (IntersectBox(box, origin, direction, &t, &axis) && t < best) {
       const Eigen::Vector3d p = origin + t * direction;
-      // Texture coordinates: the two axes spanning the face hit.
-      const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+      // Texture coordinates: the two axes spanning the face hit; on a
+      // vertical face the horizontal one then z (brick courses and grain
+      // run the way they do on real walls and boards).
+      const int a = axis == 2 ? 0 : 1 - axis;
+      const int b = axis == 2 ? 1 : 2;
       best = t;
-      best_color =
-          box.tint * SurfaceTexture(p[a], p[b], box.texture_seed * 3 + axis);
+      best_color = box.tint * SurfaceTexture(p[a] * to_texture,
+                                             p[b] * to_texture,
+                                             box.texture_seed * 3 + axis,
+                                             box.material,
+                                             scene.texture_contrast);
     }
   }
   if (!std::isfinite(best)) return false;
@@ -187,7 +478,7 @@ bool CastRay(const TabletopScene& scene,
   return true;
 }
 
-RenderedView RenderView(const TabletopScene& scene, const PinholeView& view) {
+RenderedView RenderView(const SyntheticScene& scene, const PinholeView& view) {
   RenderedView out;
   out.image = cv::Mat(view.height, view.width, CV_32FC3, cv::Scalar::all(0));
   out.depth = cv::Mat(view.height, view.width, CV_32FC1, cv::Scalar(0));
