@@ -1,5 +1,5 @@
 # The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench clean-cache
+.PHONY: example test build bench accuracy clean-cache
 
 example:
 	bash scripts/run_example.sh
@@ -12,6 +12,10 @@ build:
 
 bench:
 	bash scripts/run_bench.sh
+
+# Accuracy on generated scenes with known scale (tables; gates nothing).
+accuracy:
+	bash scripts/run_accuracy_bench.sh
 
 clean-cache:
 	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"

@@ -1,6 +1,8 @@
 // Prints an estimate next to the ground truth of a generated scene: the scale
 // ratio r_s = s_est / s_true (the paper's measure), the error |1 - r_s|, and
-// each view's focus distance error.
+// each view's focus distance error. With --tsv, one tab-separated line for
+// scripts: r_s of the linear and of the final estimate ("-" where the run
+// gave none), views used, and whether the intensity stage was adopted.
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -26,15 +28,21 @@ nlohmann::json ReadJson(const std::string& path) {
 
 int main(int argc, char** argv) {
   std::string truth_path, report_path, model_path;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  bool tsv = false;
+  for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if (flag == "--ground_truth") truth_path = argv[i + 1];
-    if (flag == "--report") report_path = argv[i + 1];
-    if (flag == "--model_path") model_path = argv[i + 1];
+    if (flag == "--tsv") {
+      tsv = true;
+    } else if (i + 1 < argc) {
+      if (flag == "--ground_truth") truth_path = argv[i + 1];
+      if (flag == "--report") report_path = argv[i + 1];
+      if (flag == "--model_path") model_path = argv[i + 1];
+      ++i;
+    }
   }
   if (truth_path.empty() || report_path.empty()) {
     std::cerr << "usage: dpsfm_compare_to_truth --ground_truth FILE --report "
-                 "FILE [--model_path RESCALED_MODEL]\n";
+                 "FILE [--model_path RESCALED_MODEL | --tsv]\n";
     return EXIT_FAILURE;
   }
   try {
@@ -83,6 +91,19 @@ int main(int argc, char** argv) {
       return EXIT_SUCCESS;
     }
     const double s_true = truth.at("scale").get<double>();
+    if (tsv) {
+      const auto ratio = [&](const char* key) {
+        return report.contains(key) && report[key].is_number()
+                   ? std::to_string(report[key].get<double>() / s_true)
+                   : std::string("-");
+      };
+      std::printf("%s\t%s\t%d\t%s\n",
+                  ratio("scale_initial").c_str(),
+                  ratio("scale").c_str(),
+                  report.value("num_views_used", 0),
+                  report.at("intensity").value("used", false) ? "yes" : "no");
+      return EXIT_SUCCESS;
+    }
     const double s_est = report.at("scale").get<double>();
     const double s_lin = report.at("scale_initial").get<double>();
     std::printf("\n%-28s %12s %12s %10s\n", "", "scale", "ratio r_s", "error");
