@@ -170,3 +170,81 @@ TEST(ConvolvePsf, IsTrueConvolution) {
 
 }  // namespace
 }  // namespace dpsfm
+
+namespace dpsfm {
+namespace {
+
+// Every split profile: half the energy per view, mirror symmetry, the
+// centroid sign of the convention, continuity in r.
+TEST(SplitProfilePsf, EnergySymmetryAndCentroidSign) {
+  const double exponents[] = {0.1, 0.5, 1.0, 3.0};
+  for (const double p : exponents) {
+    for (const double c : {0.0, 0.2}) {
+      for (const double e : {0.0, 0.15}) {
+        SplitProfileParams params;
+        params.split_exponent = p;
+        params.crosstalk = c;
+        params.rim_softness = e;
+        const SplitProfilePsf psf(params);
+        for (const double r : {-7.3, -2.0, 1.5, 6.0}) {
+          const DPKernels k = psf.Kernels(r);
+          EXPECT_NEAR(cv::sum(k.left)[0], 0.5, 1e-5) << psf.Name();
+          EXPECT_NEAR(cv::sum(k.right)[0], 0.5, 1e-5) << psf.Name();
+          cv::Mat mirrored;
+          cv::flip(k.left, mirrored, 1);
+          EXPECT_LT(cv::norm(mirrored, k.right, cv::NORM_INF), 1e-6);
+          const double dx =
+              KernelCentroid(k.left).x - KernelCentroid(k.right).x;
+          // Near (r < 0): left towards +x.
+          EXPECT_GT(r < 0 ? dx : -dx, 0.1 * std::abs(r)) << psf.Name();
+          EXPECT_EQ(k.left.rows, 2 * psf.KernelRadius(r) + 1);
+        }
+        // Continuity: a small step in r changes the kernels a little.
+        const DPKernels a = psf.Kernels(4.0), b = psf.Kernels(4.01);
+        if (a.left.size() == b.left.size()) {
+          EXPECT_LT(cv::norm(a.left, b.left, cv::NORM_L1), 0.01) << psf.Name();
+        }
+      }
+    }
+  }
+}
+
+// The sum of the views is the defocus disk whatever the split (notes,
+// section 5): the same for every split exponent and crosstalk.
+TEST(SplitProfilePsf, SumOfViewsDoesNotDependOnTheSplit) {
+  const SplitProfilePsf linear{SplitProfileParams()};
+  SplitProfileParams other;
+  other.split_exponent = 0.2;
+  other.crosstalk = 0.3;
+  const SplitProfilePsf sharp(other);
+  for (const double r : {-12.0, -3.2, 0.7, 5.5}) {
+    const DPKernels a = linear.Kernels(r), b = sharp.Kernels(r);
+    ASSERT_EQ(a.left.size(), b.left.size());
+    const cv::Mat sum_a = a.left + a.right, sum_b = b.left + b.right;
+    EXPECT_LT(cv::norm(sum_a, sum_b, cv::NORM_INF), 1e-6) << r;
+  }
+}
+
+// Centroid offsets (notes, section 5): sharper split -> larger offset
+// towards 4 / (3 pi) R; crosstalk c scales it by (1 - 2 c).
+TEST(SplitProfilePsf, CentroidOffsetsFollowTheParameters) {
+  SplitProfileParams params;
+  params.split_exponent = 0.05;
+  EXPECT_NEAR(CentroidOffsetPerRadius(SplitProfilePsf(params), 15),
+              4 / (3 * M_PI),
+              0.02);
+  params.split_exponent = 1;
+  // Linear split of a uniform disk: 8 / (9 pi) R (the translating disk,
+  // whose views sum to a disk weighted by chord length, has 3 pi / 32).
+  const double disk = CentroidOffsetPerRadius(SplitProfilePsf(params), 20);
+  EXPECT_NEAR(disk, 8 / (9 * M_PI), 0.005);
+  params.crosstalk = 0.1;
+  EXPECT_NEAR(
+      CentroidOffsetPerRadius(SplitProfilePsf(params), 10) / disk, 0.8, 1e-3);
+  params.crosstalk = 0;
+  params.split_exponent = 3;
+  EXPECT_LT(CentroidOffsetPerRadius(SplitProfilePsf(params), 20), 0.8 * disk);
+}
+
+}  // namespace
+}  // namespace dpsfm

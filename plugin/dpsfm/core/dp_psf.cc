@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <vector>
 
@@ -121,6 +122,137 @@ DPKernels TranslatingDiskPsf::Kernels(double signed_radius_px) const {
     kernels.right = towards_plus_x;
   }
   return kernels;
+}
+
+bool SplitProfileParams::Check() const {
+  return std::isfinite(split_exponent) && split_exponent >= 0.05 &&
+         split_exponent <= 8 && std::isfinite(crosstalk) && crosstalk >= 0 &&
+         crosstalk <= 0.45 && std::isfinite(rim_softness) &&
+         rim_softness >= 0 && rim_softness <= 0.5;
+}
+
+std::string SplitProfileParams::ToString() const {
+  std::ostringstream s;
+  s << std::setprecision(4) << "split_exponent=" << split_exponent
+    << ", crosstalk=" << crosstalk << ", rim_softness=" << rim_softness;
+  return s.str();
+}
+
+SplitProfilePsf::SplitProfilePsf(const SplitProfileParams& params,
+                                 int subsamples_per_pixel)
+    : params_(params), subsamples_per_pixel_(subsamples_per_pixel) {
+  DPSFM_CHECK(params.Check())
+      << "invalid split profile (" << params.ToString() << ")";
+  DPSFM_CHECK_GE(subsamples_per_pixel, 1)
+      << "subsamples_per_pixel must be positive";
+}
+
+std::string SplitProfilePsf::Name() const {
+  std::ostringstream name;
+  name << std::setprecision(6) << "split_profile(p=" << params_.split_exponent
+       << ",c=" << params_.crosstalk << ",e=" << params_.rim_softness
+       << ",subsamples=" << subsamples_per_pixel_ << ")";
+  return name.str();
+}
+
+int SplitProfilePsf::KernelRadius(double signed_radius_px) const {
+  DPSFM_CHECK(std::isfinite(signed_radius_px))
+      << "blur radius must be finite, got " << signed_radius_px;
+  const double radius = std::abs(signed_radius_px);
+  const int disk = std::max(0, static_cast<int>(std::ceil(radius + 0.5)) - 1);
+  // The rim's Gaussian reaches 3 sigma further.
+  return disk +
+         static_cast<int>(std::ceil(3.0 * params_.rim_softness * radius));
+}
+
+DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
+  const int half = KernelRadius(signed_radius_px);
+  const double radius = std::abs(signed_radius_px);
+  const int side = 2 * half + 1;
+  const double p = params_.split_exponent;
+  // Antiderivative of g(t) = sign(t) |t|^p.
+  auto g_integral = [p](double t) {
+    return std::pow(std::abs(t), p + 1) / (p + 1);
+  };
+  // Weight towards +x; the view leaning -x is its mirror image.
+  std::vector<double> plus(side * side, 0.0), minus(side * side, 0.0);
+  const double r2 = radius * radius;
+  const double dy = 1.0 / subsamples_per_pixel_;
+  for (int i = -half; i <= half; ++i) {
+    for (int s = 0; s < subsamples_per_pixel_; ++s) {
+      const double y = i - 0.5 + (s + 0.5) * dy;
+      if (y * y >= r2) continue;
+      const double a = std::sqrt(r2 - y * y);  // half chord
+      const int j_begin =
+          std::max(-half, static_cast<int>(std::floor(-a + 0.5)));
+      const int j_end = std::min(half, static_cast<int>(std::ceil(a - 0.5)));
+      for (int j = j_begin; j <= j_end; ++j) {
+        const double lo = std::max(j - 0.5, -a);
+        const double hi = std::min(j + 0.5, a);
+        if (hi <= lo) continue;
+        // Exact along x: (hi - lo) / 2 +- (a / 2) (G(hi / a) - G(lo / a)).
+        const double base = 0.5 * (hi - lo) * dy;
+        const double split =
+            0.5 * a * (g_integral(hi / a) - g_integral(lo / a)) * dy;
+        plus[(i + half) * side + j + half] += base + split;
+        minus[(i + half) * side + j + half] += base - split;
+      }
+    }
+  }
+  cv::Mat towards_plus_x(side, side, CV_32FC1);
+  cv::Mat towards_minus_x(side, side, CV_32FC1);
+  double total = 0;
+  for (int k = 0; k < side * side; ++k) total += plus[k] + minus[k];
+  if (!(total > 0)) {
+    // A vanishing disk: the limit is a delta in each view.
+    towards_plus_x.setTo(0);
+    towards_plus_x.at<float>(half, half) = 0.5f;
+    towards_plus_x.copyTo(towards_minus_x);
+  } else {
+    const double c = params_.crosstalk;
+    for (int k = 0; k < side * side; ++k) {
+      towards_plus_x.at<float>(k / side, k % side) =
+          static_cast<float>(((1 - c) * plus[k] + c * minus[k]) / total);
+      towards_minus_x.at<float>(k / side, k % side) =
+          static_cast<float>(((1 - c) * minus[k] + c * plus[k]) / total);
+    }
+  }
+  const double sigma = params_.rim_softness * radius;
+  if (sigma > 0.05) {
+    cv::GaussianBlur(towards_plus_x,
+                     towards_plus_x,
+                     cv::Size(side, side),
+                     sigma,
+                     sigma,
+                     cv::BORDER_CONSTANT);
+    cv::GaussianBlur(towards_minus_x,
+                     towards_minus_x,
+                     cv::Size(side, side),
+                     sigma,
+                     sigma,
+                     cv::BORDER_CONSTANT);
+    // Keep half the energy each (the Gaussian's truncated tails).
+    towards_plus_x *= 0.5 / cv::sum(towards_plus_x)[0];
+    towards_minus_x *= 0.5 / cv::sum(towards_minus_x)[0];
+  }
+  DPKernels kernels;
+  // Near (r < 0): the view leaning +x is the left one (cli contract).
+  if (signed_radius_px < 0) {
+    kernels.left = towards_plus_x;
+    kernels.right = towards_minus_x;
+  } else {
+    kernels.left = towards_minus_x;
+    kernels.right = towards_plus_x;
+  }
+  return kernels;
+}
+
+double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px) {
+  DPSFM_CHECK(radius_px > 0 && std::isfinite(radius_px))
+      << "radius must be positive, got " << radius_px;
+  const DPKernels k = psf.Kernels(radius_px);
+  return (KernelCentroid(k.right).x - KernelCentroid(k.left).x) /
+         (2 * radius_px);
 }
 
 cv::Mat ConvolvePsf(const cv::Mat& image, const cv::Mat& psf) {

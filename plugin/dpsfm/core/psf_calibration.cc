@@ -1,0 +1,373 @@
+#include "dpsfm/core/psf_calibration.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "dpsfm/core/check.h"
+
+namespace dpsfm {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Per-patch outcome of the blur search under one profile.
+struct Evaluation {
+  std::vector<double> radius;    // NaN where the search gave no estimate
+  std::vector<double> residual;  // relative residual; 1 where none
+};
+
+double Percentile(std::vector<double> values, double q) {
+  std::sort(values.begin(), values.end());
+  const double pos = q * (values.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (pos - lo) * (values[hi] - values[lo]);
+}
+
+// Self-calibration criterion: mean residual of the patches (with
+// multiplicities `weight`) after trimming the largest `trim` share.
+double TrimmedMean(const std::vector<double>& residual,
+                   const std::vector<int>& members,
+                   double trim) {
+  std::vector<double> v;
+  v.reserve(members.size());
+  for (int i : members) v.push_back(residual[i]);
+  std::sort(v.begin(), v.end());
+  const size_t keep = std::max<size_t>(
+      1, static_cast<size_t>(std::ceil((1 - trim) * v.size())));
+  return std::accumulate(v.begin(), v.begin() + keep, 0.0) / keep;
+}
+
+// Calibration criterion: median of r / r_known - 1 (signed; radii grow as
+// the split softens, so it rises with the exponent).
+double MedianRadiusError(const std::vector<double>& radius,
+                         const std::vector<double>& known,
+                         const std::vector<int>& members) {
+  std::vector<double> v;
+  for (int i : members) {
+    v.push_back(std::isfinite(radius[i]) ? radius[i] / known[i] - 1 : 1.0);
+  }
+  return Percentile(v, 0.5);
+}
+
+// Vertex (in x) of the parabola through the minimum of ys and its two
+// neighbours; the node itself at the ends or when not convex.
+double ParabolicMinimum(const std::vector<double>& xs,
+                        const std::vector<double>& ys,
+                        size_t* index) {
+  const size_t k = std::min_element(ys.begin(), ys.end()) - ys.begin();
+  *index = k;
+  if (k == 0 || k + 1 >= xs.size()) return xs[k];
+  const double x0 = xs[k - 1], x1 = xs[k], x2 = xs[k + 1];
+  const double y0 = ys[k - 1], y1 = ys[k], y2 = ys[k + 1];
+  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
+  if (denom == 0) return x1;
+  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
+  const double b =
+      (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
+  if (!(a > 0)) return x1;
+  return std::max(x0, std::min(x2, -b / (2 * a)));
+}
+
+// Where an increasing-ish curve crosses 0, by linear interpolation between
+// the bracketing nodes; NaN if it does not.
+double ZeroCrossing(const std::vector<double>& xs,
+                    const std::vector<double>& ys) {
+  for (size_t k = 0; k + 1 < xs.size(); ++k) {
+    if (ys[k] <= 0 && ys[k + 1] >= 0) {
+      if (ys[k + 1] == ys[k]) return 0.5 * (xs[k] + xs[k + 1]);
+      return xs[k] - ys[k] * (xs[k + 1] - xs[k]) / (ys[k + 1] - ys[k]);
+    }
+  }
+  return kNaN;
+}
+
+}  // namespace
+
+bool SplitProfileFitOptions::Check() const {
+  DPSFM_CHECK(min_exponent >= 0.05 && max_exponent <= 8 &&
+              min_exponent < max_exponent)
+      << "split exponent range must lie in [0.05, 8]";
+  DPSFM_CHECK_GE(num_grid, 5);
+  DPSFM_CHECK_GE(num_refine, 0);
+  DPSFM_CHECK_GE(min_abs_radius_px, 0);
+  DPSFM_CHECK(trim_fraction >= 0 && trim_fraction < 1);
+  DPSFM_CHECK_GE(min_patches, 3);
+  DPSFM_CHECK_GE(num_bootstrap, 0);
+  DPSFM_CHECK_GT(max_relative_uncertainty, 0);
+  DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
+  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  return true;
+}
+
+SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
+                                const SplitProfileFitOptions& options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  SplitProfileFit fit;
+  fit.translating_disk_centroid_offset =
+      CentroidOffsetPerRadius(TranslatingDiskPsf(), 8);
+  fit.params.split_exponent = 1;
+  fit.centroid_offset = fit.translating_disk_centroid_offset;
+  auto finish = [&]() {
+    fit.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+            .count();
+    return fit;
+  };
+  if (patches.empty()) {
+    fit.reason = "no patches";
+    return finish();
+  }
+  const cv::Size size = patches[0].left.size();
+  int num_known = 0;
+  for (const ProfilePatch& p : patches) {
+    DPSFM_CHECK(p.left.type() == CV_32FC1 && p.right.type() == CV_32FC1 &&
+                p.left.size() == size && p.right.size() == size)
+        << "profile patches must be CV_32FC1 crops of one size";
+    num_known += std::isfinite(p.known_radius_px) ? 1 : 0;
+  }
+  DPSFM_CHECK(num_known == 0 || num_known == static_cast<int>(patches.size()))
+      << "either every patch has a known radius or none";
+  const bool known = num_known > 0;
+  fit.self_calibrated = !known;
+  const int n = static_cast<int>(patches.size());
+#ifdef _OPENMP
+  const int threads =
+      options.num_threads > 0 ? options.num_threads : omp_get_max_threads();
+#endif
+
+  std::map<double, Evaluation> evaluations;  // by log exponent
+  auto evaluate = [&](double log_p) -> const Evaluation& {
+    auto it = evaluations.find(log_p);
+    if (it != evaluations.end()) return it->second;
+    SplitProfileParams params;
+    params.split_exponent = std::exp(log_p);
+    const SplitProfilePsf psf(params);
+    const PatchBlurEstimator estimator(psf, options.blur, size);
+    Evaluation e;
+    e.radius.assign(n, kNaN);
+    e.residual.assign(n, 1.0);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+    for (int i = 0; i < n; ++i) {
+      try {
+        const PatchBlurEstimate b =
+            estimator.Estimate(patches[i].left, patches[i].right);
+        if (b.valid && !b.at_bound && std::isfinite(b.relative_residual)) {
+          e.radius[i] = b.radius_px;
+          e.residual[i] = b.relative_residual;
+        }
+      } catch (const std::exception&) {
+        // No estimate: counts as unexplained.
+      }
+    }
+    return evaluations.emplace(log_p, std::move(e)).first->second;
+  };
+
+  // Patches with enough blur for the shape to matter.
+  std::vector<int> usable;
+  std::vector<double> known_radius(n, kNaN);
+  {
+    const Evaluation& disk = evaluate(0.0);  // p = 1: the translating disk
+    for (int i = 0; i < n; ++i) {
+      known_radius[i] = patches[i].known_radius_px;
+      const double r = known ? known_radius[i] : disk.radius[i];
+      if (std::isfinite(r) && std::abs(r) >= options.min_abs_radius_px &&
+          std::isfinite(disk.radius[i])) {
+        usable.push_back(i);
+      }
+    }
+  }
+  fit.num_patches = static_cast<int>(usable.size());
+  if (fit.num_patches < options.min_patches) {
+    std::ostringstream s;
+    s << "only " << fit.num_patches << " of " << n
+      << " patches have a usable blur of at least " << options.min_abs_radius_px
+      << " px (need " << options.min_patches
+      << "); the profile's shape cannot be seen in smaller blur";
+    fit.reason = s.str();
+    return finish();
+  }
+
+  auto criterion = [&](const Evaluation& e, const std::vector<int>& members) {
+    return known ? MedianRadiusError(e.radius, known_radius, members)
+                 : TrimmedMean(e.residual, members, options.trim_fraction);
+  };
+  auto curve = [&](const std::vector<int>& members,
+                   std::vector<double>* xs,
+                   std::vector<double>* ys) {
+    xs->clear();
+    ys->clear();
+    for (const auto& entry : evaluations) {
+      xs->push_back(entry.first);
+      ys->push_back(criterion(entry.second, members));
+    }
+  };
+  // The fitted log exponent of a curve; NaN when it leaves the range.
+  auto solve = [&](const std::vector<double>& xs,
+                   const std::vector<double>& ys,
+                   bool* at_edge) {
+    if (known) {
+      const double x = ZeroCrossing(xs, ys);
+      *at_edge = !std::isfinite(x);
+      return x;
+    }
+    size_t k = 0;
+    const double x = ParabolicMinimum(xs, ys, &k);
+    *at_edge = k == 0 || k + 1 == xs.size();
+    return x;
+  };
+
+  // Coarse grid, then a finer one around its solution.
+  const double lo = std::log(options.min_exponent);
+  const double hi = std::log(options.max_exponent);
+  std::vector<double> grid;
+  for (int k = 0; k < options.num_grid; ++k) {
+    grid.push_back(lo + (hi - lo) * k / (options.num_grid - 1));
+  }
+  for (const double x : grid) evaluate(x);
+  std::vector<double> xs, ys;
+  curve(usable, &xs, &ys);
+  bool at_edge = false;
+  double best = solve(xs, ys, &at_edge);
+  if (!at_edge && options.num_refine > 0) {
+    const double step = (hi - lo) / (options.num_grid - 1);
+    const double a = std::max(lo, best - step), b = std::min(hi, best + step);
+    for (int k = 1; k <= options.num_refine; ++k) {
+      evaluate(a + (b - a) * k / (options.num_refine + 1));
+    }
+    curve(usable, &xs, &ys);
+    best = solve(xs, ys, &at_edge);
+  }
+  fit.exponents.clear();
+  for (const double x : xs) fit.exponents.push_back(std::exp(x));
+  fit.criterion = ys;
+  if (at_edge || !std::isfinite(best)) {
+    std::ostringstream s;
+    if (known) {
+      s << "no split exponent in [" << options.min_exponent << ", "
+        << options.max_exponent
+        << "] makes the recovered radii agree with the known ones (median "
+           "error from "
+        << ys.front() << " to " << ys.back() << ")";
+    } else {
+      s << "the residual is lowest at the edge of the split exponents tried ("
+        << std::exp(xs[std::min_element(ys.begin(), ys.end()) - ys.begin()])
+        << " in [" << options.min_exponent << ", " << options.max_exponent
+        << "])";
+    }
+    fit.reason = s.str();
+    return finish();
+  }
+
+  // Bootstrap over the usable patches.
+  std::vector<double> samples;
+  if (options.num_bootstrap > 0) {
+    std::mt19937_64 rng(options.seed);
+    std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
+    std::vector<int> members(usable.size());
+    std::vector<double> bx, by;
+    for (int b = 0; b < options.num_bootstrap; ++b) {
+      for (int& m : members) m = usable[pick(rng)];
+      curve(members, &bx, &by);
+      bool edge = false;
+      const double x = solve(bx, by, &edge);
+      samples.push_back(std::isfinite(x) ? x : (by.front() < 0 ? hi : lo));
+    }
+  } else {
+    samples.push_back(best);
+  }
+  fit.params.split_exponent = std::exp(best);
+  fit.exponent_ci_low = std::exp(std::min(best, Percentile(samples, 0.025)));
+  fit.exponent_ci_high = std::exp(std::max(best, Percentile(samples, 0.975)));
+  auto centroid = [](double p) {
+    SplitProfileParams params;
+    params.split_exponent = p;
+    return CentroidOffsetPerRadius(SplitProfilePsf(params), 8);
+  };
+  fit.centroid_offset = centroid(fit.params.split_exponent);
+  // The centroid offset falls as the exponent grows.
+  fit.centroid_offset_ci_low = centroid(fit.exponent_ci_high);
+  fit.centroid_offset_ci_high = centroid(fit.exponent_ci_low);
+
+  const Evaluation& at_fit = evaluate(best);
+  if (!known) {
+    // The paper's translating disk against the best split profile.
+    const TranslatingDiskPsf disk;
+    const PatchBlurEstimator estimator(disk, options.blur, size);
+    std::vector<double> residual(n, 1.0);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+    for (int k = 0; k < static_cast<int>(usable.size()); ++k) {
+      const int i = usable[k];
+      try {
+        const PatchBlurEstimate b =
+            estimator.Estimate(patches[i].left, patches[i].right);
+        if (b.valid && !b.at_bound && std::isfinite(b.relative_residual)) {
+          residual[i] = b.relative_residual;
+        }
+      } catch (const std::exception&) {
+        // No estimate: counts as unexplained.
+      }
+    }
+    fit.translating_disk_criterion =
+        TrimmedMean(residual, usable, options.trim_fraction);
+    fit.translating_disk =
+        fit.translating_disk_criterion <= criterion(at_fit, usable);
+  }
+  std::vector<double> residuals;
+  for (int i : usable) residuals.push_back(at_fit.residual[i]);
+  fit.mean_relative_residual =
+      std::accumulate(residuals.begin(), residuals.end(), 0.0) /
+      residuals.size();
+  if (known) {
+    std::vector<double> errors;
+    for (int i : usable) {
+      errors.push_back(std::isfinite(at_fit.radius[i])
+                           ? std::abs(at_fit.radius[i] / known_radius[i] - 1)
+                           : 1.0);
+    }
+    fit.median_radius_error = Percentile(errors, 0.5);
+  }
+  const double worst_side =
+      std::max(fit.centroid_offset - fit.centroid_offset_ci_low,
+               fit.centroid_offset_ci_high - fit.centroid_offset) /
+      fit.centroid_offset;
+  std::ostringstream s;
+  s << "split exponent " << fit.params.split_exponent << " (95 % interval "
+    << fit.exponent_ci_low << " - " << fit.exponent_ci_high
+    << "), centroid offset " << fit.centroid_offset << " R (translating disk "
+    << fit.translating_disk_centroid_offset << " R) from " << fit.num_patches
+    << " patches";
+  if (worst_side > options.max_relative_uncertainty) {
+    s << ": not determined (the centroid offset is uncertain by "
+      << std::lround(100 * worst_side) << " %, limit "
+      << std::lround(100 * options.max_relative_uncertainty) << " %)";
+    fit.reason = s.str();
+    return finish();
+  }
+  fit.determined = true;
+  if (fit.translating_disk) {
+    s << "; the translating disk fits at least as well (residual "
+      << fit.translating_disk_criterion << " vs " << criterion(at_fit, usable)
+      << ") and is kept";
+    fit.params = SplitProfileParams();
+    fit.centroid_offset = fit.translating_disk_centroid_offset;
+  }
+  fit.reason = s.str();
+  return finish();
+}
+
+}  // namespace dpsfm
