@@ -170,6 +170,8 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK(min_intensity_bootstrap_support >= 0 &&
               min_intensity_bootstrap_support <= 1);
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  DPSFM_CHECK_GE(max_psf_fit_patches, 1);
+  if (psf_self_calibration) psf_fit.Check();
   blur.Check();
   linear.Check();
   intensity.Check();
@@ -586,6 +588,118 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   return summary;
 }
 
+void DPScaleEstimator::CalibrateProfile(
+    std::vector<std::vector<PatchSample>>* samples,
+    std::shared_ptr<const DPPsfModel>* psf,
+    DPScaleResult* result) const {
+  // Stored crops by geometry (crop size, radius bound): FitSplitProfile
+  // takes one geometry; the largest group feeds it.
+  struct Ref {
+    int view, stored;
+  };
+  std::map<std::pair<int, double>, std::vector<Ref>> groups;
+  for (int i = 0; i < static_cast<int>(views_.size()); ++i) {
+    const ViewData& v = *views_[i];
+    for (int k = 0; k < static_cast<int>(v.stored.size()); ++k) {
+      groups[{v.stored[k].left.cols, v.summary.max_radius_px}].push_back(
+          {i, k});
+    }
+  }
+  auto gray_of = [](const cv::Mat& crop) {
+    cv::Mat f;
+    crop.convertTo(f, CV_MAKETYPE(CV_32F, crop.channels()), 1.0 / 65535.0);
+    return Luma(f);
+  };
+  const std::vector<Ref>* largest = nullptr;
+  double bound = 0;
+  for (const auto& g : groups) {
+    if (largest == nullptr || g.second.size() > largest->size()) {
+      largest = &g.second;
+      bound = g.first.second;
+    }
+  }
+  SplitProfileFitOptions fit_options = options_.psf_fit;
+  fit_options.blur = options_.blur;
+  fit_options.blur.max_radius_px = bound;
+  fit_options.num_threads = options_.num_threads;
+  fit_options.seed = options_.seed;
+  std::vector<ProfilePatch> patches;
+  if (largest != nullptr) {
+    const size_t step =
+        std::max<size_t>(1,
+                         (largest->size() + options_.max_psf_fit_patches - 1) /
+                             options_.max_psf_fit_patches);
+    for (size_t k = 0; k < largest->size(); k += step) {
+      const ViewData::Stored& st =
+          views_[(*largest)[k].view]->stored[(*largest)[k].stored];
+      patches.push_back({gray_of(st.left), gray_of(st.right)});
+    }
+  }
+  try {
+    result->psf_fit = FitSplitProfile(patches, fit_options);
+  } catch (const std::exception& e) {
+    result->psf_fit = SplitProfileFit();
+    result->psf_fit.reason = e.what();
+  }
+  const SplitProfileFit& fit = result->psf_fit;
+  std::ostringstream status;
+  if (!fit.determined) {
+    status << "self-calibration could not determine the DP profile ("
+           << fit.reason << "); " << psf_->Name() << " kept";
+    result->psf_status = status.str();
+    return;
+  }
+  if (fit.translating_disk) {
+    status << "self-calibration kept the translating disk (" << fit.reason
+           << ")";
+    result->psf_status = status.str();
+    return;
+  }
+  auto fitted = std::make_shared<const SplitProfilePsf>(fit.params);
+  // Every stored patch searched again with the fitted profile; the others
+  // (estimated with the old one) leave the selection.
+  for (auto& view_samples : *samples) {
+    for (PatchSample& s : view_samples) s.selected = false;
+  }
+  int reestimated = 0;
+  for (const auto& g : groups) {
+    BlurEstimationOptions blur = options_.blur;
+    blur.max_radius_px = g.first.second;
+    const PatchBlurEstimator estimator(
+        *fitted, blur, cv::Size(g.first.first, g.first.first));
+    const std::vector<Ref>& refs = g.second;
+#ifdef _OPENMP
+    const int threads =
+        options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+#pragma omp parallel for num_threads(threads) schedule(dynamic) \
+    reduction(+ : reestimated)
+#endif
+    for (int k = 0; k < static_cast<int>(refs.size()); ++k) {
+      const ViewData& v = *views_[refs[k].view];
+      const ViewData::Stored& st = v.stored[refs[k].stored];
+      PatchSample& s = (*samples)[refs[k].view][st.sample];
+      try {
+        const PatchBlurEstimate e =
+            estimator.Estimate(gray_of(st.left), gray_of(st.right));
+        if (e.valid && !e.at_bound && std::isfinite(e.radius_px)) {
+          s.radius_px = e.radius_px;
+          s.radius_frame_px = e.radius_px / v.summary.resize_factor;
+          s.fit_quality = e.fit_quality;
+          s.selected = true;
+          ++reestimated;
+        }
+      } catch (const std::exception&) {
+        // Left out of the selection.
+      }
+    }
+  }
+  status << "self-calibrated DP profile: " << fit.reason << "; " << reestimated
+         << " stored patches re-estimated with it";
+  result->psf_status = status.str();
+  result->psf_self_calibrated = true;
+  *psf = fitted;
+}
+
 DPScaleResult DPScaleEstimator::Estimate() const {
   DPScaleResult result;
   const int num_views = static_cast<int>(views_.size());
@@ -595,16 +709,32 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     return result;
   }
 
+  // The patches as the stages see them, and the PSF they use:
+  // self-calibration may replace both.
+  std::vector<std::vector<PatchSample>> samples(num_views);
+  for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
+  std::shared_ptr<const DPPsfModel> psf = psf_;
+  if (options_.psf_self_calibration) {
+    const auto fit_start = std::chrono::steady_clock::now();
+    CalibrateProfile(&samples, &psf, &result);
+    result.seconds_psf_fit = SecondsSince(fit_start);
+  }
+  result.psf_model = psf->Name();
+
   // --- Linear stage. ---
   auto start = std::chrono::steady_clock::now();
   std::vector<LinearViewData> linear_views(num_views);
+  std::vector<int> selected_count(num_views, 0);
   for (int i = 0; i < num_views; ++i) {
     const ViewData& v = *views_[i];
     linear_views[i].name = v.summary.name;
     linear_views[i].lens = v.lens;
     linear_views[i].pixel_pitch_mm = v.working_pitch_mm;
-    for (const PatchSample& s : v.samples) {
-      if (s.selected) linear_views[i].samples.push_back({s.depth, s.radius_px});
+    for (const PatchSample& s : samples[i]) {
+      if (s.selected) {
+        linear_views[i].samples.push_back({s.depth, s.radius_px});
+        ++selected_count[i];
+      }
     }
   }
   LinearEstimatorOptions linear_options = options_.linear;
@@ -644,9 +774,9 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     out.patches_tried = v.summary.patches_tried;
     out.patches_searched = v.summary.patches_searched;
     out.patches_valid = v.summary.patches_valid;
-    out.patches_selected = v.summary.patches_kept;
+    out.patches_selected = selected_count[i];
     out.focus_distance_m = kNaN;
-    for (const PatchSample& s : v.samples) {
+    for (const PatchSample& s : samples[i]) {
       PatchSample copy = s;
       copy.used = s.selected && lv.used;
       result.patches.push_back(copy);
@@ -745,7 +875,8 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       for (const ViewData::Stored& st : v.stored) {
         IntensityPatch ip;
         ip.view = index;
-        ip.depth = v.samples[st.sample].depth;
+        if (!samples[i][st.sample].selected) continue;
+        ip.depth = samples[i][st.sample].depth;
         ip.left = st.left;
         ip.right = st.right;
         ip.border = st.border;
@@ -765,7 +896,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     IntensitySearchResult intensity;
     try {
       intensity =
-          SearchScaleByIntensity(iviews, ipatches, linear.scale, *psf_, search);
+          SearchScaleByIntensity(iviews, ipatches, linear.scale, *psf, search);
     } catch (const std::exception& e) {
       intensity.success = false;
       intensity.failure_reason = e.what();

@@ -18,6 +18,7 @@
 #include "dpsfm/core/intensity_search.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/linear_estimator.h"
+#include "dpsfm/core/psf_calibration.h"
 
 namespace dpsfm {
 
@@ -140,6 +141,17 @@ struct DPScaleOptions {
   // when the patches agree with each other better than with the world.
   double scale_systematic_uncertainty = 0.01;
 
+  // DP PSF self-calibration (the `auto` profile, issue 7): before the
+  // linear stage, fit the split profile to the stored patches of all views
+  // (FitSplitProfile). When the data determine a profile other than the
+  // translating disk, the stored patches' blur is searched again with it and
+  // both stages use those patches and that profile; otherwise the given PSF
+  // is kept and the result says why.
+  bool psf_self_calibration = false;
+  SplitProfileFitOptions psf_fit;
+  // At most this many patches feed the fit (evenly over the views).
+  int max_psf_fit_patches = 400;
+
   // OpenMP threads for blur estimation and the intensity search; -1 = all.
   int num_threads = -1;
   uint64_t seed = 42;
@@ -224,6 +236,13 @@ struct DPScaleResult {
   int num_views_used = 0;
   double linear_median_abs_residual_px = 0;
   double seconds_blur = 0, seconds_linear = 0, seconds_intensity = 0;
+  // The DP PSF the stages used (DPPsfModel::Name()), and what
+  // self-calibration did ("" when it was off).
+  std::string psf_model;
+  std::string psf_status;
+  bool psf_self_calibrated = false;  // a fitted profile replaced the given one
+  SplitProfileFit psf_fit;
+  double seconds_psf_fit = 0;
 };
 
 class DPScaleEstimator {
@@ -249,6 +268,12 @@ class DPScaleEstimator {
 
  private:
   struct ViewData;
+  // Self-calibration: fits the split profile to the stored patches and, if
+  // it replaces the given PSF, re-estimates them (samples[i] of view i; only
+  // the stored ones stay selected) and sets *psf.
+  void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
+                        std::shared_ptr<const DPPsfModel>* psf,
+                        DPScaleResult* result) const;
   DPScaleOptions options_;
   std::shared_ptr<const DPPsfModel> psf_;
   std::vector<std::unique_ptr<ViewData>> views_;
