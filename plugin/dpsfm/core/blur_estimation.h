@@ -180,6 +180,30 @@ double HorizontalTexture(const cv::Mat& gray_patch);
 // the patch without its outer pixel ring. Texture inflates it.
 double EstimateNoiseSigma(const cv::Mat& gray_patch);
 
+// Cheap per-patch texture and noise measures for a whole view, computed once
+// per view (not once per patch) to screen patches before the blur search:
+// the horizontal texture of HorizontalTexture (|Sobel x| of left + right) by
+// an integral image, and EstimateNoiseSigma's estimate from the mask's
+// responses on left, right and left - right (the smallest per-view-sum
+// estimate, as PatchBlurEstimator::Estimate takes), on every other pixel.
+class PatchScreening {
+ public:
+  // Grey CV_32FC1 views of one size.
+  PatchScreening(const cv::Mat& gray_left, const cv::Mat& gray_right);
+
+  // Mean |horizontal Sobel| of left + right over `rect`.
+  double Texture(const cv::Rect& rect) const;
+  // Noise std of one view over `rect` (without its outer ring).
+  double NoiseSigma(const cv::Rect& rect) const;
+  // Texture over what noise alone gives (~1 for pure noise: the Sobel of
+  // left + right has mean |.| = 3.91 sigma for i.i.d. noise).
+  double TextureSnr(const cv::Rect& rect) const;
+
+ private:
+  cv::Mat texture_integral_;                       // CV_64FC1
+  cv::Mat noise_left_, noise_right_, noise_diff_;  // |responses|, CV_32FC1
+};
+
 // Patch geometry on the working frame (the DP frame after resizing by
 // resize_factor).
 struct PatchGeometry {

@@ -76,52 +76,6 @@ double TextureSnr(const PatchBlurEstimate& e) {
   return e.texture / noise_texture;
 }
 
-// Per-view maps for the cheap screening of patches before the blur search,
-// computed once per view instead of once per patch: the horizontal texture
-// (HorizontalTexture's |Sobel x| of left + right, as an integral image) and
-// the absolute responses of EstimateNoiseSigma's mask on left, right and
-// left - right.
-struct ScreeningMaps {
-  cv::Mat texture_integral;                     // CV_64FC1
-  cv::Mat noise_left, noise_right, noise_diff;  // CV_32FC1, |response|
-};
-
-ScreeningMaps MakeScreeningMaps(const cv::Mat& gray_left,
-                                const cv::Mat& gray_right) {
-  ScreeningMaps maps;
-  cv::Mat sum, diff, gx;
-  cv::add(gray_left, gray_right, sum);
-  cv::subtract(gray_left, gray_right, diff);
-  cv::Sobel(sum, gx, CV_32F, 1, 0, 3, 1, 0, cv::BORDER_REFLECT_101);
-  cv::integral(cv::abs(gx), maps.texture_integral, CV_64F);
-  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
-  cv::filter2D(gray_left, maps.noise_left, CV_32F, mask);
-  cv::filter2D(gray_right, maps.noise_right, CV_32F, mask);
-  cv::filter2D(diff, maps.noise_diff, CV_32F, mask);
-  maps.noise_left = cv::abs(maps.noise_left);
-  maps.noise_right = cv::abs(maps.noise_right);
-  maps.noise_diff = cv::abs(maps.noise_diff);
-  return maps;
-}
-
-// EstimateNoiseSigma over `rect` (without its outer ring) from a response
-// map, on every other pixel in both directions: the median of ~5000
-// responses is as good as that of all of them for a screening decision.
-double ScreeningNoiseSigma(const cv::Mat& response, const cv::Rect& rect) {
-  std::vector<float> values;
-  values.reserve((rect.width / 2 + 1) * (rect.height / 2 + 1));
-  for (int y = rect.y + 1; y + 1 < rect.y + rect.height; y += 2) {
-    const float* row = response.ptr<float>(y);
-    for (int x = rect.x + 1; x + 1 < rect.x + rect.width; x += 2) {
-      values.push_back(row[x]);
-    }
-  }
-  if (values.empty()) return 0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid] / (0.67449 * 6.0);
-}
-
 std::string CountsToString(
     const std::vector<std::pair<std::string, int>>& counts) {
   std::ostringstream s;
@@ -355,7 +309,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   std::vector<int> screened;  // candidates that pass, in grid order
   std::vector<double> screening_confidence, screening_inverse_depth;
   if (with_depth > 0) {
-    const ScreeningMaps maps = MakeScreeningMaps(gray_left, gray_right);
+    const PatchScreening screening(gray_left, gray_right);
     std::vector<char> pass(num, 0);
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
@@ -363,21 +317,11 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     for (int k = 0; k < num; ++k) {
       if (!candidates[k].reject.empty()) continue;
       const cv::Rect r = crop_of(k);
-      const cv::Mat& ti = maps.texture_integral;
-      const double texture =
-          (ti.at<double>(r.y + r.height, r.x + r.width) -
-           ti.at<double>(r.y, r.x + r.width) -
-           ti.at<double>(r.y + r.height, r.x) + ti.at<double>(r.y, r.x)) /
-          r.area();
       // A patch whose horizontal texture does not clear what noise alone
       // gives would be dropped after the search anyway (the estimator's
       // measures, with a 10 % margin for its gain equalisation).
-      const double sl = ScreeningNoiseSigma(maps.noise_left, r);
-      const double sr = ScreeningNoiseSigma(maps.noise_right, r);
-      const double sd =
-          ScreeningNoiseSigma(maps.noise_diff, r) / std::sqrt(2.0);
-      const double sigma =
-          std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
+      const double texture = screening.Texture(r);
+      const double sigma = screening.NoiseSigma(r);
       estimates[k].texture = texture;
       estimates[k].noise_sigma = sigma;
       if (options_.min_texture_snr > 0 &&

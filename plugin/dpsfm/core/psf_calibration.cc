@@ -370,4 +370,30 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   return finish();
 }
 
+std::vector<ProfilePatch> ExtractProfilePatches(const cv::Mat& gray_left,
+                                                const cv::Mat& gray_right,
+                                                int patch_size,
+                                                int stride,
+                                                int border,
+                                                double known_radius_px,
+                                                double min_texture_snr) {
+  DPSFM_CHECK(patch_size > 0 && stride > 0 && border >= 0)
+      << "invalid patch geometry";
+  const PatchScreening screening(gray_left, gray_right);
+  const int crop = patch_size + 2 * border;
+  std::vector<ProfilePatch> patches;
+  for (int y = 0; y + crop <= gray_left.rows; y += stride) {
+    for (int x = 0; x + crop <= gray_left.cols; x += stride) {
+      const cv::Rect rect(x, y, crop, crop);
+      if (screening.TextureSnr(rect) < min_texture_snr) continue;
+      ProfilePatch patch;
+      patch.left = gray_left(rect).clone();
+      patch.right = gray_right(rect).clone();
+      patch.known_radius_px = known_radius_px;
+      patches.push_back(patch);
+    }
+  }
+  return patches;
+}
+
 }  // namespace dpsfm

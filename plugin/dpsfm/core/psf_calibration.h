@@ -105,4 +105,17 @@ struct SplitProfileFit {
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options);
 
+// Calibration captures: the textured patches of a DP pair of a planar,
+// fronto-parallel target (one blur radius over the frame). Grey CV_32FC1
+// views; patches of patch_size + 2 border px on a `stride` grid whose
+// texture clears min_texture_snr times what noise alone gives; each carries
+// known_radius_px.
+std::vector<ProfilePatch> ExtractProfilePatches(const cv::Mat& gray_left,
+                                                const cv::Mat& gray_right,
+                                                int patch_size,
+                                                int stride,
+                                                int border,
+                                                double known_radius_px,
+                                                double min_texture_snr);
+
 }  // namespace dpsfm
