@@ -14,10 +14,10 @@ function(dpsfm_check_colmap_source dir)
       "COLMAP 3.10 only.")
   endif()
   file(STRINGS "${dir}/src/colmap/exe/colmap.cc" registered
-       REGEX "dp_scale_estimator")
+       REGEX "dpsfm::Commands\\(\\)")
   if(NOT registered)
     message(FATAL_ERROR
-      "COLMAP_SOURCE_DIR=${dir} does not register dp_scale_estimator. Apply "
+      "COLMAP_SOURCE_DIR=${dir} does not register the dp-sfm commands. Apply "
       "the patch series first:\n  cd ${dir} && git apply "
       "${PROJECT_SOURCE_DIR}/colmap_patches/*.patch")
   endif()

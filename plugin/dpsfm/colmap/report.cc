@@ -64,6 +64,30 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   intensity["loss_curve"] = curve;
   report["intensity"] = intensity;
 
+  // The DP PSF profile the stages used and what self-calibration found.
+  nlohmann::json psf;
+  psf["model"] = result.psf_model;
+  psf["self_calibrated"] = result.psf_self_calibrated;
+  psf["status"] = result.psf_status;
+  if (!result.psf_status.empty()) {
+    const SplitProfileFit& fit = result.psf_fit;
+    psf["fit"] = {
+        {"determined", fit.determined},
+        {"translating_disk_kept", fit.translating_disk},
+        {"split_exponent", Number(fit.params.split_exponent)},
+        {"split_exponent_ci",
+         Interval(fit.exponent_ci_low, fit.exponent_ci_high)},
+        {"centroid_offset_per_radius", Number(fit.centroid_offset)},
+        {"centroid_offset_ci",
+         Interval(fit.centroid_offset_ci_low, fit.centroid_offset_ci_high)},
+        {"translating_disk_centroid_offset",
+         Number(fit.translating_disk_centroid_offset)},
+        {"patches", fit.num_patches},
+        {"mean_relative_residual", Number(fit.mean_relative_residual)},
+        {"seconds", fit.seconds}};
+  }
+  report["psf"] = psf;
+
   std::map<std::string, const ViewSource*> source_by_name;
   for (const ViewSource& source : sources) {
     source_by_name[source.image_name] = &source;
@@ -143,6 +167,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   report["timings"] = {{"read", timings.read},
                        {"blur", timings.blur},
                        {"linear", timings.linear},
+                       {"psf_fit", result.seconds_psf_fit},
                        {"intensity", timings.intensity},
                        {"rescale", timings.rescale},
                        {"total", timings.total}};

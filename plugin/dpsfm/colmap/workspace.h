@@ -50,6 +50,10 @@ struct DPScaleEstimatorOptions {
   double f_number = 0.0;
   double pixel_pitch_um = 0.0;
   bool swap_dp_views = false;
+  // The DP PSF profile: translating_disk, calibrated (psf_path) or auto
+  // (self-calibrated from the data); see psf_profile.h.
+  std::string psf_model = "translating_disk";
+  std::string psf_path;
 
   // Throws InputError naming the option and the value.
   void Check() const;

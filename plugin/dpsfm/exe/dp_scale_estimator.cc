@@ -12,6 +12,7 @@
 #include "colmap/util/misc.h"
 #include "colmap/util/timer.h"
 #include "dpsfm/colmap/database_check.h"
+#include "dpsfm/colmap/psf_profile.h"
 #include "dpsfm/colmap/report.h"
 #include "dpsfm/colmap/report_plots.h"
 #include "dpsfm/colmap/transaction.h"
@@ -86,6 +87,14 @@ void AddCommandOptions(colmap::OptionManager* manager,
       "DPScaleEstimator.swap_dp_views",
       &options->swap_dp_views,
       "swap left and right DP views (sensor with the opposite convention)");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.psf_model",
+      &options->psf_model,
+      "DP PSF profile: translating_disk (the paper's), calibrated (the file "
+      "in psf_path, from dp_psf_calibrator), auto (fitted to the data)");
+  manager->AddDefaultOption("DPScaleEstimator.psf_path",
+                            &options->psf_path,
+                            "DP PSF profile file for psf_model calibrated");
   // The method's parameters (paper names in brackets).
   manager->AddDefaultOption("DPScaleEstimator.patch_size",
                             &core->patch_size,
@@ -220,8 +229,14 @@ int RunDPScaleEstimator(int argc, char** argv) {
     }
 
     colmap::PrintHeading2("Per-patch DP blur estimation");
-    DPScaleEstimator estimator(core_options,
-                               std::make_shared<TranslatingDiskPsf>());
+    const std::shared_ptr<const DPPsfModel> psf =
+        MakePsfModel(options.psf_model, options.psf_path, &core_options);
+    LOG(INFO) << "DP PSF: " << options.psf_model << " (" << psf->Name()
+              << (core_options.psf_self_calibration
+                      ? ", self-calibrated from the data before the scale"
+                      : "")
+              << ")";
+    DPScaleEstimator estimator(core_options, psf);
     RunTimings timings;
     std::vector<DPViewSummary> summaries;
     // A few views' images for the report's patch overlays (8-bit, to keep
@@ -261,6 +276,10 @@ int RunDPScaleEstimator(int argc, char** argv) {
     const DPScaleResult result = estimator.Estimate();
     timings.linear = result.seconds_linear;
     timings.intensity = result.seconds_intensity;
+    if (!result.psf_status.empty()) {
+      LOG(INFO) << "DP PSF: " << result.psf_status << " ("
+                << FormatSeconds(result.seconds_psf_fit) << ")";
+    }
     for (const DPViewResult& view : result.views) {
       LOG(INFO) << "  " << view.name << ": "
                 << (view.used ? "used" : "not used") << " (" << view.reason
