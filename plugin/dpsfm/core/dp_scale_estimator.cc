@@ -734,8 +734,12 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     for (const auto& v : views_) {
       patches_tried += v->summary.patches_tried;
       patches_valid += v->summary.patches_valid;
-      for (const auto& r : v->summary.rejections)
+      for (const auto& r : v->summary.rejections) {
+        // Patches the blur search skipped by design are no defect of the
+        // data; a refusal lists what went wrong.
+        if (r.first.compare(0, 15, "left unsearched") == 0) continue;
         rejections[r.first] += r.second;
+      }
     }
     if (!rejections.empty()) {
       patch_rejections =

@@ -150,7 +150,7 @@ struct DPScaleOptions {
   bool psf_self_calibration = false;
   SplitProfileFitOptions psf_fit;
   // At most this many patches feed the fit (evenly over the views).
-  int max_psf_fit_patches = 400;
+  int max_psf_fit_patches = 250;
 
   // OpenMP threads for blur estimation and the intensity search; -1 = all.
   int num_threads = -1;

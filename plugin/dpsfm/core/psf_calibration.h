@@ -52,8 +52,8 @@ struct SplitProfileFitOptions {
   // between the neighbours of the best node, then a parabola in log p).
   double min_exponent = 0.1;
   double max_exponent = 6.0;
-  int num_grid = 13;
-  int num_refine = 6;
+  int num_grid = 9;
+  int num_refine = 4;
   // Patches with |r| below this (under the translating disk, or known) carry
   // no information on the profile's shape and are left out.
   double min_abs_radius_px = 2.0;
