@@ -125,8 +125,9 @@ DPScaleOptions Options() {
   return options;
 }
 
-// `calibrated`: planar-target captures of the same sensor at known blur.
-SplitProfileFit Calibrate(const Sensor& sensor, double noise) {
+// `calibrated`: planar-target captures of the same sensor at known blur,
+// calibrated for the whole frame and for three column bands.
+SplitProfileCalibration Calibrate(const Sensor& sensor, double noise) {
   const DPScaleOptions options = Options();
   const int border = 11;  // KernelRadius(10) of the split family
   std::vector<ProfilePatch> patches;
@@ -149,7 +150,7 @@ SplitProfileFit Calibrate(const Sensor& sensor, double noise) {
         ExtractProfilePatches(test::ToGray(pair.left),
                               test::ToGray(pair.right),
                               options.patch_size,
-                              40,
+                              30,
                               border,
                               r,
                               1.5);
@@ -157,7 +158,7 @@ SplitProfileFit Calibrate(const Sensor& sensor, double noise) {
   }
   SplitProfileFitOptions fit;
   fit.blur.max_radius_px = options.max_radius_px;
-  return FitSplitProfile(patches, fit);
+  return CalibrateSplitProfile(patches, 3, fit);
 }
 
 struct Run {
@@ -167,13 +168,13 @@ struct Run {
 };
 
 Run Estimate(const std::vector<DPView>& views,
-             std::shared_ptr<const DPPsfModel> psf,
+             std::vector<std::shared_ptr<const DPPsfModel>> psfs,
              bool self_calibration,
              double scale) {
   DPScaleOptions options = Options();
   options.psf_self_calibration = self_calibration;
   const double t0 = Now();
-  DPScaleEstimator estimator(options, psf);
+  DPScaleEstimator estimator(options, psfs);
   for (const DPView& view : views) estimator.AddView(view);
   const DPScaleResult result = estimator.Estimate();
   Run run;
@@ -236,11 +237,17 @@ int main(int argc, char** argv) {
   double time_disk = 0, time_auto = 0;
   std::vector<std::string> notes;
   for (const Sensor& sensor : sensors) {
-    const SplitProfileFit calibration = Calibrate(sensor, noise);
-    std::shared_ptr<const DPPsfModel> calibrated =
-        calibration.determined
-            ? std::make_shared<const SplitProfilePsf>(calibration.params)
-            : nullptr;
+    const SplitProfileCalibration calibration = Calibrate(sensor, noise);
+    std::vector<std::shared_ptr<const DPPsfModel>> calibrated;
+    if (calibration.banded) {
+      for (const SplitProfileFit& band : calibration.bands) {
+        calibrated.push_back(
+            std::make_shared<const SplitProfilePsf>(band.params));
+      }
+    } else if (calibration.frame.determined) {
+      calibrated.push_back(
+          std::make_shared<const SplitProfilePsf>(calibration.frame.params));
+    }
     std::string cells[3];
     double errors[3] = {0, 0, 0};
     int counts[3] = {0, 0, 0};
@@ -251,10 +258,11 @@ int main(int argc, char** argv) {
         views.push_back(Capture(sensor, scene, v, scale, noise));
       }
       const auto disk = std::make_shared<const TranslatingDiskPsf>();
-      const Run runs[3] = {
-          Estimate(views, disk, false, scale),
-          Estimate(views, disk, true, scale),
-          calibrated ? Estimate(views, calibrated, false, scale) : Run()};
+      const Run runs[3] = {Estimate(views, {disk}, false, scale),
+                           Estimate(views, {disk}, true, scale),
+                           calibrated.empty()
+                               ? Run()
+                               : Estimate(views, calibrated, false, scale)};
       time_disk += runs[0].seconds;
       time_auto += runs[1].seconds;
       for (int m = 0; m < 3; ++m) {
@@ -270,7 +278,8 @@ int main(int argc, char** argv) {
       }
       if (scene == 0) notes.push_back(sensor.name + ": " + runs[1].note);
     }
-    if (!calibrated) cells[2] = "calibration failed";
+    if (calibrated.empty()) cells[2] = "calibration failed";
+    if (calibration.banded) cells[2] += " (3 bands)";
     std::printf("| %s | %s | %s | %s |",
                 sensor.name.c_str(),
                 cells[0].c_str(),

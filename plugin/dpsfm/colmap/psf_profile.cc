@@ -54,7 +54,8 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
       continue;
     }
     if (key != "format" && key != "model" && key != "split_exponent" &&
-        key != "crosstalk" && key != "rim_softness") {
+        key != "crosstalk" && key != "rim_softness" &&
+        key != "band_split_exponents") {
       throw InputError(where + ": unknown key '" + key + "'");
     }
     if (!values.emplace(key, value).second) {
@@ -86,6 +87,24 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     profile.params.rim_softness =
         ParseNumber(values["rim_softness"], where("rim_softness"));
   }
+  if (values.count("band_split_exponents")) {
+    std::istringstream stream(values["band_split_exponents"]);
+    std::string item;
+    while (stream >> item) {
+      profile.band_split_exponents.push_back(
+          ParseNumber(item, where("band_split_exponents")));
+      SplitProfileParams band = profile.params;
+      band.split_exponent = profile.band_split_exponents.back();
+      if (!band.Check()) {
+        throw InputError(where("band_split_exponents") +
+                         ": split exponents must lie in [0.05, 8]");
+      }
+    }
+    if (profile.band_split_exponents.size() < 2) {
+      throw InputError(where("band_split_exponents") +
+                       ": needs two or more bands");
+    }
+  }
   if (!profile.params.Check()) {
     throw InputError(path + ": profile out of range (" +
                      profile.params.ToString() +
@@ -109,15 +128,21 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
        << profile.params.split_exponent << "\n"
        << "crosstalk " << profile.params.crosstalk << "\n"
        << "rim_softness " << profile.params.rim_softness << "\n";
+  if (!profile.band_split_exponents.empty()) {
+    file << "band_split_exponents";
+    for (const double p : profile.band_split_exponents) file << " " << p;
+    file << "\n";
+  }
   for (const auto& entry : profile.fit_info) {
     file << entry.first << " " << entry.second << "\n";
   }
   if (!file) throw InputError("cannot write DP PSF profile " + path);
 }
 
-std::shared_ptr<const DPPsfModel> MakePsfModel(const std::string& psf_model,
-                                               const std::string& psf_path,
-                                               DPScaleOptions* core) {
+std::vector<std::shared_ptr<const DPPsfModel>> MakePsfModels(
+    const std::string& psf_model,
+    const std::string& psf_path,
+    DPScaleOptions* core) {
   if (psf_model == "translating_disk" || psf_model == "auto") {
     if (!psf_path.empty()) {
       throw InputError(
@@ -126,7 +151,7 @@ std::shared_ptr<const DPPsfModel> MakePsfModel(const std::string& psf_model,
           psf_model + ")");
     }
     core->psf_self_calibration = psf_model == "auto";
-    return std::make_shared<TranslatingDiskPsf>();
+    return {std::make_shared<TranslatingDiskPsf>()};
   }
   if (psf_model == "calibrated") {
     if (psf_path.empty()) {
@@ -136,7 +161,17 @@ std::shared_ptr<const DPPsfModel> MakePsfModel(const std::string& psf_model,
           "dp_psf_calibrator)");
     }
     core->psf_self_calibration = false;
-    return std::make_shared<SplitProfilePsf>(ReadPsfProfile(psf_path).params);
+    const PsfProfileFile profile = ReadPsfProfile(psf_path);
+    if (profile.band_split_exponents.empty()) {
+      return {std::make_shared<SplitProfilePsf>(profile.params)};
+    }
+    std::vector<std::shared_ptr<const DPPsfModel>> bands;
+    for (const double p : profile.band_split_exponents) {
+      SplitProfileParams params = profile.params;
+      params.split_exponent = p;
+      bands.push_back(std::make_shared<SplitProfilePsf>(params));
+    }
+    return bands;
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");

@@ -147,9 +147,22 @@ struct DPScaleEstimator::ViewData {
 
 DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
                                    std::shared_ptr<const DPPsfModel> psf)
-    : options_(options), psf_(std::move(psf)) {
+    : DPScaleEstimator(
+          options,
+          std::vector<std::shared_ptr<const DPPsfModel>>{std::move(psf)}) {}
+
+DPScaleEstimator::DPScaleEstimator(
+    const DPScaleOptions& options,
+    std::vector<std::shared_ptr<const DPPsfModel>> band_psfs)
+    : options_(options), band_psfs_(std::move(band_psfs)) {
   options_.Check();
-  DPSFM_CHECK(psf_ != nullptr) << "a DP PSF model is required";
+  DPSFM_CHECK(!band_psfs_.empty()) << "a DP PSF model is required";
+  for (const auto& psf : band_psfs_) {
+    DPSFM_CHECK(psf != nullptr) << "a DP PSF model is required";
+  }
+  DPSFM_CHECK(band_psfs_.size() == 1 || !options_.psf_self_calibration)
+      << "self-calibration fits one profile for the whole frame";
+  psf_ = band_psfs_[0];
 }
 
 DPScaleEstimator::~DPScaleEstimator() = default;
@@ -215,7 +228,16 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 
   BlurEstimationOptions blur = options_.blur;
   blur.max_radius_px = geometry.max_radius_px;
-  const int border = psf_->KernelRadius(geometry.max_radius_px);
+  int border = 0;
+  for (const auto& psf : band_psfs_) {
+    border = std::max(border, psf->KernelRadius(geometry.max_radius_px));
+  }
+  const int num_bands = static_cast<int>(band_psfs_.size());
+  auto band_of = [&](const cv::Rect& interior) {
+    const double cx = interior.x + 0.5 * interior.width;
+    return std::min(num_bands - 1,
+                    static_cast<int>(cx / left.cols * num_bands));
+  };
   const int p = geometry.patch_size;
   const int crop = p + 2 * border;
 
@@ -383,8 +405,12 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 
   // Blur per searched patch (the expensive part), in parallel.
   if (num_searched > 0) {
-    const PatchBlurEstimator estimator(*psf_, blur, cv::Size(crop, crop));
-    DPSFM_CHECK_EQ(estimator.Border(), crop_border);
+    std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
+    for (const auto& psf : band_psfs_) {
+      estimators.emplace_back(
+          new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
+      DPSFM_CHECK_LE(estimators.back()->Border(), crop_border);
+    }
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
@@ -392,8 +418,8 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       if (!search[k]) continue;
       const cv::Rect r = crop_of(k);
       try {
-        estimates[k] =
-            estimator.Estimate(gray_left(r).clone(), gray_right(r).clone());
+        estimates[k] = estimators[band_of(candidates[k].interior)]->Estimate(
+            gray_left(r).clone(), gray_right(r).clone());
       } catch (const std::exception& e) {
         estimates[k].valid = false;
         estimates[k].reject_reason = e.what();
@@ -454,6 +480,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     }
     PatchSample s;
     s.view = summary.index;
+    s.psf_band = band_of(c.interior);
     const double cx = c.interior.x + 0.5 * (p - 1);
     const double cy = c.interior.y + 0.5 * (p - 1);
     s.x = (cx + 0.5) / sx - 0.5;
@@ -658,12 +685,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   std::vector<std::vector<PatchSample>> samples(num_views);
   for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
   std::shared_ptr<const DPPsfModel> psf = psf_;
-  if (options_.psf_self_calibration) {
+  if (options_.psf_self_calibration && band_psfs_.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
     CalibrateProfile(&samples, &psf, &result);
     result.seconds_psf_fit = SecondsSince(fit_start);
   }
   result.psf_model = psf->Name();
+  const bool banded = band_psfs_.size() > 1 && !result.psf_self_calibrated;
+  if (banded) {
+    std::ostringstream name;
+    name << band_psfs_.size() << " column bands:";
+    for (const auto& band : band_psfs_) name << " " << band->Name();
+    result.psf_model = name.str();
+  }
 
   // --- Linear stage. ---
   auto start = std::chrono::steady_clock::now();
@@ -825,6 +859,9 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         ip.view = index;
         if (!samples[i][st.sample].selected) continue;
         ip.depth = samples[i][st.sample].depth;
+        if (banded) {
+          ip.psf = band_psfs_[samples[i][st.sample].psf_band].get();
+        }
         ip.left = st.left;
         ip.right = st.right;
         ip.border = st.border;

@@ -181,6 +181,7 @@ struct DPViewSummary {
 
 struct PatchSample {
   int view = -1;
+  int psf_band = 0;            // column band of the DP PSF (see constructor)
   double x = 0, y = 0;         // centre, DP-frame pixels
   double depth = 0;            // z'
   double radius_px = 0;        // signed estimate, working-frame pixels
@@ -249,6 +250,12 @@ class DPScaleEstimator {
  public:
   DPScaleEstimator(const DPScaleOptions& options,
                    std::shared_ptr<const DPPsfModel> psf);
+  // A profile that changes across the frame: band_psfs[k] serves the
+  // patches whose centre lies in the k-th of K equal-width column bands of
+  // the DP frame (left to right), in every stage. K = 1 is the constructor
+  // above; self-calibration needs K = 1.
+  DPScaleEstimator(const DPScaleOptions& options,
+                   std::vector<std::shared_ptr<const DPPsfModel>> band_psfs);
   ~DPScaleEstimator();
 
   // Estimates patch blurs in one view and keeps only what later stages need
@@ -275,7 +282,8 @@ class DPScaleEstimator {
                         std::shared_ptr<const DPPsfModel>* psf,
                         DPScaleResult* result) const;
   DPScaleOptions options_;
-  std::shared_ptr<const DPPsfModel> psf_;
+  std::vector<std::shared_ptr<const DPPsfModel>> band_psfs_;
+  std::shared_ptr<const DPPsfModel> psf_;  // band_psfs_[0]
   std::vector<std::unique_ptr<ViewData>> views_;
 };
 

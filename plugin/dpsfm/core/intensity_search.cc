@@ -55,6 +55,7 @@ struct NodeChannelStats {
 
 // A patch converted once for the whole search.
 struct Prepared {
+  const DPPsfModel* psf = nullptr;  // the patch's PSF
   cv::Mat left, right;  // CV_32FC(n); released once `stats` are computed
   int border = 0;
   int channels = 0;
@@ -599,25 +600,28 @@ IntensitySearchResult SearchScaleByIntensity(
   // L1 needs the pixels at every radius). Built before the parallel loop.
   const bool use_grid =
       options.grid_step_px > 0 && options.loss != IntensityLoss::kPaperL1;
-  std::map<std::tuple<int, int, int>, std::unique_ptr<DPKernelGrid>> grids;
+  std::map<std::tuple<int, int, int, const DPPsfModel*>,
+           std::unique_ptr<DPKernelGrid>>
+      grids;
   std::vector<const DPKernelGrid*> patch_grid(num_patches, nullptr);
   if (use_grid) {
     for (int j = 0; j < num_patches; ++j) {
       const IntensityPatch& patch = patches[j];
-      const auto key =
-          std::make_tuple(patch.left.cols, patch.left.rows, patch.border);
+      const DPPsfModel& patch_psf = patch.psf != nullptr ? *patch.psf : psf;
+      const auto key = std::make_tuple(
+          patch.left.cols, patch.left.rows, patch.border, &patch_psf);
       auto it = grids.find(key);
       if (it == grids.end()) {
         // Nodes only where the crop's border supports the kernels.
         const double supported =
-            std::floor(
-                MaxSupportedRadius(psf, patch.border, options.max_radius_px) /
-                options.grid_step_px) *
+            std::floor(MaxSupportedRadius(
+                           patch_psf, patch.border, options.max_radius_px) /
+                       options.grid_step_px) *
             options.grid_step_px;
         std::unique_ptr<DPKernelGrid> grid;
         if (supported >= options.grid_step_px) {
           grid.reset(new DPKernelGrid(
-              psf,
+              patch_psf,
               options.grid_step_px,
               supported,
               cv::Size(cv::getOptimalDFTSize(patch.left.cols),
@@ -637,7 +641,10 @@ IntensitySearchResult SearchScaleByIntensity(
 #endif
   for (int j = 0; j < num_patches; ++j) {
     Prepared& p = prepared[j];
-    p = Prepare(patches[j], psf, options.max_radius_px);  // checked
+    const DPPsfModel& patch_psf =
+        patches[j].psf != nullptr ? *patches[j].psf : psf;
+    p = Prepare(patches[j], patch_psf, options.max_radius_px);  // checked
+    p.psf = &patch_psf;
     if (options.loss == IntensityLoss::kNoiseCorrectedL2 ||
         options.loss == IntensityLoss::kRelativeL2) {
       p.sigma_left = EstimatePairNoiseSigma(p.left, p.right);
@@ -724,7 +731,7 @@ IntensitySearchResult SearchScaleByIntensity(
       for (const double radius : radii) {
         std::vector<ChannelTerms> terms;
         try {
-          LossOfPrepared(p, radius, psf, options.loss, &terms);
+          LossOfPrepared(p, radius, *p.psf, options.loss, &terms);
         } catch (...) {
           continue;
         }
@@ -759,7 +766,7 @@ IntensitySearchResult SearchScaleByIntensity(
       if (!std::isfinite(r)) r = r > 0 ? p.max_abs_radius : -p.max_abs_radius;
       std::vector<ChannelTerms> terms;
       try {
-        LossOfPrepared(p, r, psf, options.loss, &terms);
+        LossOfPrepared(p, r, *p.psf, options.loss, &terms);
       } catch (...) {
         terms.clear();
       }
@@ -797,7 +804,7 @@ IntensitySearchResult SearchScaleByIntensity(
             std::max(-p.max_abs_radius, std::min(p.max_abs_radius, radii[k]));
         if (r != last_radius) {
           try {
-            last_loss = LossOfPrepared(p, r, psf, options.loss);
+            last_loss = LossOfPrepared(p, r, *p.psf, options.loss);
           } catch (...) {
             // An exception must not leave the parallel region; a patch
             // whose loss cannot be evaluated contributes nothing.

@@ -96,6 +96,9 @@ struct IntensityPatch {
   // on each side; the border feeds the convolution.
   cv::Mat left, right;
   int border = 0;
+  // This patch's DP PSF when it differs from the search's (a profile that
+  // changes across the frame); null = the search's.
+  const DPPsfModel* psf = nullptr;
 };
 
 struct IntensitySearchResult {

@@ -390,10 +390,58 @@ std::vector<ProfilePatch> ExtractProfilePatches(const cv::Mat& gray_left,
       patch.left = gray_left(rect).clone();
       patch.right = gray_right(rect).clone();
       patch.known_radius_px = known_radius_px;
+      patch.x_fraction = (x + 0.5 * crop) / gray_left.cols;
       patches.push_back(patch);
     }
   }
   return patches;
+}
+
+SplitProfileCalibration CalibrateSplitProfile(
+    const std::vector<ProfilePatch>& patches,
+    int num_bands,
+    const SplitProfileFitOptions& options,
+    double min_band_difference) {
+  DPSFM_CHECK_GE(num_bands, 1);
+  SplitProfileCalibration calibration;
+  calibration.frame = FitSplitProfile(patches, options);
+  std::ostringstream summary;
+  summary << "whole frame: " << calibration.frame.reason;
+  if (!calibration.frame.determined || num_bands == 1) {
+    calibration.summary = summary.str();
+    return calibration;
+  }
+  std::vector<std::vector<ProfilePatch>> by_band(num_bands);
+  for (const ProfilePatch& patch : patches) {
+    const int band =
+        std::max(0,
+                 std::min(num_bands - 1,
+                          static_cast<int>(patch.x_fraction * num_bands)));
+    by_band[band].push_back(patch);
+  }
+  bool all_determined = true;
+  double largest_difference = 0;
+  for (int b = 0; b < num_bands; ++b) {
+    calibration.bands.push_back(FitSplitProfile(by_band[b], options));
+    const SplitProfileFit& fit = calibration.bands.back();
+    summary << "; band " << b + 1 << " of " << num_bands << ": "
+            << (fit.determined ? "" : "not determined, ") << fit.reason;
+    all_determined = all_determined && fit.determined;
+    if (fit.determined) {
+      largest_difference = std::max(
+          largest_difference,
+          std::abs(fit.centroid_offset / calibration.frame.centroid_offset -
+                   1));
+    }
+  }
+  calibration.banded =
+      all_determined && largest_difference > min_band_difference;
+  summary << (calibration.banded ? "; the profile changes across the frame ("
+                                 : "; one profile for the whole frame (")
+          << "largest band difference in centroid offset "
+          << std::lround(1000 * largest_difference) / 10.0 << " %)";
+  calibration.summary = summary.str();
+  return calibration;
 }
 
 }  // namespace dpsfm

@@ -45,6 +45,9 @@ struct ProfilePatch {
   cv::Mat left, right;
   // Known signed blur radius (calibration); NaN = unknown (self-calibration).
   double known_radius_px = std::numeric_limits<double>::quiet_NaN();
+  // Horizontal position of the patch centre in the frame, 0 (left edge) to
+  // 1 (right edge): profiles change across the frame.
+  double x_fraction = 0.5;
 };
 
 struct SplitProfileFitOptions {
@@ -104,6 +107,24 @@ struct SplitProfileFit {
 
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options);
+
+// Calibration from captures of known blur, for the whole frame and for
+// `num_bands` equal-width column bands: real DP profiles change across the
+// frame. The bands are used (banded = true) when every band's fit is
+// determined and some band's centroid offset differs from the whole
+// frame's by more than `min_band_difference` (relative); otherwise the
+// whole-frame profile is the calibration.
+struct SplitProfileCalibration {
+  SplitProfileFit frame;
+  std::vector<SplitProfileFit> bands;
+  bool banded = false;
+  std::string summary;
+};
+SplitProfileCalibration CalibrateSplitProfile(
+    const std::vector<ProfilePatch>& patches,
+    int num_bands,
+    const SplitProfileFitOptions& options,
+    double min_band_difference = 0.02);
 
 // Calibration captures: the textured patches of a DP pair of a planar,
 // fronto-parallel target (one blur radius over the frame). Grey CV_32FC1

@@ -192,7 +192,9 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     fit_options.blur.max_radius_px = geometry.max_radius_px;
     fit_options.num_threads = options.num_threads;
     colmap::PrintHeading2("Fitting the split profile");
-    const SplitProfileFit fit = FitSplitProfile(patches, fit_options);
+    const SplitProfileCalibration calibration =
+        CalibrateSplitProfile(patches, 3, fit_options);
+    const SplitProfileFit& fit = calibration.frame;
     if (!fit.determined) {
       return Fail("the captures do not determine the profile: " + fit.reason +
                   ". Capture the target nearer or farther than the focus so "
@@ -204,8 +206,14 @@ int RunDPPsfCalibrator(int argc, char** argv) {
               << " %; mean relative residual " << std::setprecision(6)
               << fit.mean_relative_residual;
 
+    LOG(INFO) << calibration.summary;
     PsfProfileFile profile;
     profile.params = fit.params;
+    if (calibration.banded) {
+      for (const SplitProfileFit& band : calibration.bands) {
+        profile.band_split_exponents.push_back(band.params.split_exponent);
+      }
+    }
     auto add = [&](const std::string& key, const std::string& value) {
       profile.fit_info.emplace_back("fit_" + key, value);
     };
