@@ -1,5 +1,5 @@
 # The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench accuracy clean-cache
+.PHONY: example test build bench accuracy profiles clean-cache
 
 example:
 	bash scripts/run_example.sh
@@ -16,6 +16,10 @@ bench:
 # Accuracy on generated scenes with known scale (tables; gates nothing).
 accuracy:
 	bash scripts/run_accuracy_bench.sh
+
+# DP PSF profiles x estimation modes on generated scenes (a table).
+profiles:
+	bash scripts/run_profile_bench.sh
 
 clean-cache:
 	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"

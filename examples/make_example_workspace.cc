@@ -23,6 +23,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -38,6 +39,7 @@
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "colmap/util/ply.h"
+#include "dpsfm/core/blur_estimation.h"
 #include "dpsfm/core/dp_psf.h"
 #include "dpsfm/core/dp_renderer.h"
 #include "dpsfm/core/lens_model.h"
@@ -100,7 +102,77 @@ struct GeneratorOptions {
   // "additive" (seamless surfaces) or "layers" (occlusion-aware "over"
   // compositing, seams at blur-bin boundaries): see DPRenderOptions.
   std::string compositing = "additive";
+  // The sensor's DP split profile (dpsfm::SplitProfilePsf); split exponent
+  // 0 = the paper's translating disk. With psf_split_exponent_right > 0 the
+  // profile changes across the frame: the views are blended column by
+  // column from the profile with psf_split_exponent (left edge) to the one
+  // with psf_split_exponent_right (right edge).
+  double psf_split_exponent = 0;
+  double psf_crosstalk = 0;
+  double psf_rim_softness = 0;
+  double psf_split_exponent_right = 0;
+  // Calibration captures of a planar textured target at known distances
+  // made with the same camera and profile (calibration/dp, targets.csv), for
+  // colmap dp_psf_calibrator. 0 = none.
+  int calibration_captures = 0;
 };
+
+// The simulated sensor's DP PSF: one profile, or two blended across the
+// frame.
+struct SensorPsf {
+  std::shared_ptr<const dpsfm::DPPsfModel> left_edge, right_edge;
+  std::string description;
+};
+
+SensorPsf MakeSensorPsf(const GeneratorOptions& options) {
+  SensorPsf sensor;
+  const bool split = options.psf_split_exponent > 0 ||
+                     options.psf_crosstalk > 0 || options.psf_rim_softness > 0;
+  auto make = [&](double exponent) {
+    dpsfm::SplitProfileParams params;
+    params.split_exponent = exponent > 0 ? exponent : 1.0;
+    params.crosstalk = options.psf_crosstalk;
+    params.rim_softness = options.psf_rim_softness;
+    return std::make_shared<const dpsfm::SplitProfilePsf>(params);
+  };
+  if (!split && options.psf_split_exponent_right <= 0) {
+    sensor.left_edge = std::make_shared<const dpsfm::TranslatingDiskPsf>();
+  } else {
+    sensor.left_edge = make(options.psf_split_exponent);
+  }
+  sensor.description = sensor.left_edge->Name();
+  if (options.psf_split_exponent_right > 0) {
+    sensor.right_edge = make(options.psf_split_exponent_right);
+    sensor.description += " -> " + sensor.right_edge->Name();
+  }
+  return sensor;
+}
+
+// DP views through the sensor's PSF.
+void RenderSensorViews(const SensorPsf& sensor,
+                       const cv::Mat& image,
+                       const cv::Mat& depth,
+                       const cv::Mat& radius,
+                       const dpsfm::DPRenderOptions& render_options,
+                       cv::Mat* left,
+                       cv::Mat* right) {
+  dpsfm::RenderDPViews(
+      image, depth, radius, *sensor.left_edge, render_options, left, right);
+  if (!sensor.right_edge) return;
+  cv::Mat other_left, other_right;
+  dpsfm::RenderDPViews(image,
+                       depth,
+                       radius,
+                       *sensor.right_edge,
+                       render_options,
+                       &other_left,
+                       &other_right);
+  for (int c = 0; c < left->cols; ++c) {
+    const double w = left->cols == 1 ? 0 : c / (left->cols - 1.0);
+    left->col(c) = (1 - w) * left->col(c) + w * other_left.col(c);
+    right->col(c) = (1 - w) * right->col(c) + w * other_right.col(c);
+  }
+}
 
 // Fills the options left at 0 with the camera's defaults.
 void ApplyCameraDefaults(GeneratorOptions* options) {
@@ -257,6 +329,90 @@ std::string FNumberTag(double f_number) {
   return tag.str();
 }
 
+// colmap dp_psf_calibrator's input: DP captures of a planar, fronto-parallel
+// target with multi-scale texture, focused at 1 m (x scene_scale), at
+// distances whose blur spans 0.3-0.85 of the automatic radius bound on both
+// sides of the focus; calibration/targets.csv lists them with the lens data
+// (pitch of the DP frames' pixels).
+void WriteCalibrationCaptures(const GeneratorOptions& options,
+                              const SensorPsf& sensor,
+                              double pitch_mm,
+                              const cv::Size& dp_size,
+                              std::mt19937* rng,
+                              const fs::path& out) {
+  const fs::path root = out / "calibration";
+  fs::create_directories(root / "dp/left");
+  fs::create_directories(root / "dp/right");
+  std::ofstream csv((root / "targets.csv").string());
+  csv << "name,target_distance_m,focus_distance_m,focal_length_mm,f_number,"
+         "pixel_pitch_um\n";
+  dpsfm::DPLensData lens;
+  lens.focal_length_mm = options.focal_length_mm;
+  lens.f_number = options.f_number;
+  lens.pixel_pitch_um = pitch_mm * 1e3 * options.dp_factor;
+  const double focus_m = 1.0 * options.scene_scale;
+  const double bound = dpsfm::DefaultPatchGeometry(dp_size).max_radius_px;
+  const cv::Size size(options.width, options.height);
+  const dpsfm::DPRenderOptions render_options;
+  for (int k = 0; k < options.calibration_captures; ++k) {
+    // Radius in DP-frame pixels, alternating sides of the focus.
+    const double fraction =
+        0.3 +
+        0.55 * (k / 2) / std::max(1, (options.calibration_captures - 1) / 2);
+    const double target_radius = (k % 2 ? 1 : -1) * fraction * bound;
+    // Distance with that blur (bisection; the blur is monotone in depth).
+    double lo = 0.2 * focus_m, hi = 20 * focus_m;
+    for (int it = 0; it < 100; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      const double r = dpsfm::PredictBlurRadiusPx(
+          lens, lens.PixelPitchMm(), 1.0, focus_m, mid);
+      (r < target_radius ? lo : hi) = mid;
+    }
+    const double distance_m = std::sqrt(lo * hi);
+    const double radius_full =
+        options.dp_factor *
+        dpsfm::PredictBlurRadiusPx(
+            lens, lens.PixelPitchMm(), 1.0, focus_m, distance_m);
+    // Multi-scale value noise, like the scenes' textures.
+    cv::Mat texture = cv::Mat::zeros(size, CV_32FC3);
+    double amplitude = 1.0, total = 0;
+    for (int cell = 64; cell >= 2; cell /= 2) {
+      cv::Mat coarse(size.height / cell + 2, size.width / cell + 2, CV_32FC3);
+      cv::RNG noise((*rng)());
+      noise.fill(coarse, cv::RNG::UNIFORM, 0.0, 1.0);
+      cv::Mat up;
+      cv::resize(coarse,
+                 up,
+                 cv::Size(coarse.cols * cell, coarse.rows * cell),
+                 0,
+                 0,
+                 cv::INTER_CUBIC);
+      texture += amplitude * up(cv::Rect(0, 0, size.width, size.height));
+      total += amplitude;
+      amplitude *= 0.75;
+    }
+    texture = 0.1 + 0.8 * texture / total;
+    const cv::Mat depth(size, CV_32FC1, cv::Scalar(distance_m));
+    const cv::Mat radius(size, CV_32FC1, cv::Scalar(radius_full));
+    cv::Mat left, right;
+    RenderSensorViews(
+        sensor, texture, depth, radius, render_options, &left, &right);
+    cv::RNG noise_rng((*rng)());
+    const std::string name = "cal_" + std::to_string(k) + ".png";
+    for (cv::Mat* view : {&left, &right}) {
+      if (options.dp_factor > 1) {
+        cv::resize(cv::Mat(*view), *view, dp_size, 0, 0, cv::INTER_AREA);
+      }
+      AddNoiseAndClamp(options.noise, &noise_rng, view);
+    }
+    cv::imwrite((root / "dp/left" / name).string(), To16Bit(left));
+    cv::imwrite((root / "dp/right" / name).string(), To16Bit(right));
+    csv << name << "," << std::setprecision(8) << distance_m << "," << focus_m
+        << "," << lens.focal_length_mm << "," << lens.f_number << ","
+        << lens.pixel_pitch_um << "\n";
+  }
+}
+
 // fused.ply: every 4th depth pixel of every pose, in model units.
 void WriteFusedPly(const std::vector<PinholeView>& views,
                    const std::vector<RenderedView>& renders,
@@ -342,7 +498,7 @@ int Run(const GeneratorOptions& options) {
                                   &rng);
   for (PinholeView& view : views) view.k1 = options.radial_k1;
 
-  const dpsfm::TranslatingDiskPsf psf;
+  const SensorPsf sensor = MakeSensorPsf(options);
   dpsfm::DPRenderOptions render_options;
   render_options.compositing =
       options.compositing == "layers"
@@ -356,6 +512,7 @@ int Run(const GeneratorOptions& options) {
   truth["scene"] = options.scene;
   truth["camera"] = options.camera;
   truth["dp_factor"] = options.dp_factor;
+  truth["dp_psf"] = sensor.description;
 
   // Renders in the undistorted (dense) geometry: depth maps, tracks, fused.
   std::vector<RenderedView> renders;
@@ -425,13 +582,13 @@ int Run(const GeneratorOptions& options) {
         }
       }
       cv::Mat left, right;
-      dpsfm::RenderDPViews(render.image,
-                           render.depth,
-                           radius,
-                           psf,
-                           render_options,
-                           &left,
-                           &right);
+      RenderSensorViews(sensor,
+                        render.image,
+                        render.depth,
+                        radius,
+                        render_options,
+                        &left,
+                        &right);
       ApplyColumnGain(1.0, -options.gain_ramp, &left);
       ApplyColumnGain(options.right_gain, options.gain_ramp, &right);
       cv::RNG noise_rng(ImageSeed(options.seed, name));
@@ -582,6 +739,9 @@ int Run(const GeneratorOptions& options) {
   }
   WriteFusedPly(views, renders, true_scale, (out / "dense/fused.ply").string());
 
+  if (options.calibration_captures > 0) {
+    WriteCalibrationCaptures(options, sensor, pitch_mm, dp_size, &rng, out);
+  }
   std::ofstream((out / "ground_truth.json").string()) << truth.dump(2) << "\n";
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
@@ -656,6 +816,19 @@ int main(int argc, char** argv) {
       &options.radial_k1,
       "SIMPLE_RADIAL k1 of the original images");
   add("compositing", &options.compositing, "additive | layers");
+  add("psf_split_exponent",
+      &options.psf_split_exponent,
+      "DP split profile exponent (0: the translating disk)");
+  add("psf_crosstalk", &options.psf_crosstalk, "DP split profile crosstalk");
+  add("psf_rim_softness",
+      &options.psf_rim_softness,
+      "DP split profile rim softness (fraction of the radius)");
+  add("psf_split_exponent_right",
+      &options.psf_split_exponent_right,
+      "split exponent at the right edge (profile changing across the frame)");
+  add("calibration_captures",
+      &options.calibration_captures,
+      "planar-target captures for dp_psf_calibrator (calibration/)");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
