@@ -131,6 +131,63 @@ TEST(FitSplitProfile, KnownRadiusCalibrationRoundTrip) {
   EXPECT_LT(fit.median_radius_error, 0.03);
 }
 
+// Planar-target captures (known radius) of a sensor whose split changes
+// across the frame (blended column by column from `left` to `right`).
+std::vector<ProfilePatch> TargetCaptures(const DPPsfModel& left,
+                                         const DPPsfModel& right) {
+  std::vector<ProfilePatch> patches;
+  const cv::Size size(390, 240);
+  int k = 0;
+  for (const double r : {-6.0, 6.0}) {
+    test::TextureOptions texture;
+    const cv::Mat sharp = test::MakeTexture(size, 900 + k, texture);
+    test::RenderOptions render;
+    render.noise_sigma = 0.004;
+    render.noise_seed = 950 + k++;
+    const test::DPPair a = test::RenderDP(sharp, left, r);
+    const test::DPPair b = test::RenderDP(sharp, right, r);
+    test::DPPair pair;
+    pair.left = a.left.clone();
+    pair.right = a.right.clone();
+    for (int x = 0; x < size.width; ++x) {
+      const double w = x / (size.width - 1.0);
+      pair.left.col(x) = (1 - w) * a.left.col(x) + w * b.left.col(x);
+      pair.right.col(x) = (1 - w) * a.right.col(x) + w * b.right.col(x);
+    }
+    test::internal::FinishViews(render, &pair);
+    const std::vector<ProfilePatch> found = ExtractProfilePatches(
+        test::ToGray(pair.left), test::ToGray(pair.right), 51, 25, 15, r, 1.5);
+    patches.insert(patches.end(), found.begin(), found.end());
+  }
+  return patches;
+}
+
+// A split that changes across the frame is calibrated per column band (and
+// the bands follow the change); a uniform one is not split into bands.
+TEST(CalibrateSplitProfile, BandsOnlyWhenTheProfileChangesAcrossTheFrame) {
+  SplitProfileParams sharp, soft;
+  sharp.split_exponent = 0.4;
+  soft.split_exponent = 1.6;
+  const SplitProfilePsf left(sharp), right(soft);
+  const SplitProfileCalibration varying =
+      CalibrateSplitProfile(TargetCaptures(left, right), 3, FastOptions());
+  std::printf("varying: %s\n", varying.summary.c_str());
+  ASSERT_TRUE(varying.frame.determined) << varying.summary;
+  ASSERT_TRUE(varying.banded) << varying.summary;
+  ASSERT_EQ(varying.bands.size(), 3u);
+  EXPECT_LT(varying.bands[0].params.split_exponent,
+            varying.bands[1].params.split_exponent);
+  EXPECT_LT(varying.bands[1].params.split_exponent,
+            varying.bands[2].params.split_exponent);
+
+  const SplitProfileCalibration uniform =
+      CalibrateSplitProfile(TargetCaptures(left, left), 3, FastOptions());
+  std::printf("uniform: %s\n", uniform.summary.c_str());
+  ASSERT_TRUE(uniform.frame.determined) << uniform.summary;
+  EXPECT_FALSE(uniform.banded) << uniform.summary;
+  EXPECT_NEAR(uniform.frame.centroid_offset / Centroid(0.4), 1.0, 0.02);
+}
+
 // Nothing but near-focus patches: the profile cannot be seen, and the fit
 // says so instead of guessing.
 TEST(FitSplitProfile, SaysWhenTheDataCannotDetermineIt) {
