@@ -505,7 +505,8 @@ int Run(const GeneratorOptions& options) {
           ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
           : dpsfm::DPRenderOptions::Compositing::kAdditive;
   std::ofstream lens_csv((out / "lens.csv").string());
-  lens_csv << "name,focal_length_mm,f_number,pixel_pitch_um\n";
+  lens_csv << "name,focal_length_mm,f_number,pixel_pitch_um\n"
+           << std::setprecision(10);
   nlohmann::json truth;
   truth["scale"] = true_scale;
   truth["model_unit"] = "metres / scale";

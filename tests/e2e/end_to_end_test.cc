@@ -18,6 +18,7 @@
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "dpsfm/colmap/workspace_reader.h"
+#include "tests/e2e/e2e_helpers.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -26,108 +27,8 @@ namespace {
 
 namespace fs = boost::filesystem;
 
-const std::string kColmap = DPSFM_COLMAP_EXE;
-const std::string kScenes = DPSFM_E2E_SCENES_DIR;
-
 // Largest accepted |1 - s_est / s_true| on the clean generated DSLR scene.
 constexpr double kMaxScaleError = 0.03;
-
-nlohmann::json ReadJson(const std::string& path) {
-  std::ifstream file(path);
-  EXPECT_TRUE(file.good()) << path;
-  return nlohmann::json::parse(file);
-}
-
-// A private copy of a generated scene.
-class SceneCopy {
- public:
-  explicit SceneCopy(const std::string& scene) {
-    const std::string source = kScenes + "/" + scene;
-    if (!fs::is_directory(source)) {
-      ADD_FAILURE() << "generated scene missing: " << source
-                    << " (run the whole suite with ctest; the "
-                       "e2e_generate_scenes fixture makes it)";
-      return;
-    }
-    root_ = dir_ / scene;
-    fs::create_directories(root_);
-    for (fs::recursive_directory_iterator it(source), end; it != end; ++it) {
-      const fs::path target =
-          fs::path(root_) / fs::relative(it->path(), source);
-      if (fs::is_directory(it->path())) {
-        fs::create_directories(target);
-      } else {
-        fs::copy_file(it->path(), target);
-      }
-    }
-  }
-  const std::string& root() const { return root_; }
-  std::string operator/(const std::string& name) const {
-    return (fs::path(root_) / name).string();
-  }
-  const TempDir& temp() const { return dir_; }
-
- private:
-  TempDir dir_;
-  std::string root_;
-};
-
-// A copy of a binary model, to compare with after the run.
-std::string CopyModel(const std::string& model_dir, const std::string& copy) {
-  fs::create_directories(copy);
-  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
-    fs::copy_file(fs::path(model_dir) / name, fs::path(copy) / name);
-  }
-  return copy;
-}
-
-CommandResult RunEstimator(const std::vector<std::string>& args,
-                           const std::vector<std::string>& env = {}) {
-  std::vector<std::string> command;
-  if (!env.empty()) {
-    command.push_back("env");
-    command.insert(command.end(), env.begin(), env.end());
-  }
-  command.push_back(kColmap);
-  command.push_back("dp_scale_estimator");
-  command.insert(command.end(), args.begin(), args.end());
-  return RunCommand(command);
-}
-
-std::vector<std::string> DenseArgs(const SceneCopy& scene) {
-  return {"--workspace_path",
-          scene / "dense",
-          "--dp_image_path",
-          scene / "dp",
-          "--lens_path",
-          scene / "lens.csv"};
-}
-
-std::vector<std::string> With(std::vector<std::string> args,
-                              const std::vector<std::string>& more) {
-  args.insert(args.end(), more.begin(), more.end());
-  return args;
-}
-
-// One error line naming `expected`, exit 1, and the tree untouched.
-void ExpectRefusal(const CommandResult& result,
-                   const std::string& expected,
-                   const std::map<std::string, std::string>& before,
-                   const std::string& root) {
-  EXPECT_FALSE(result.signaled) << result.err;
-  EXPECT_EQ(result.exit_code, 1) << result.err;
-  const std::vector<std::string> lines = Lines(result.err);
-  int error_lines = 0;
-  for (const std::string& line : lines) {
-    if (line.compare(0, 7, "ERROR: ") == 0) {
-      ++error_lines;
-      EXPECT_NE(line.find(expected), std::string::npos)
-          << line << "\nexpected: " << expected;
-    }
-  }
-  EXPECT_EQ(error_lines, 1) << result.err;
-  EXPECT_TRUE(SnapshotTree(root) == before) << "the workspace changed";
-}
 
 void ExpectModelScaled(const std::string& before_dir,
                        const std::string& after_dir,
@@ -550,10 +451,7 @@ TEST(EndToEndErrors, ModelWithoutRegisteredImages) {
 }
 
 TEST(EndToEndErrors, PanFocusCaptureIsRefusedWithAReason) {
-  SceneCopy scene("pan_focus");
-  const auto before = SnapshotTree(scene.root());
-  ExpectRefusal(
-      RunEstimator(DenseArgs(scene)), "too little blur", before, scene.root());
+  ExpectSceneRefused("pan_focus", "too little blur");
 }
 
 // A project database holding the model's cameras and images (or, with

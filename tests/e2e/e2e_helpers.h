@@ -1,0 +1,134 @@
+// Helpers of the end-to-end tests on generated scenes: the real binary,
+// private copies of the scenes the e2e_generate_scenes fixture made, and
+// the checks every refusal must pass.
+#pragma once
+
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace test {
+
+const std::string kColmap = DPSFM_COLMAP_EXE;
+const std::string kScenes = DPSFM_E2E_SCENES_DIR;
+
+inline nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream file(path);
+  EXPECT_TRUE(file.good()) << path;
+  return nlohmann::json::parse(file);
+}
+
+// A private copy of a generated scene.
+class SceneCopy {
+ public:
+  explicit SceneCopy(const std::string& scene) {
+    const std::string source = kScenes + "/" + scene;
+    if (!boost::filesystem::is_directory(source)) {
+      ADD_FAILURE() << "generated scene missing: " << source
+                    << " (run the whole suite with ctest; the "
+                       "e2e_generate_scenes fixture makes it)";
+      return;
+    }
+    root_ = dir_ / scene;
+    boost::filesystem::create_directories(root_);
+    for (boost::filesystem::recursive_directory_iterator it(source), end;
+         it != end;
+         ++it) {
+      const boost::filesystem::path target =
+          boost::filesystem::path(root_) /
+          boost::filesystem::relative(it->path(), source);
+      if (boost::filesystem::is_directory(it->path())) {
+        boost::filesystem::create_directories(target);
+      } else {
+        boost::filesystem::copy_file(it->path(), target);
+      }
+    }
+  }
+  const std::string& root() const { return root_; }
+  std::string operator/(const std::string& name) const {
+    return (boost::filesystem::path(root_) / name).string();
+  }
+  const TempDir& temp() const { return dir_; }
+
+ private:
+  TempDir dir_;
+  std::string root_;
+};
+
+// A copy of a binary model, to compare with after the run.
+inline std::string CopyModel(const std::string& model_dir,
+                             const std::string& copy) {
+  boost::filesystem::create_directories(copy);
+  for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
+    boost::filesystem::copy_file(boost::filesystem::path(model_dir) / name,
+                                 boost::filesystem::path(copy) / name);
+  }
+  return copy;
+}
+
+inline CommandResult RunEstimator(const std::vector<std::string>& args,
+                                  const std::vector<std::string>& env = {}) {
+  std::vector<std::string> command;
+  if (!env.empty()) {
+    command.push_back("env");
+    command.insert(command.end(), env.begin(), env.end());
+  }
+  command.push_back(kColmap);
+  command.push_back("dp_scale_estimator");
+  command.insert(command.end(), args.begin(), args.end());
+  return RunCommand(command);
+}
+
+inline std::vector<std::string> DenseArgs(const SceneCopy& scene) {
+  return {"--workspace_path",
+          scene / "dense",
+          "--dp_image_path",
+          scene / "dp",
+          "--lens_path",
+          scene / "lens.csv"};
+}
+
+inline std::vector<std::string> With(std::vector<std::string> args,
+                                     const std::vector<std::string>& more) {
+  args.insert(args.end(), more.begin(), more.end());
+  return args;
+}
+
+// One error line naming `expected`, exit 1, and the tree untouched.
+inline void ExpectRefusal(const CommandResult& result,
+                          const std::string& expected,
+                          const std::map<std::string, std::string>& before,
+                          const std::string& root) {
+  EXPECT_FALSE(result.signaled) << result.err;
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  const std::vector<std::string> lines = Lines(result.err);
+  int error_lines = 0;
+  for (const std::string& line : lines) {
+    if (line.compare(0, 7, "ERROR: ") == 0) {
+      ++error_lines;
+      EXPECT_NE(line.find(expected), std::string::npos)
+          << line << "\nexpected: " << expected;
+    }
+  }
+  EXPECT_EQ(error_lines, 1) << result.err;
+  EXPECT_TRUE(SnapshotTree(root) == before) << "the workspace changed";
+}
+
+// A dense run on a private copy of the generated scene `name` is refused
+// with an error line naming `expected`.
+inline void ExpectSceneRefused(const std::string& name,
+                               const std::string& expected) {
+  SceneCopy scene(name);
+  const auto before = SnapshotTree(scene.root());
+  ExpectRefusal(RunEstimator(DenseArgs(scene)), expected, before, scene.root());
+}
+
+}  // namespace test
+}  // namespace dpsfm
