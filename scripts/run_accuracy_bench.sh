@@ -9,7 +9,8 @@
 # overall. Prints tables; it does not gate anything.
 #
 # Environment: DPSFM_ACCURACY_DIR (default <cache>/accuracy), DPSFM_JOBS
-# (generation jobs, at most 2), DPSFM_ACCURACY_VIEWS (poses per scene, 8).
+# (generation jobs, at most 2), DPSFM_ACCURACY_VIEWS (poses per scene, 8),
+# DPSFM_ACCURACY_REUSE=1 (estimate again on the scenes of the last run).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
@@ -59,7 +60,15 @@ suite=(
 
 field() { cut -d'|' -f"$2" <<<"$1"; }
 
-rm -rf "$out"
+# DPSFM_ACCURACY_REUSE=1 keeps the scenes of the previous run (to re-run
+# only the estimates after a change of the estimator).
+reuse="${DPSFM_ACCURACY_REUSE:-0}"
+if [ "$reuse" = 1 ] && [ -d "$out/scenes" ]; then
+  rm -rf "$out/reports" "$out/subsets" "$out"/logs/*.estimate.log
+else
+  reuse=0
+  rm -rf "$out"
+fi
 mkdir -p "$out/scenes" "$out/logs" "$out/reports"
 
 # 1. Generate, at most $jobs at a time.
@@ -78,6 +87,7 @@ seed=100
 running=0
 for entry in "${suite[@]}"; do
   seed=$((seed + 1))
+  [ "$reuse" = 1 ] && continue
   generate "$(field "$entry" 1)" "$(field "$entry" 2)" "$(field "$entry" 4)" \
     "$(field "$entry" 5)" "$seed" &
   running=$((running + 1))
@@ -99,7 +109,8 @@ results="$out/results.tsv"
 : >"$results"
 estimate() {
   local run="$1" table="$2" row="$3" column="$4" workspace="$5" scene="$6"
-  local report="$out/reports/$run.json" logfile="$out/logs/$run.estimate.log"
+  local file="${run//\//_}"
+  local report="$out/reports/$file.json" logfile="$out/logs/$file.estimate.log"
   local status=0
   "$colmap" dp_scale_estimator --workspace_path "$workspace" \
     --dp_image_path "$scene/dp" --lens_path "$scene/lens.csv" \
