@@ -85,6 +85,25 @@ nlohmann::json MakeReport(const DPScaleResult& result,
         {"patches", fit.num_patches},
         {"mean_relative_residual", Number(fit.mean_relative_residual)},
         {"seconds", fit.seconds}};
+    nlohmann::json curve = nlohmann::json::array();
+    for (size_t i = 0; i < fit.exponents.size() && i < fit.criterion.size();
+         ++i) {
+      curve.push_back({Number(fit.exponents[i]), Number(fit.criterion[i])});
+    }
+    // Trimmed mean relative residual per split exponent tried.
+    psf["fit"]["criterion_curve"] = curve;
+    // A profile that changes across the frame: each column band's fit.
+    nlohmann::json bands = nlohmann::json::array();
+    for (const SplitProfileFit& band : result.psf_band_fits) {
+      bands.push_back(
+          {{"translating_disk_kept", band.translating_disk},
+           {"split_exponent", Number(band.params.split_exponent)},
+           {"split_exponent_ci",
+            Interval(band.exponent_ci_low, band.exponent_ci_high)},
+           {"centroid_offset_per_radius", Number(band.centroid_offset)},
+           {"patches", band.num_patches}});
+    }
+    psf["fit"]["bands"] = bands;
   }
   report["psf"] = psf;
 

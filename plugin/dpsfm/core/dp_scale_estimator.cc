@@ -15,6 +15,7 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
 namespace {
@@ -125,6 +126,9 @@ bool DPScaleOptions::Check() const {
               min_intensity_bootstrap_support <= 1);
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
   DPSFM_CHECK_GE(max_psf_fit_patches, 1);
+  DPSFM_CHECK(psf_fit_radius_factor >= 1 && psf_fit_radius_factor <= 4)
+      << "psf_fit_radius_factor must lie in [1, 4]";
+  DPSFM_CHECK_GE(psf_fit_bands, 1);
   if (psf_self_calibration) psf_fit.Check();
   blur.Check();
   linear.Check();
@@ -529,8 +533,22 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   std::stable_sort(by_confidence.begin(),
                    by_confidence.end(),
                    [&](int a, int b) { return confidence[a] > confidence[b]; });
+  // Stored crops: with self-calibration their border supports blur up to
+  // psf_fit_radius_factor x the search bound (see the option).
+  int store_border = border;
+  if (options_.psf_self_calibration) {
+    for (const auto& psf : band_psfs_) {
+      store_border = std::max(
+          store_border,
+          psf->KernelRadius(options_.psf_fit_radius_factor *
+                            DPKernelGridBound(geometry.max_radius_px,
+                                              options_.blur.grid_step_px)));
+    }
+  }
+  const int store_crop = p + 2 * store_border;
   {
-    const double crop_bytes = 2.0 * crop * crop * left.channels() * 2;
+    const double crop_bytes =
+        2.0 * store_crop * store_crop * left.channels() * 2;
     const int by_memory = static_cast<int>(
         options_.max_stored_megabytes_per_view * 1e6 / crop_bytes);
     const int cap = std::min(options_.max_stored_patches_per_view, by_memory);
@@ -543,14 +561,25 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   for (int k = 0; k < num; ++k) {
     if (usable(k)) sample_candidate.push_back(k);
   }
+  // Frames padded (reflected) so that wider stored crops near the edges
+  // exist too.
+  const int pad = store_border - border;
+  cv::Mat padded_left = left, padded_right = right;
+  if (pad > 0 && !by_confidence.empty()) {
+    cv::copyMakeBorder(
+        left, padded_left, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
+    cv::copyMakeBorder(
+        right, padded_right, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
+  }
   for (int i : by_confidence) {
     const cv::Rect interior = candidates[sample_candidate[i]].interior;
-    const cv::Rect r(interior.x - border, interior.y - border, crop, crop);
+    const cv::Rect r(
+        interior.x - border, interior.y - border, store_crop, store_crop);
     ViewData::Stored stored;
     stored.sample = i;
-    stored.left = ToU16(left(r));
-    stored.right = ToU16(right(r));
-    stored.border = border;
+    stored.left = ToU16(padded_left(r));
+    stored.right = ToU16(padded_right(r));
+    stored.border = store_border;
     data->stored.push_back(stored);
   }
 
@@ -561,7 +590,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 
 void DPScaleEstimator::CalibrateProfile(
     std::vector<std::vector<PatchSample>>* samples,
-    std::shared_ptr<const DPPsfModel>* psf,
+    std::vector<std::shared_ptr<const DPPsfModel>>* band_psfs,
     DPScaleResult* result) const {
   // Stored crops by geometry (crop size, radius bound): FitSplitProfile
   // takes one geometry; the largest group feeds it.
@@ -591,7 +620,7 @@ void DPScaleEstimator::CalibrateProfile(
   }
   SplitProfileFitOptions fit_options = options_.psf_fit;
   fit_options.blur = options_.blur;
-  fit_options.blur.max_radius_px = bound;
+  fit_options.blur.max_radius_px = options_.psf_fit_radius_factor * bound;
   fit_options.num_threads = options_.num_threads;
   fit_options.seed = options_.seed;
   std::vector<ProfilePatch> patches;
@@ -603,41 +632,75 @@ void DPScaleEstimator::CalibrateProfile(
     for (size_t k = 0; k < largest->size(); k += step) {
       const ViewData::Stored& st =
           views_[(*largest)[k].view]->stored[(*largest)[k].stored];
-      patches.push_back({gray_of(st.left), gray_of(st.right)});
+      ProfilePatch patch;
+      patch.left = gray_of(st.left);
+      patch.right = gray_of(st.right);
+      const ViewData& v = *views_[(*largest)[k].view];
+      patch.x_fraction =
+          (v.samples[st.sample].x + 0.5) / v.summary.frame_size.width;
+      patches.push_back(patch);
     }
   }
+  SplitProfileCalibration calibration;
   try {
-    result->psf_fit = FitSplitProfile(patches, fit_options);
+    calibration = CalibrateSplitProfile(patches,
+                                        options_.psf_fit_bands,
+                                        fit_options,
+                                        0.02,
+                                        /*bands_when_frame_fits=*/false);
   } catch (const std::exception& e) {
-    result->psf_fit = SplitProfileFit();
-    result->psf_fit.reason = e.what();
+    calibration.summary = e.what();
   }
-  const SplitProfileFit& fit = result->psf_fit;
+  result->psf_fit = calibration.frame;
+  const SplitProfileFit& fit = calibration.frame;
   std::ostringstream status;
-  if (!fit.determined) {
+  // The profiles to use: one for the whole frame, or one per band (a band
+  // may keep the translating disk).
+  std::vector<std::shared_ptr<const DPPsfModel>> fitted;
+  auto profile_of =
+      [&](const SplitProfileFit& f) -> std::shared_ptr<const DPPsfModel> {
+    if (f.translating_disk) return std::make_shared<TranslatingDiskPsf>();
+    return std::make_shared<SplitProfilePsf>(f.params);
+  };
+  if (calibration.banded) {
+    result->psf_band_fits = calibration.bands;
+    for (const SplitProfileFit& band : calibration.bands) {
+      fitted.push_back(profile_of(band));
+    }
+  } else if (!fit.determined) {
     status << "self-calibration could not determine the DP profile ("
-           << fit.reason << "); " << psf_->Name() << " kept";
+           << calibration.summary << "); " << psf_->Name() << " kept";
     result->psf_status = status.str();
     return;
-  }
-  if (fit.translating_disk) {
+  } else if (fit.translating_disk) {
     status << "self-calibration kept the translating disk (" << fit.reason
            << ")";
     result->psf_status = status.str();
     return;
+  } else {
+    fitted.push_back(profile_of(fit));
   }
-  auto fitted = std::make_shared<const SplitProfilePsf>(fit.params);
-  // Every stored patch searched again with the fitted profile; the others
+  const int num_bands = static_cast<int>(fitted.size());
+  // Every stored patch searched again with its fitted profile; the others
   // (estimated with the old one) leave the selection.
   for (auto& view_samples : *samples) {
-    for (PatchSample& s : view_samples) s.selected = false;
+    for (PatchSample& s : view_samples) {
+      s.selected = false;
+      const double x_fraction =
+          (s.x + 0.5) / views_[s.view]->summary.frame_size.width;
+      s.psf_band = std::max(
+          0, std::min(num_bands - 1, static_cast<int>(x_fraction * num_bands)));
+    }
   }
   int reestimated = 0;
   for (const auto& g : groups) {
     BlurEstimationOptions blur = options_.blur;
-    blur.max_radius_px = g.first.second;
-    const PatchBlurEstimator estimator(
-        *fitted, blur, cv::Size(g.first.first, g.first.first));
+    blur.max_radius_px = options_.psf_fit_radius_factor * g.first.second;
+    std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
+    for (const auto& band : fitted) {
+      estimators.emplace_back(new PatchBlurEstimator(
+          *band, blur, cv::Size(g.first.first, g.first.first)));
+    }
     const std::vector<Ref>& refs = g.second;
 #ifdef _OPENMP
     const int threads =
@@ -650,8 +713,8 @@ void DPScaleEstimator::CalibrateProfile(
       const ViewData::Stored& st = v.stored[refs[k].stored];
       PatchSample& s = (*samples)[refs[k].view][st.sample];
       try {
-        const PatchBlurEstimate e =
-            estimator.Estimate(gray_of(st.left), gray_of(st.right));
+        const PatchBlurEstimate e = estimators[s.psf_band]->Estimate(
+            gray_of(st.left), gray_of(st.right));
         if (e.valid && !e.at_bound && std::isfinite(e.radius_px)) {
           s.radius_px = e.radius_px;
           s.radius_frame_px = e.radius_px / v.summary.resize_factor;
@@ -664,11 +727,12 @@ void DPScaleEstimator::CalibrateProfile(
       }
     }
   }
-  status << "self-calibrated DP profile: " << fit.reason << "; " << reestimated
-         << " stored patches re-estimated with it";
+  status << "self-calibrated DP profile: "
+         << (calibration.banded ? calibration.summary : fit.reason) << "; "
+         << reestimated << " stored patches re-estimated with it";
   result->psf_status = status.str();
   result->psf_self_calibrated = true;
-  *psf = fitted;
+  *band_psfs = fitted;
 }
 
 DPScaleResult DPScaleEstimator::Estimate() const {
@@ -684,18 +748,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   // self-calibration may replace both.
   std::vector<std::vector<PatchSample>> samples(num_views);
   for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
-  std::shared_ptr<const DPPsfModel> psf = psf_;
+  std::vector<std::shared_ptr<const DPPsfModel>> psfs = band_psfs_;
   if (options_.psf_self_calibration && band_psfs_.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
-    CalibrateProfile(&samples, &psf, &result);
+    CalibrateProfile(&samples, &psfs, &result);
     result.seconds_psf_fit = SecondsSince(fit_start);
   }
+  const std::shared_ptr<const DPPsfModel> psf = psfs[0];
   result.psf_model = psf->Name();
-  const bool banded = band_psfs_.size() > 1 && !result.psf_self_calibrated;
+  const bool banded = psfs.size() > 1;
   if (banded) {
     std::ostringstream name;
-    name << band_psfs_.size() << " column bands:";
-    for (const auto& band : band_psfs_) name << " " << band->Name();
+    name << psfs.size() << " column bands:";
+    for (const auto& band : psfs) name << " " << band->Name();
     result.psf_model = name.str();
   }
 
@@ -860,7 +925,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         if (!samples[i][st.sample].selected) continue;
         ip.depth = samples[i][st.sample].depth;
         if (banded) {
-          ip.psf = band_psfs_[samples[i][st.sample].psf_band].get();
+          ip.psf = psfs[samples[i][st.sample].psf_band].get();
         }
         ip.left = st.left;
         ip.right = st.right;
@@ -875,7 +940,11 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     // supports exactly that).
     double max_r = 0;
     for (int i : linear.selected_views) {
-      max_r = std::max(max_r, views_[i]->summary.max_radius_px);
+      max_r = std::max(
+          max_r,
+          views_[i]->summary.max_radius_px *
+              (result.psf_self_calibrated ? options_.psf_fit_radius_factor
+                                          : 1.0));
     }
     search.max_radius_px = max_r;
     IntensitySearchResult intensity;

@@ -142,15 +142,26 @@ struct DPScaleOptions {
   double scale_systematic_uncertainty = 0.01;
 
   // DP PSF self-calibration (the `auto` profile, issue 7): before the
-  // linear stage, fit the split profile to the stored patches of all views
-  // (FitSplitProfile). When the data determine a profile other than the
-  // translating disk, the stored patches' blur is searched again with it and
-  // both stages use those patches and that profile; otherwise the given PSF
-  // is kept and the result says why.
+  // linear stage, fit the split profile to the stored patches of all views,
+  // for the whole frame and for psf_fit_bands column bands
+  // (CalibrateSplitProfile). When the data determine a profile other than
+  // the translating disk, the stored patches' blur is searched again with
+  // it (each band's where the profile changes across the frame) and both
+  // stages use those patches and profiles; otherwise the given PSF is kept
+  // and the result says why.
   bool psf_self_calibration = false;
   SplitProfileFitOptions psf_fit;
   // At most this many patches feed the fit (evenly over the views).
-  int max_psf_fit_patches = 250;
+  int max_psf_fit_patches = 400;
+  // Self-calibration searches blur up to this multiple of the blur stage's
+  // bound, and the stored crops carry the border for it: the translating
+  // disk reads a softer true split's blur up to ~1.5x small, so the true
+  // blur of the patches it selected can lie beyond its own bound (with the
+  // bound as it was, the true profile lost those patches and the fit was
+  // pulled back towards the translating disk: generated soft-split scenes
+  // fitted p ~1.1 instead of 2.2).
+  double psf_fit_radius_factor = 2;
+  int psf_fit_bands = 3;
 
   // OpenMP threads for blur estimation and the intensity search; -1 = all.
   int num_threads = -1;
@@ -242,7 +253,10 @@ struct DPScaleResult {
   std::string psf_model;
   std::string psf_status;
   bool psf_self_calibrated = false;  // a fitted profile replaced the given one
+  // The whole frame's fit (and, for a profile changing across the frame,
+  // the bands' fits, left to right, when they were used).
   SplitProfileFit psf_fit;
+  std::vector<SplitProfileFit> psf_band_fits;
   double seconds_psf_fit = 0;
 };
 
@@ -278,9 +292,10 @@ class DPScaleEstimator {
   // Self-calibration: fits the split profile to the stored patches and, if
   // it replaces the given PSF, re-estimates them (samples[i] of view i; only
   // the stored ones stay selected) and sets *psf.
-  void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
-                        std::shared_ptr<const DPPsfModel>* psf,
-                        DPScaleResult* result) const;
+  void CalibrateProfile(
+      std::vector<std::vector<PatchSample>>* samples,
+      std::vector<std::shared_ptr<const DPPsfModel>>* band_psfs,
+      DPScaleResult* result) const;
   DPScaleOptions options_;
   std::vector<std::shared_ptr<const DPPsfModel>> band_psfs_;
   std::shared_ptr<const DPPsfModel> psf_;  // band_psfs_[0]

@@ -86,6 +86,12 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   }
 }
 
+double DPKernelGridBound(double max_radius_px, double step_px) {
+  return std::max(1,
+                  static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9))) *
+         step_px;
+}
+
 void DPKernelGrid::Locate(double signed_radius_px, int* node, double* t) const {
   const double bound = Bound();
   double r = std::isfinite(signed_radius_px)

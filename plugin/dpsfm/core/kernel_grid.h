@@ -74,6 +74,10 @@ class DPKernelGrid {
   std::vector<double> left_cross_, right_cross_;
 };
 
+// The bound of a DPKernelGrid(psf, step_px, max_radius_px, ...): max_radius_px
+// rounded up to a multiple of step_px.
+double DPKernelGridBound(double max_radius_px, double step_px);
+
 // (1 - t)^2 a + 2 t (1 - t) ab + t^2 b: the squared norm of
 // (1 - t) x + t y given |x|^2 = a, <x, y> = ab, |y|^2 = b.
 inline double InterpolatedEnergy(double a, double ab, double b, double t) {

@@ -401,13 +401,15 @@ SplitProfileCalibration CalibrateSplitProfile(
     const std::vector<ProfilePatch>& patches,
     int num_bands,
     const SplitProfileFitOptions& options,
-    double min_band_difference) {
+    double min_band_difference,
+    bool bands_when_frame_fits) {
   DPSFM_CHECK_GE(num_bands, 1);
   SplitProfileCalibration calibration;
   calibration.frame = FitSplitProfile(patches, options);
   std::ostringstream summary;
   summary << "whole frame: " << calibration.frame.reason;
-  if (!calibration.frame.determined || num_bands == 1) {
+  if (num_bands == 1 ||
+      (!bands_when_frame_fits && calibration.frame.determined)) {
     calibration.summary = summary.str();
     return calibration;
   }
@@ -420,6 +422,7 @@ SplitProfileCalibration CalibrateSplitProfile(
     by_band[band].push_back(patch);
   }
   bool all_determined = true;
+  bool significant = false;  // some band's interval excludes the frame's
   double largest_difference = 0;
   for (int b = 0; b < num_bands; ++b) {
     calibration.bands.push_back(FitSplitProfile(by_band[b], options));
@@ -427,15 +430,21 @@ SplitProfileCalibration CalibrateSplitProfile(
     summary << "; band " << b + 1 << " of " << num_bands << ": "
             << (fit.determined ? "" : "not determined, ") << fit.reason;
     all_determined = all_determined && fit.determined;
-    if (fit.determined) {
-      largest_difference = std::max(
-          largest_difference,
-          std::abs(fit.centroid_offset / calibration.frame.centroid_offset -
-                   1));
+    if (fit.determined && calibration.frame.determined) {
+      const double difference =
+          std::abs(fit.centroid_offset / calibration.frame.centroid_offset - 1);
+      largest_difference = std::max(largest_difference, difference);
+      const double c = calibration.frame.centroid_offset;
+      if (difference > min_band_difference &&
+          (c < fit.centroid_offset_ci_low || c > fit.centroid_offset_ci_high)) {
+        significant = true;
+      }
     }
   }
+  // Bands when they differ, or when only they are determined (a profile
+  // that changes across the frame fits no single one well).
   calibration.banded =
-      all_determined && largest_difference > min_band_difference;
+      all_determined && (!calibration.frame.determined || significant);
   summary << (calibration.banded ? "; the profile changes across the frame ("
                                  : "; one profile for the whole frame (")
           << "largest band difference in centroid offset "

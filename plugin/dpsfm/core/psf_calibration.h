@@ -62,7 +62,7 @@ struct SplitProfileFitOptions {
   double min_abs_radius_px = 2.0;
   // Self-calibration: the largest residuals are trimmed (depth edges,
   // occlusions, patches the model cannot fit whatever the profile).
-  double trim_fraction = 0.2;
+  double trim_fraction = 0.5;
   int min_patches = 20;
   // Bootstrap over patches; the fit counts as determined when the 95 %
   // interval of the centroid offset per radius is narrower than this
@@ -112,19 +112,25 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
 // `num_bands` equal-width column bands: real DP profiles change across the
 // frame. The bands are used (banded = true) when every band's fit is
 // determined and some band's centroid offset differs from the whole
-// frame's by more than `min_band_difference` (relative); otherwise the
-// whole-frame profile is the calibration.
+// frame's by more than `min_band_difference` (relative) with the frame's
+// outside that band's 95 % interval, or the whole frame's is not
+// determined; otherwise the whole-frame profile is the calibration. Works
+// for known radii and for self-calibration alike.
 struct SplitProfileCalibration {
   SplitProfileFit frame;
   std::vector<SplitProfileFit> bands;
   bool banded = false;
   std::string summary;
 };
+// bands_when_frame_fits = false fits the bands only when the whole frame's
+// profile is not determined (self-calibration: saves their cost when one
+// profile explains the data).
 SplitProfileCalibration CalibrateSplitProfile(
     const std::vector<ProfilePatch>& patches,
     int num_bands,
     const SplitProfileFitOptions& options,
-    double min_band_difference = 0.02);
+    double min_band_difference = 0.02,
+    bool bands_when_frame_fits = true);
 
 // Calibration captures: the textured patches of a DP pair of a planar,
 // fronto-parallel target (one blur radius over the frame). Grey CV_32FC1
