@@ -1,7 +1,8 @@
 # Turns the accuracy benchmark's results.tsv (table, row, column, run,
 # exit status, r_s linear, r_s final, views used, intensity adopted, ERROR
 # line) into markdown tables in the layout of the paper's tables: r_s per
-# cell (linear / final), e_s = mean |1 - r_s| per row, per column and
+# cell (linear / final, and the views used), e_s = mean |1 - r_s| per row,
+# per column and
 # overall, then the failure scenes and the issue's goals.
 function abs(x) { return x < 0 ? -x : x }
 function fmt_pair(a, b) { return sprintf("%.3f / %.3f", a, b) }
@@ -62,7 +63,7 @@ function pivot(t, title, corner,    i, j, r, c, key, line, n, sl, sf, rn, rl, rf
     refused[++nrefused] = t ": " r ", " c ": " $10
     next
   }
-  cell[key] = fmt_pair($6, $7)
+  cell[key] = fmt_pair($6, $7) " (" $8 ")"
   el[key] = abs(1 - $6); ef[key] = abs(1 - $7)
   # Overall means: every scene of the per-setting tables once, and each
   # multi-aperture set's all-together run.

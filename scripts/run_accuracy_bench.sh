@@ -64,12 +64,18 @@ field() { cut -d'|' -f"$2" <<<"$1"; }
 # only the estimates after a change of the estimator).
 reuse="${DPSFM_ACCURACY_REUSE:-0}"
 if [ "$reuse" = 1 ] && [ -d "$out/scenes" ]; then
-  rm -rf "$out/reports" "$out/subsets" "$out"/logs/*.estimate.log
+  rm -rf "$out/reports" "$out/subsets" "$out/bin" "$out"/logs/*.estimate.log
 else
   reuse=0
   rm -rf "$out"
 fi
-mkdir -p "$out/scenes" "$out/logs" "$out/reports"
+mkdir -p "$out/scenes" "$out/logs" "$out/reports" "$out/bin"
+# Run copies of the binaries: a rebuild in the same tree while the suite
+# runs then neither breaks it nor mixes versions.
+cp "$colmap" "$generator" "$compare" "$out/bin/"
+colmap="$out/bin/colmap"
+generator="$out/bin/dpsfm_make_example"
+compare="$out/bin/dpsfm_compare_to_truth"
 
 # 1. Generate, at most $jobs at a time.
 generate() {
@@ -168,9 +174,13 @@ log "stage 'estimate' took $((SECONDS - start)) s"
 # 3. Tables.
 generation_times="$(grep -ho '([0-9.]* s)$' "$out"/logs/*.generate.log | tr -d '(s)' |
   awk '{ sum += $1; if ($1 > max) max = $1 } END { printf "%.1f s mean, %.1f s max", sum / NR, max }')"
+source_state="$(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+dirty="$(git -C "$DPSFM_ROOT" status --short -- plugin examples 2>/dev/null | awk '{ print $2 }' | tr '\n' ' ')"
+[ -n "$dirty" ] && source_state="$source_state + uncommitted changes to $dirty"
 {
+  echo "Run $(date -u '+%Y-%m-%d %H:%M UTC') on $(nproc) cores; source: $source_state."
   echo "Accuracy benchmark: ${#suite[@]} generated scenes, $views poses each (multi-aperture sets 6 poses x 3 apertures)."
-  echo "Cells: r_s = s_est / s_true of the linear (initial) / intensity (final) stage; e_s = mean |1 - r_s| (linear / final)."
+  echo "Cells: r_s = s_est / s_true of the linear (initial) / intensity (final) stage (views used); e_s = mean |1 - r_s| (linear / final)."
   echo "Generation: $generation_times per scene."
   echo
   awk -F'\t' -f "$DPSFM_ROOT/scripts/accuracy_tables.awk" "$results"
