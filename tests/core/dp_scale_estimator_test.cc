@@ -438,6 +438,9 @@ TEST(DPScaleEstimator, RefusesTexturelessCaptureAndSaysWhy) {
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.failure_reason.find("no view passed selection"),
             std::string::npos);
+  // The cause leads the message.
+  EXPECT_EQ(r.failure_reason.find("too little texture"), 0u)
+      << r.failure_reason;
   std::printf("textureless refusal: %s\n", r.failure_reason.c_str());
 }
 

@@ -825,9 +825,11 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       result.patches.push_back(copy);
     }
   }
-  // Where the patches went, summed over views, for refusal messages.
+  // Where the patches went, summed over views, for refusal messages; and
+  // the leading cause when most patches had too little texture (then the
+  // views' other symptoms, e.g. a small blur range, follow from it).
   int patches_tried = 0, patches_valid = 0;
-  std::string patch_rejections;
+  std::string patch_rejections, leading_cause;
   {
     std::map<std::string, int> rejections;
     for (const auto& v : views_) {
@@ -845,11 +847,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
           CountsToString(std::vector<std::pair<std::string, int>>(
               rejections.begin(), rejections.end()));
     }
+    const int weak = rejections["with texture too weak for the noise"];
+    if (weak > 0 && weak >= 0.5 * patches_tried) {
+      std::ostringstream cause;
+      cause << "too little texture: " << weak << " of " << patches_tried
+            << " patches have texture too weak for the sensor noise; ";
+      leading_cause = cause.str();
+    }
   }
   if (!linear.success) {
     std::ostringstream s;
-    s << linear.failure_reason << " (patches over all views: " << patches_tried
-      << " tried, " << patches_valid << " usable";
+    s << leading_cause << linear.failure_reason
+      << " (patches over all views: " << patches_tried << " tried, "
+      << patches_valid << " usable";
     if (!patch_rejections.empty()) {
       s << "; " << patch_rejections;
     }
@@ -869,6 +879,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     const double width =
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
     std::ostringstream s;
+    if (linear.num_rows < options_.min_total_patches ||
+        !(width <= options_.max_scale_ci_relative_width)) {
+      s << leading_cause;
+    }
     if (linear.num_rows < options_.min_total_patches) {
       s << "too few usable patches for a scale (" << linear.num_rows
         << " in the joint solve, need " << options_.min_total_patches << ")";
