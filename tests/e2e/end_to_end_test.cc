@@ -257,6 +257,45 @@ TEST(EndToEnd, DistortedCamerasDenseAndSparse) {
   EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
 }
 
+// The model image_undistorter ran on (--original_model_path) maps depths
+// into the DP frames like the database's cameras, and takes precedence over
+// them (a real database holds only feature extraction's initial guesses).
+TEST(EndToEnd, DistortedCamerasFromTheOriginalModel) {
+  SceneCopy scene("distorted");
+  const double true_scale =
+      ReadJson(scene / "ground_truth.json").at("scale").get<double>();
+  const std::string report_path = scene.temp() / "report.json";
+  CommandResult result = RunEstimator(With(DenseArgs(scene),
+                                           {"--original_model_path",
+                                            scene / "sparse/0",
+                                            "--dry_run",
+                                            "1",
+                                            "--report_path",
+                                            report_path}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const double scale = ReadJson(report_path).at("scale").get<double>();
+  EXPECT_LT(std::abs(1 - scale / true_scale), kMaxScaleError);
+  // A folder without a model, or a sparse run, is refused with the reason.
+  const std::map<std::string, std::string> before = SnapshotTree(scene.root());
+  ExpectRefusal(
+      RunEstimator(With(DenseArgs(scene),
+                        {"--original_model_path", scene / "dense/stereo"})),
+      "--original_model_path has no model",
+      before,
+      scene.root());
+  ExpectRefusal(RunEstimator({"--input_path",
+                              scene / "sparse/0",
+                              "--dp_image_path",
+                              scene / "dp",
+                              "--lens_path",
+                              scene / "lens.csv",
+                              "--original_model_path",
+                              scene / "sparse/0"}),
+                "is for a dense workspace",
+                before,
+                scene.root());
+}
+
 TEST(EndToEnd, RealColmapPipelineSparseMode) {
   // COLMAP's own SfM on the generated images gives a model of arbitrary
   // frame and scale; after dp_scale_estimator its camera distances must be

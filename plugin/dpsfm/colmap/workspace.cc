@@ -138,6 +138,19 @@ WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options) {
   if (!options.image_path.empty()) {
     RequireDir(options.image_path, "--image_path");
   }
+  if (!options.original_model_path.empty()) {
+    if (options.workspace_path.empty()) {
+      throw InputError(
+          "--original_model_path is for a dense workspace "
+          "(--workspace_path); a sparse model is in the original geometry "
+          "already");
+    }
+    RequireDir(options.original_model_path, "--original_model_path");
+    if (!IsModelDir(options.original_model_path)) {
+      throw InputError("--original_model_path has no model: " +
+                       options.original_model_path);
+    }
+  }
   if (!options.database_path.empty()) {
     // Opening a missing database would silently create an empty one.
     RequireFile(options.database_path, "--database_path");

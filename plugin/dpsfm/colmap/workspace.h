@@ -30,6 +30,11 @@ struct DPScaleEstimatorOptions {
   std::string image_path;
   // The project database; opened read-only, never created.
   std::string database_path;
+  // Dense mode: the (distorted) model image_undistorter was run on, e.g.
+  // sparse/0. Its refined cameras map the undistorted depth maps into the DP
+  // frames' original geometry; they take precedence over the database's
+  // cameras (which hold feature extraction's initial guesses).
+  std::string original_model_path;
   // Per-image lens data (name,focal_length_mm,f_number,pixel_pitch_um).
   std::string lens_path;
   // Which depth maps to read: "geometric" (falls back to photometric) or

@@ -94,6 +94,30 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
     database_check_ =
         CheckModelAgainstDatabase(options_.database_path, reconstruction_);
   }
+  if (!options_.original_model_path.empty()) {
+    colmap::Reconstruction original;
+    try {
+      original.Read(options_.original_model_path);
+    } catch (const std::exception& error) {
+      throw InputError("cannot read the model in " +
+                       options_.original_model_path + ": " + error.what());
+    }
+    for (const auto& entry : original.Images()) {
+      original_model_cameras_[entry.second.Name()] =
+          original.Camera(entry.second.CameraId());
+    }
+    std::vector<std::string> missing;
+    for (const colmap::image_t image_id : image_ids) {
+      const std::string& name = reconstruction_.Image(image_id).Name();
+      if (original_model_cameras_.count(name) == 0) missing.push_back(name);
+    }
+    if (!missing.empty()) {
+      throw InputError(std::to_string(missing.size()) + " images of " +
+                       layout_.model_path + " are not in " +
+                       options_.original_model_path + " (e.g. " + missing[0] +
+                       "): pass the model image_undistorter was run on");
+    }
+  }
 
   dp_index_.reset(new DPImageIndex(layout_));
   std::vector<std::string> missing;
@@ -207,10 +231,16 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   // the database) and different, depths are mapped through both cameras.
   const colmap::Camera* original = nullptr;
   if (layout_.dense) {
-    const auto entry = database_check_.original_cameras.find(source.image_name);
-    if (entry != database_check_.original_cameras.end() &&
-        !SameGeometry(entry->second, camera)) {
-      original = &entry->second;
+    const auto from_model = original_model_cameras_.find(source.image_name);
+    const auto from_database =
+        database_check_.original_cameras.find(source.image_name);
+    if (from_model != original_model_cameras_.end()) {
+      if (!SameGeometry(from_model->second, camera)) {
+        original = &from_model->second;
+      }
+    } else if (from_database != database_check_.original_cameras.end() &&
+               !SameGeometry(from_database->second, camera)) {
+      original = &from_database->second;
     }
   }
   const colmap::Camera& frame_camera = original ? *original : camera;
@@ -222,10 +252,12 @@ DPView WorkspaceReader::LoadView(size_t index) const {
                             source.image_name);
   } catch (const InputError& error) {
     if (layout_.dense && original == nullptr &&
-        options_.database_path.empty()) {
+        options_.database_path.empty() &&
+        options_.original_model_path.empty()) {
       throw InputError(std::string(error.what()) +
                        "; if the DP views keep the geometry of distorted "
-                       "original images, pass --database_path so their "
+                       "original images, pass --original_model_path (the "
+                       "model image_undistorter was run on) so their "
                        "cameras can be mapped");
     }
     throw;

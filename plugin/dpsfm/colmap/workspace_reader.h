@@ -68,6 +68,8 @@ class WorkspaceReader {
   std::unique_ptr<DPImageIndex> dp_index_;
   std::vector<ViewSource> sources_;
   DatabaseCheck database_check_;
+  // Image name -> its camera in --original_model_path.
+  std::map<std::string, colmap::Camera> original_model_cameras_;
 };
 
 }  // namespace dpsfm

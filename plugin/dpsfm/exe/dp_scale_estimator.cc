@@ -54,6 +54,11 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption(
       "database_path", &options->database_path, "project database, read only");
   manager->AddDefaultOption(
+      "original_model_path",
+      &options->original_model_path,
+      "dense mode: the distorted model image_undistorter was run on (its "
+      "cameras map depths into the DP frames' geometry)");
+  manager->AddDefaultOption(
       "lens_path", &options->lens_path, "lens.csv with per-image lens data");
   manager->AddDefaultOption("input_type",
                             &options->input_type,
