@@ -8,15 +8,11 @@
 // the generator's, with the true scale of the workspace's units (metres
 // per unit, from the true camera centres).
 //
-// With --original_model_path (the mapper's model, distorted cameras) and
-// --database_output, it writes a database holding the mapper's refined
-// cameras: `dp_scale_estimator --database_path` takes the original
-// geometry of the DP frames from the database, and the project database
-// holds only the cameras' priors (see docs/benchmark.md).
+// dp_scale_estimator then takes the DP frames' original (distorted)
+// geometry from the mapper's model with --original_model_path.
 //
 //   dpsfm_align_true_depths --truth_path GENERATED_SCENE
 //       --workspace_path PIPELINE_DENSE --ground_truth_output FILE.json
-//       [--original_model_path SPARSE_MODEL --database_output FILE.db]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -30,7 +26,6 @@
 #include <nlohmann/json.hpp>
 
 #include "colmap/mvs/depth_map.h"
-#include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 
 namespace fs = boost::filesystem;
@@ -141,28 +136,10 @@ colmap::mvs::DepthMap TransferDepthMap(const colmap::Image& image,
   return map;
 }
 
-// A database holding `model`'s cameras and image names: what the project
-// database would hold if it kept the mapper's refined intrinsics.
-void WriteCameraDatabase(const colmap::Reconstruction& model,
-                         const std::string& path) {
-  colmap::Database database(path);
-  for (const auto& camera : model.Cameras()) {
-    database.WriteCamera(camera.second, /*use_camera_id=*/true);
-  }
-  for (const auto& image : model.Images()) {
-    colmap::Image copy;
-    copy.SetName(image.second.Name());
-    copy.SetCameraId(image.second.CameraId());
-    database.WriteImage(copy);
-  }
-}
-
 struct Paths {
   std::string truth;
   std::string workspace;
   std::string ground_truth_output;
-  std::string original_model;
-  std::string database_output;
 };
 
 int Run(const Paths& paths) {
@@ -225,12 +202,6 @@ int Run(const Paths& paths) {
     }
   }
   std::ofstream(paths.ground_truth_output) << truth.dump(2) << "\n";
-  if (!paths.database_output.empty()) {
-    colmap::Reconstruction original;
-    original.Read(paths.original_model);
-    fs::remove(paths.database_output);
-    WriteCameraDatabase(original, paths.database_output);
-  }
   std::printf(
       "Aligned %zu images of %s to the generated scene: camera centres "
       "within %.2f mm RMS; true scale of the workspace %.6g m per model "
@@ -254,16 +225,12 @@ int main(int argc, char** argv) {
     if (flag == "--ground_truth_output") {
       paths.ground_truth_output = argv[i + 1];
     }
-    if (flag == "--original_model_path") paths.original_model = argv[i + 1];
-    if (flag == "--database_output") paths.database_output = argv[i + 1];
   }
   if (paths.truth.empty() || paths.workspace.empty() ||
-      paths.ground_truth_output.empty() ||
-      paths.original_model.empty() != paths.database_output.empty()) {
+      paths.ground_truth_output.empty()) {
     std::cerr << "usage: dpsfm_align_true_depths --truth_path GENERATED_SCENE "
                  "--workspace_path PIPELINE_DENSE --ground_truth_output "
-                 "FILE.json [--original_model_path SPARSE --database_output "
-                 "FILE.db]\n";
+                 "FILE.json\n";
     return EXIT_FAILURE;
   }
   try {

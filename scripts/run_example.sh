@@ -67,19 +67,16 @@ stage "dp_scale_estimator (mapper's sparse model)" "$colmap" dp_scale_estimator 
   || { tail -n 5 "$logs/sparse.log" >&2; die "dp_scale_estimator failed on the mapper's model"; }
 
 # 3. The mapper's dense workspace with the true depths in its units. The DP
-# frames keep the original images' geometry, which the estimator takes from
-# --database_path; the project database holds only the cameras' priors
-# (focal 1.2 x width), not the mapper's refined intrinsics, so a database
-# of the mapper's cameras is given instead (docs/benchmark.md).
+# frames keep the original images' geometry: --original_model_path gives
+# the mapper's refined (distorted) cameras (the project database holds only
+# their priors). Rescaling sparse/0 in step 2 left its cameras as they were.
 stage "true depth maps in the mapper's frame" "$examples/dpsfm_align_true_depths" \
   --truth_path "$scene" --workspace_path "$pipeline/dense" \
-  --ground_truth_output "$pipeline/ground_truth.json" \
-  --original_model_path "$pipeline/sparse/0" \
-  --database_output "$pipeline/refined_cameras.db" >"$logs/align.log" \
+  --ground_truth_output "$pipeline/ground_truth.json" >"$logs/align.log" \
   || die "aligning the true depth maps failed"
 stage "dp_scale_estimator (mapper's dense workspace)" "$colmap" dp_scale_estimator \
   --workspace_path "$pipeline/dense" --dp_image_path "$scene/dp" \
-  --database_path "$pipeline/refined_cameras.db" --lens_path "$scene/lens.csv" \
+  --original_model_path "$pipeline/sparse/0" --lens_path "$scene/lens.csv" \
   --report_path "$scene/report_pipeline_dense.json" 2>"$logs/pipeline_dense.log" \
   || { tail -n 5 "$logs/pipeline_dense.log" >&2; die "dp_scale_estimator failed on the mapper's dense workspace"; }
 
