@@ -20,7 +20,13 @@ generator="$build_dir/examples/dpsfm_make_example"
 out="${DPSFM_PROFILE_DIR:-$DPSFM_CACHE_DIR/profiles}"
 seeds="${DPSFM_PROFILE_SEEDS:-2}"
 rm -rf "$out"
-mkdir -p "$out"
+mkdir -p "$out/bin"
+# Run copies of the binaries: a rebuild in the same tree during the run
+# must not change them halfway.
+cp "$colmap" "$generator" "$out/bin/"
+colmap="$out/bin/colmap"
+generator="$out/bin/dpsfm_make_example"
+log "source: $(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$DPSFM_ROOT" status --porcelain 2>/dev/null | grep -q . && echo ' (with uncommitted changes)')"
 
 # name | generator options for the sensor's DP PSF.
 profiles=(

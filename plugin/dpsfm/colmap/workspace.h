@@ -56,8 +56,11 @@ struct DPScaleEstimatorOptions {
   double pixel_pitch_um = 0.0;
   bool swap_dp_views = false;
   // The DP PSF profile: translating_disk, calibrated (psf_path) or auto
-  // (self-calibrated from the data); see psf_profile.h.
-  std::string psf_model = "translating_disk";
+  // (self-calibrated from the data; the default since the profile benchmark
+  // showed it equal to translating_disk on translating-disk data and far
+  // better on every other profile, docs/psf-profiles.md); see
+  // psf_profile.h.
+  std::string psf_model = "auto";
   std::string psf_path;
 
   // Throws InputError naming the option and the value.

@@ -547,8 +547,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   }
   const int store_crop = p + 2 * store_border;
   {
-    const double crop_bytes =
-        2.0 * store_crop * store_crop * left.channels() * 2;
+    // The budget is for crops with the blur stage's border: the wider
+    // border self-calibration needs does not cost patches.
+    const double crop_bytes = 2.0 * crop * crop * left.channels() * 2;
     const int by_memory = static_cast<int>(
         options_.max_stored_megabytes_per_view * 1e6 / crop_bytes);
     const int cap = std::min(options_.max_stored_patches_per_view, by_memory);
