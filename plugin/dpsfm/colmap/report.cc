@@ -84,6 +84,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
          Number(fit.translating_disk_centroid_offset)},
         {"patches", fit.num_patches},
         {"mean_relative_residual", Number(fit.mean_relative_residual)},
+        {"translating_disk_criterion", Number(fit.translating_disk_criterion)},
         {"seconds", fit.seconds}};
     nlohmann::json curve = nlohmann::json::array();
     for (size_t i = 0; i < fit.exponents.size() && i < fit.criterion.size();

@@ -129,6 +129,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK(psf_fit_radius_factor >= 1 && psf_fit_radius_factor <= 4)
       << "psf_fit_radius_factor must lie in [1, 4]";
   DPSFM_CHECK_GE(psf_fit_bands, 1);
+  DPSFM_CHECK_GE(max_psf_fit_depth_spread, 0);
   if (psf_self_calibration) psf_fit.Check();
   blur.Check();
   linear.Check();
@@ -490,6 +491,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     s.x = (cx + 0.5) / sx - 0.5;
     s.y = (cy + 0.5) / sy - 0.5;
     s.depth = c.depth.median;
+    s.depth_spread = c.depth.relative_spread;
     s.radius_px = e.radius_px;
     s.radius_frame_px = e.radius_px / rf;
     s.fit_quality = e.fit_quality;
@@ -626,17 +628,37 @@ void DPScaleEstimator::CalibrateProfile(
   fit_options.seed = options_.seed;
   std::vector<ProfilePatch> patches;
   if (largest != nullptr) {
+    // The flat ones (see max_psf_fit_depth_spread), evenly over the views.
+    std::vector<Ref> flat;
+    std::vector<std::pair<double, size_t>> by_spread;
+    for (size_t k = 0; k < largest->size(); ++k) {
+      const Ref& ref = (*largest)[k];
+      const ViewData& v = *views_[ref.view];
+      const double spread = v.samples[v.stored[ref.stored].sample].depth_spread;
+      by_spread.emplace_back(spread, k);
+      if (spread <= options_.max_psf_fit_depth_spread) flat.push_back(ref);
+    }
+    const size_t enough = 2 * static_cast<size_t>(fit_options.min_patches);
+    if (flat.size() < enough) {
+      std::stable_sort(by_spread.begin(), by_spread.end());
+      flat.clear();
+      for (size_t i = 0; i < by_spread.size() && i < enough; ++i) {
+        flat.push_back((*largest)[by_spread[i].second]);
+      }
+      std::sort(flat.begin(), flat.end(), [](const Ref& a, const Ref& b) {
+        return a.view != b.view ? a.view < b.view : a.stored < b.stored;
+      });
+    }
     const size_t step =
         std::max<size_t>(1,
-                         (largest->size() + options_.max_psf_fit_patches - 1) /
+                         (flat.size() + options_.max_psf_fit_patches - 1) /
                              options_.max_psf_fit_patches);
-    for (size_t k = 0; k < largest->size(); k += step) {
-      const ViewData::Stored& st =
-          views_[(*largest)[k].view]->stored[(*largest)[k].stored];
+    for (size_t k = 0; k < flat.size(); k += step) {
+      const ViewData::Stored& st = views_[flat[k].view]->stored[flat[k].stored];
       ProfilePatch patch;
       patch.left = gray_of(st.left);
       patch.right = gray_of(st.right);
-      const ViewData& v = *views_[(*largest)[k].view];
+      const ViewData& v = *views_[flat[k].view];
       patch.x_fraction =
           (v.samples[st.sample].x + 0.5) / v.summary.frame_size.width;
       patches.push_back(patch);

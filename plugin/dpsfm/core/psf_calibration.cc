@@ -104,6 +104,7 @@ bool SplitProfileFitOptions::Check() const {
   DPSFM_CHECK_GE(min_patches, 3);
   DPSFM_CHECK_GE(num_bootstrap, 0);
   DPSFM_CHECK_GT(max_relative_uncertainty, 0);
+  DPSFM_CHECK_GE(min_improvement_over_translating_disk, 1);
   DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
   return true;
@@ -324,8 +325,28 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
     }
     fit.translating_disk_criterion =
         TrimmedMean(residual, usable, options.trim_fraction);
-    fit.translating_disk =
-        fit.translating_disk_criterion <= criterion(at_fit, usable);
+    // The paper's model is kept unless the split profile fits significantly
+    // better: in at least 95 % of paired bootstrap resamples of the patches.
+    // Translating-disk data lie outside the family, and its best member
+    // there can fit about as well with a centroid offset some % off (seen:
+    // p 1.14 on one generated scene, 7 % off in scale).
+    int family_better = 0, resamples = 0;
+    if (fit.translating_disk_criterion >
+        options.min_improvement_over_translating_disk *
+            criterion(at_fit, usable)) {
+      std::mt19937_64 rng(options.seed + 1);
+      std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
+      std::vector<int> members(usable.size());
+      resamples = std::max(options.num_bootstrap, 100);
+      for (int b = 0; b < resamples; ++b) {
+        for (int& m : members) m = usable[pick(rng)];
+        if (TrimmedMean(residual, members, options.trim_fraction) >
+            TrimmedMean(at_fit.residual, members, options.trim_fraction)) {
+          ++family_better;
+        }
+      }
+    }
+    fit.translating_disk = resamples == 0 || family_better < 0.95 * resamples;
   }
   std::vector<double> residuals;
   for (int i : usable) residuals.push_back(at_fit.residual[i]);
@@ -360,7 +381,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   }
   fit.determined = true;
   if (fit.translating_disk) {
-    s << "; the translating disk fits at least as well (residual "
+    s << "; the translating disk fits about as well (residual "
       << fit.translating_disk_criterion << " vs " << criterion(at_fit, usable)
       << ") and is kept";
     fit.params = SplitProfileParams();
