@@ -463,7 +463,46 @@ SplitProfileCalibration CalibrateSplitProfile(
     }
   }
   // Bands when they differ, or when only they are determined (a profile
-  // that changes across the frame fits no single one well).
+  // that changes across the frame fits no single one well). Without a
+  // whole-frame profile, a band the data leave open (a few patches) takes
+  // the geometric mean of its determined neighbours' exponents (the
+  // profile changes smoothly across the frame), when two or more bands are
+  // determined.
+  int num_determined = 0;
+  for (const SplitProfileFit& fit : calibration.bands) {
+    num_determined += fit.determined ? 1 : 0;
+  }
+  if (!all_determined && !calibration.frame.determined && num_determined >= 2) {
+    for (int b = 0; b < num_bands; ++b) {
+      SplitProfileFit& fit = calibration.bands[b];
+      if (fit.determined) continue;
+      double log_sum = 0;
+      int count = 0;
+      for (int step : {-1, 1}) {
+        for (int n = b + step; n >= 0 && n < num_bands; n += step) {
+          if (calibration.bands[n].determined &&
+              calibration.bands[n].reason.find("interpolated") ==
+                  std::string::npos) {
+            log_sum += std::log(calibration.bands[n].params.split_exponent);
+            ++count;
+            break;
+          }
+        }
+      }
+      fit = SplitProfileFit();
+      fit.determined = true;
+      fit.self_calibrated = calibration.frame.self_calibrated;
+      fit.params.split_exponent = std::exp(log_sum / count);
+      fit.centroid_offset =
+          CentroidOffsetPerRadius(SplitProfilePsf(fit.params), 8);
+      std::ostringstream reason;
+      reason << "split exponent " << fit.params.split_exponent
+             << " interpolated from the neighbouring bands";
+      fit.reason = reason.str();
+      summary << "; band " << b + 1 << " " << fit.reason;
+    }
+    all_determined = true;
+  }
   calibration.banded =
       all_determined && (!calibration.frame.determined || significant);
   summary << (calibration.banded ? "; the profile changes across the frame ("
