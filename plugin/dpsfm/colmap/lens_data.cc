@@ -7,28 +7,11 @@
 
 #include <FreeImage.h>
 
+#include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
 
 namespace dpsfm {
 namespace {
-
-std::string Trim(const std::string& text) {
-  const size_t begin = text.find_first_not_of(" \t\r\n");
-  if (begin == std::string::npos) return "";
-  const size_t end = text.find_last_not_of(" \t\r\n");
-  return text.substr(begin, end - begin + 1);
-}
-
-std::vector<std::string> SplitCsvLine(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream stream(line);
-  while (std::getline(stream, cell, ',')) {
-    cells.push_back(Trim(cell));
-  }
-  if (!line.empty() && line.back() == ',') cells.push_back("");
-  return cells;
-}
 
 double ParseCell(const std::string& cell,
                  const std::string& path,

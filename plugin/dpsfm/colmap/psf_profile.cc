@@ -6,17 +6,11 @@
 #include <map>
 #include <sstream>
 
+#include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
 
 namespace dpsfm {
 namespace {
-
-std::string Trim(const std::string& text) {
-  const size_t begin = text.find_first_not_of(" \t\r\n");
-  if (begin == std::string::npos) return "";
-  const size_t end = text.find_last_not_of(" \t\r\n");
-  return text.substr(begin, end - begin + 1);
-}
 
 double ParseNumber(const std::string& text, const std::string& where) {
   char* end = nullptr;

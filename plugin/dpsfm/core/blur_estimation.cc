@@ -730,6 +730,13 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
   return estimator->Estimate(left, right);
 }
 
+cv::Mat ToLuma(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat gray;
+  cv::transform(image, gray, cv::Matx13f(0.299f, 0.587f, 0.114f));
+  return gray;
+}
+
 double HorizontalTexture(const cv::Mat& gray_patch) {
   DPSFM_CHECK(gray_patch.type() == CV_32FC1 && !gray_patch.empty())
       << "HorizontalTexture needs a non-empty CV_32FC1 patch";
@@ -817,8 +824,12 @@ double PatchScreening::NoiseSigma(const cv::Rect& rect) const {
   return std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
 }
 
+double TextureSnr(double texture, double noise_sigma) {
+  return texture / (3.91 * std::max(noise_sigma, 1e-6));
+}
+
 double PatchScreening::TextureSnr(const cv::Rect& rect) const {
-  return Texture(rect) / (3.91 * std::max(NoiseSigma(rect), 1e-6));
+  return dpsfm::TextureSnr(Texture(rect), NoiseSigma(rect));
 }
 
 PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size) {

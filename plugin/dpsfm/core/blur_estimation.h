@@ -171,6 +171,10 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
                                     const DPPsfModel& psf,
                                     const BlurEstimationOptions& options);
 
+// The grey view the blur search works on: CV_32FC1 as is, CV_32FC3 by Rec.
+// 601 weights in the channel order given (the loss is symmetric in it).
+cv::Mat ToLuma(const cv::Mat& image);
+
 // Mean |horizontal Sobel| (3x3, unnormalised, BORDER_REFLECT_101) of a
 // CV_32FC1 patch: DP disparity is horizontal, so only vertical edges carry it.
 double HorizontalTexture(const cv::Mat& gray_patch);
@@ -186,6 +190,11 @@ double EstimateNoiseSigma(const cv::Mat& gray_patch);
 // an integral image, and EstimateNoiseSigma's estimate from the mask's
 // responses on left, right and left - right (the smallest per-view-sum
 // estimate, as PatchBlurEstimator::Estimate takes), on every other pixel.
+// Texture over what noise alone gives: for i.i.d. noise of std sigma per
+// view, the horizontal Sobel of left + right has mean |.| = 3.91 sigma, so
+// pure noise reads ~1.
+double TextureSnr(double texture, double noise_sigma);
+
 class PatchScreening {
  public:
   // Grey CV_32FC1 views of one size.
@@ -195,8 +204,7 @@ class PatchScreening {
   double Texture(const cv::Rect& rect) const;
   // Noise std of one view over `rect` (without its outer ring).
   double NoiseSigma(const cv::Rect& rect) const;
-  // Texture over what noise alone gives (~1 for pure noise: the Sobel of
-  // left + right has mean |.| = 3.91 sigma for i.i.d. noise).
+  // TextureSnr of Texture(rect) and NoiseSigma(rect).
   double TextureSnr(const cv::Rect& rect) const;
 
  private:

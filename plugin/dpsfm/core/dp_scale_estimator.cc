@@ -22,17 +22,15 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// Patch rejection reasons that more than one place tests for.
+const char* const kTextureTooWeak = "with texture too weak for the noise";
+const char* const kLeftUnsearched =
+    "left unsearched (ranked below the blur-search share by texture and "
+    "depth flatness)";
+
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
       .count();
-}
-
-cv::Mat Luma(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat gray;
-  // Rec. 601 weights; channel order as given (the loss is symmetric in it).
-  cv::transform(image, gray, cv::Matx13f(0.299f, 0.587f, 0.114f));
-  return gray;
 }
 
 cv::Mat ToU16(const cv::Mat& image) {
@@ -69,12 +67,8 @@ DepthStats StatsOf(std::vector<float>* values) {
   return stats;
 }
 
-// Texture against what noise alone gives: for i.i.d. noise of std sigma per
-// view, the horizontal Sobel of left + right has std sqrt(24) sigma and mean
-// absolute value sqrt(2 / pi) sqrt(24) sigma = 3.91 sigma.
 double TextureSnr(const PatchBlurEstimate& e) {
-  const double noise_texture = 3.91 * std::max(e.noise_sigma, 1e-6);
-  return e.texture / noise_texture;
+  return dpsfm::TextureSnr(e.texture, e.noise_sigma);
 }
 
 std::string CountsToString(
@@ -229,7 +223,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   // Frame <-> working scale per axis (exact for the rounded size).
   const double sx = static_cast<double>(left.cols) / view.left.cols;
   const double sy = static_cast<double>(left.rows) / view.left.rows;
-  const cv::Mat gray_left = Luma(left), gray_right = Luma(right);
+  const cv::Mat gray_left = ToLuma(left), gray_right = ToLuma(right);
 
   BlurEstimationOptions blur = options_.blur;
   blur.max_radius_px = geometry.max_radius_px;
@@ -347,14 +341,11 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       // A patch whose horizontal texture does not clear what noise alone
       // gives would be dropped after the search anyway (the estimator's
       // measures, with a 10 % margin for its gain equalisation).
-      const double texture = screening.Texture(r);
-      const double sigma = screening.NoiseSigma(r);
-      estimates[k].texture = texture;
-      estimates[k].noise_sigma = sigma;
+      estimates[k].texture = screening.Texture(r);
+      estimates[k].noise_sigma = screening.NoiseSigma(r);
       if (options_.min_texture_snr > 0 &&
-          texture / (3.91 * std::max(sigma, 1e-6)) <
-              0.9 * options_.min_texture_snr) {
-        estimates[k].reject_reason = "with texture too weak for the noise";
+          TextureSnr(estimates[k]) < 0.9 * options_.min_texture_snr) {
+        estimates[k].reject_reason = kTextureTooWeak;
         continue;
       }
       pass[k] = 1;
@@ -400,9 +391,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     num_searched = static_cast<int>(chosen.size());
     for (int k : screened) {
       if (!search[k]) {
-        estimates[k].reject_reason =
-            "left unsearched (ranked below the blur-search share by texture "
-            "and depth flatness)";
+        estimates[k].reject_reason = kLeftUnsearched;
       }
     }
   }
@@ -474,7 +463,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     }
     const double texture_snr = TextureSnr(e);
     if (!(texture_snr >= options_.min_texture_snr)) {
-      rejections["with texture too weak for the noise"]++;
+      rejections[kTextureTooWeak]++;
       continue;
     }
     if (e.relative_residual > residual_threshold) {
@@ -611,7 +600,7 @@ void DPScaleEstimator::CalibrateProfile(
   auto gray_of = [](const cv::Mat& crop) {
     cv::Mat f;
     crop.convertTo(f, CV_MAKETYPE(CV_32F, crop.channels()), 1.0 / 65535.0);
-    return Luma(f);
+    return ToLuma(f);
   };
   const std::vector<Ref>* largest = nullptr;
   double bound = 0;
@@ -861,7 +850,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       for (const auto& r : v->summary.rejections) {
         // Patches the blur search skipped by design are no defect of the
         // data; a refusal lists what went wrong.
-        if (r.first.compare(0, 15, "left unsearched") == 0) continue;
+        if (r.first == kLeftUnsearched) continue;
         rejections[r.first] += r.second;
       }
     }
@@ -870,7 +859,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
           CountsToString(std::vector<std::pair<std::string, int>>(
               rejections.begin(), rejections.end()));
     }
-    const int weak = rejections["with texture too weak for the noise"];
+    const int weak = rejections[kTextureTooWeak];
     if (weak > 0 && weak >= 0.5 * patches_tried) {
       std::ostringstream cause;
       cause << "too little texture: " << weak << " of " << patches_tried

@@ -15,6 +15,7 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/curve_math.h"
 #include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
@@ -426,37 +427,6 @@ Prepared Prepare(const IntensityPatch& patch,
   return p;
 }
 
-// Vertex of the parabola through three points, clamped to [x0, x2]; the
-// middle point when the three are not convex.
-double ParabolicMinimum(
-    double x0, double y0, double x1, double y1, double x2, double y2) {
-  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
-  if (denom == 0) return x1;
-  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
-  const double b =
-      (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
-  if (!(a > 0)) return x1;
-  return std::max(x0, std::min(x2, -b / (2 * a)));
-}
-
-double CurveMinimum(const std::vector<double>& xs,
-                    const std::vector<double>& ys,
-                    size_t* index) {
-  const size_t k = std::min_element(ys.begin(), ys.end()) - ys.begin();
-  if (index != nullptr) *index = k;
-  if (k == 0 || k + 1 >= xs.size()) return xs[k];
-  return ParabolicMinimum(
-      xs[k - 1], ys[k - 1], xs[k], ys[k], xs[k + 1], ys[k + 1]);
-}
-
-double Percentile(std::vector<double> values, double q) {
-  std::sort(values.begin(), values.end());
-  const double pos = q * (values.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(pos));
-  const size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (pos - lo) * (values[hi] - values[lo]);
-}
-
 }  // namespace
 
 const char* IntensityLossName(IntensityLoss loss) {
@@ -756,14 +726,11 @@ IntensitySearchResult SearchScaleByIntensity(
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
     for (int j = 0; j < num_patches; ++j) {
-      const IntensityView& view = views[patches[j].view];
       Prepared& p = prepared[j];
-      double r = PredictBlurRadiusPx(view.lens,
-                                     view.pixel_pitch_mm,
-                                     initial_scale,
-                                     view.focus_distance_model,
-                                     patches[j].depth);
-      if (!std::isfinite(r)) r = r > 0 ? p.max_abs_radius : -p.max_abs_radius;
+      const double r = PatchRadii(views[patches[j].view],
+                                  patches[j].depth,
+                                  {initial_scale},
+                                  p.max_abs_radius)[0];
       std::vector<ChannelTerms> terms;
       try {
         LossOfPrepared(p, r, *p.psf, options.loss, &terms);

@@ -11,21 +11,12 @@
 #include <Eigen/Dense>
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/curve_math.h"
 
 namespace dpsfm {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// Percentile (0..1) by linear interpolation of the sorted values.
-double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  const double pos = q * (values.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(pos));
-  const size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (pos - lo) * (values[hi] - values[lo]);
-}
 
 std::string FormatDouble(double v, int precision = 3) {
   std::ostringstream s;

@@ -13,6 +13,7 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/curve_math.h"
 
 namespace dpsfm {
 namespace {
@@ -24,14 +25,6 @@ struct Evaluation {
   std::vector<double> radius;    // NaN where the search gave no estimate
   std::vector<double> residual;  // relative residual; 1 where none
 };
-
-double Percentile(std::vector<double> values, double q) {
-  std::sort(values.begin(), values.end());
-  const double pos = q * (values.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(pos));
-  const size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (pos - lo) * (values[hi] - values[lo]);
-}
 
 // Self-calibration criterion: mean residual of the patches (with
 // multiplicities `weight`) after trimming the largest `trim` share.
@@ -57,25 +50,6 @@ double MedianRadiusError(const std::vector<double>& radius,
     v.push_back(std::isfinite(radius[i]) ? radius[i] / known[i] - 1 : 1.0);
   }
   return Percentile(v, 0.5);
-}
-
-// Vertex (in x) of the parabola through the minimum of ys and its two
-// neighbours; the node itself at the ends or when not convex.
-double ParabolicMinimum(const std::vector<double>& xs,
-                        const std::vector<double>& ys,
-                        size_t* index) {
-  const size_t k = std::min_element(ys.begin(), ys.end()) - ys.begin();
-  *index = k;
-  if (k == 0 || k + 1 >= xs.size()) return xs[k];
-  const double x0 = xs[k - 1], x1 = xs[k], x2 = xs[k + 1];
-  const double y0 = ys[k - 1], y1 = ys[k], y2 = ys[k + 1];
-  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
-  if (denom == 0) return x1;
-  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
-  const double b =
-      (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
-  if (!(a > 0)) return x1;
-  return std::max(x0, std::min(x2, -b / (2 * a)));
 }
 
 // Where an increasing-ish curve crosses 0, by linear interpolation between
@@ -225,7 +199,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       return x;
     }
     size_t k = 0;
-    const double x = ParabolicMinimum(xs, ys, &k);
+    const double x = CurveMinimum(xs, ys, &k);
     *at_edge = k == 0 || k + 1 == xs.size();
     return x;
   };

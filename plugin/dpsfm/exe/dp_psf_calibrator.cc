@@ -45,13 +45,6 @@ struct CalibratorOptions {
   int num_threads = -1;
 };
 
-cv::Mat Luma(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat gray;
-  cv::transform(image, gray, cv::Matx13f(0.299f, 0.587f, 0.114f));
-  return gray;
-}
-
 }  // namespace
 
 int RunDPPsfCalibrator(int argc, char** argv) {
@@ -142,7 +135,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
                          " differs in size from the first one (calibrate "
                          "one camera mode at a time)");
       }
-      cv::Mat left = Luma(frames.left), right_view = Luma(frames.right);
+      cv::Mat left = ToLuma(frames.left), right_view = ToLuma(frames.right);
       const double rf = geometry.resize_factor;
       if (rf < 1) {
         const cv::Size size(static_cast<int>(std::round(left.cols * rf)),

@@ -1,0 +1,35 @@
+#include "dpsfm/core/curve_math.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dpsfm {
+
+double Percentile(std::vector<double> values, double q) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(values.begin(), values.end());
+  const double pos = q * (values.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (pos - lo) * (values[hi] - values[lo]);
+}
+
+double CurveMinimum(const std::vector<double>& xs,
+                    const std::vector<double>& ys,
+                    size_t* index) {
+  const size_t k = std::min_element(ys.begin(), ys.end()) - ys.begin();
+  if (index != nullptr) *index = k;
+  if (k == 0 || k + 1 >= xs.size()) return xs[k];
+  const double x0 = xs[k - 1], x1 = xs[k], x2 = xs[k + 1];
+  const double y0 = ys[k - 1], y1 = ys[k], y2 = ys[k + 1];
+  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
+  if (denom == 0) return x1;
+  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
+  const double b =
+      (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
+  if (!(a > 0)) return x1;
+  return std::max(x0, std::min(x2, -b / (2 * a)));
+}
+
+}  // namespace dpsfm

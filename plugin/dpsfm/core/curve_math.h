@@ -1,0 +1,22 @@
+// Small numeric helpers the stages share: percentiles of samples and the
+// minimum of a sampled curve.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace dpsfm {
+
+// Percentile (q in 0..1) by linear interpolation of the sorted values; NaN
+// for no values.
+double Percentile(std::vector<double> values, double q);
+
+// Minimiser of a curve sampled at increasing xs: the vertex of the parabola
+// through the lowest sample and its two neighbours, clamped to them; the
+// lowest sample itself at either end or where the three are not convex.
+// *index (optional) receives the lowest sample's index.
+double CurveMinimum(const std::vector<double>& xs,
+                    const std::vector<double>& ys,
+                    size_t* index);
+
+}  // namespace dpsfm
