@@ -13,6 +13,54 @@
 namespace dpsfm {
 namespace {
 
+// The disk of radius R cut into the pieces each kernel pixel integrates:
+// for pixel rows i in [i_begin, half] (kernel coordinates, centre = 0; row
+// i covers y in [i - 0.5, i + 0.5]), `subsamples` midpoint sub-rows y each,
+// and every pixel column j that the chord of half length a = sqrt(R^2 -
+// y^2) at y reaches, calls piece(i, j, lo, hi, a) with [lo, hi] = [j - 0.5,
+// j + 0.5] cut to the chord. A profile integrates its weight along x over
+// [lo, hi] exactly and multiplies by the sub-row height 1 / subsamples.
+template <typename Piece>
+void ForEachChordPiece(
+    double radius, int half, int subsamples, int i_begin, Piece piece) {
+  const double r2 = radius * radius;
+  const double dy = 1.0 / subsamples;
+  for (int i = i_begin; i <= half; ++i) {
+    for (int s = 0; s < subsamples; ++s) {
+      const double y = i - 0.5 + (s + 0.5) * dy;
+      const double y2 = y * y;
+      if (y2 >= r2) continue;
+      const double a = std::sqrt(r2 - y2);  // half chord
+      const int j_begin =
+          std::max(-half, static_cast<int>(std::floor(-a + 0.5)));
+      const int j_end = std::min(half, static_cast<int>(std::ceil(a - 0.5)));
+      for (int j = j_begin; j <= j_end; ++j) {
+        const double lo = std::max(j - 0.5, -a);
+        const double hi = std::min(j + 0.5, a);
+        if (hi <= lo) continue;
+        piece(i, j, lo, hi, a);
+      }
+    }
+  }
+}
+
+// The two views' kernels from the one whose mass leans towards +x and the
+// one leaning towards -x. Near (r < 0): the view leaning +x is the left one
+// (cli contract).
+DPKernels AssignBySign(double signed_radius_px,
+                       const cv::Mat& towards_plus_x,
+                       const cv::Mat& towards_minus_x) {
+  DPKernels kernels;
+  if (signed_radius_px < 0) {
+    kernels.left = towards_plus_x;
+    kernels.right = towards_minus_x;
+  } else {
+    kernels.left = towards_minus_x;
+    kernels.right = towards_plus_x;
+  }
+  return kernels;
+}
+
 // Pixel-area integral of the translating-disk profile whose mass leans
 // towards +x: weight(x, y) = x + sqrt(R^2 - y^2) inside the disk of radius R.
 // Row i of the kernel covers y in [i - 0.5, i + 0.5], column j covers x in
@@ -26,34 +74,18 @@ cv::Mat IntegrateTranslatingDisk(double radius,
                                  double total) {
   const int side = 2 * half_size + 1;
   std::vector<double> weights(side * side, 0.0);
-  const double r2 = radius * radius;
   const double dy = 1.0 / subsamples;
   // The profile is symmetric in y: integrate rows i >= 0 and mirror them, so
   // the kernel is exactly symmetric.
-  for (int i = 0; i <= half_size; ++i) {
-    double* row = &weights[(i + half_size) * side];
-    for (int s = 0; s < subsamples; ++s) {
-      const double y = i - 0.5 + (s + 0.5) * dy;
-      const double y2 = y * y;
-      if (y2 >= r2) {
-        continue;
-      }
-      const double a = std::sqrt(r2 - y2);  // half chord
-      const int j_begin =
-          std::max(-half_size, static_cast<int>(std::floor(-a + 0.5)));
-      const int j_end =
-          std::min(half_size, static_cast<int>(std::ceil(a - 0.5)));
-      for (int j = j_begin; j <= j_end; ++j) {
-        const double lo = std::max(j - 0.5, -a);
-        const double hi = std::min(j + 0.5, a);
-        if (hi <= lo) {
-          continue;
-        }
-        // Integral of (x + a) dx over [lo, hi].
-        row[j + half_size] += (0.5 * (hi * hi - lo * lo) + a * (hi - lo)) * dy;
-      }
-    }
-  }
+  ForEachChordPiece(radius,
+                    half_size,
+                    subsamples,
+                    0,
+                    [&](int i, int j, double lo, double hi, double a) {
+                      // Integral of (x + a) dx over [lo, hi].
+                      weights[(i + half_size) * side + j + half_size] +=
+                          (0.5 * (hi * hi - lo * lo) + a * (hi - lo)) * dy;
+                    });
   for (int i = 1; i <= half_size; ++i) {
     std::copy(weights.begin() + (half_size + i) * side,
               weights.begin() + (half_size + i + 1) * side,
@@ -113,15 +145,7 @@ DPKernels TranslatingDiskPsf::Kernels(double signed_radius_px) const {
       IntegrateTranslatingDisk(radius, half_size, subsamples_per_pixel_, 0.5);
   cv::Mat towards_minus_x;
   cv::flip(towards_plus_x, towards_minus_x, 1);
-  DPKernels kernels;
-  if (signed_radius_px < 0) {
-    kernels.left = towards_plus_x;
-    kernels.right = towards_minus_x;
-  } else {
-    kernels.left = towards_minus_x;
-    kernels.right = towards_plus_x;
-  }
-  return kernels;
+  return AssignBySign(signed_radius_px, towards_plus_x, towards_minus_x);
 }
 
 bool SplitProfileParams::Check() const {
@@ -176,29 +200,21 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
   };
   // Weight towards +x; the view leaning -x is its mirror image.
   std::vector<double> plus(side * side, 0.0), minus(side * side, 0.0);
-  const double r2 = radius * radius;
   const double dy = 1.0 / subsamples_per_pixel_;
-  for (int i = -half; i <= half; ++i) {
-    for (int s = 0; s < subsamples_per_pixel_; ++s) {
-      const double y = i - 0.5 + (s + 0.5) * dy;
-      if (y * y >= r2) continue;
-      const double a = std::sqrt(r2 - y * y);  // half chord
-      const int j_begin =
-          std::max(-half, static_cast<int>(std::floor(-a + 0.5)));
-      const int j_end = std::min(half, static_cast<int>(std::ceil(a - 0.5)));
-      for (int j = j_begin; j <= j_end; ++j) {
-        const double lo = std::max(j - 0.5, -a);
-        const double hi = std::min(j + 0.5, a);
-        if (hi <= lo) continue;
-        // Exact along x: (hi - lo) / 2 +- (a / 2) (G(hi / a) - G(lo / a)).
-        const double base = 0.5 * (hi - lo) * dy;
-        const double split =
-            0.5 * a * (g_integral(hi / a) - g_integral(lo / a)) * dy;
-        plus[(i + half) * side + j + half] += base + split;
-        minus[(i + half) * side + j + half] += base - split;
-      }
-    }
-  }
+  ForEachChordPiece(radius,
+                    half,
+                    subsamples_per_pixel_,
+                    -half,
+                    [&](int i, int j, double lo, double hi, double a) {
+                      // Exact along x: (hi - lo) / 2 +- (a / 2) (G(hi / a) -
+                      // G(lo / a)).
+                      const double base = 0.5 * (hi - lo) * dy;
+                      const double split =
+                          0.5 * a * (g_integral(hi / a) - g_integral(lo / a)) *
+                          dy;
+                      plus[(i + half) * side + j + half] += base + split;
+                      minus[(i + half) * side + j + half] += base - split;
+                    });
   cv::Mat towards_plus_x(side, side, CV_32FC1);
   cv::Mat towards_minus_x(side, side, CV_32FC1);
   double total = 0;
@@ -235,16 +251,7 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
     towards_plus_x *= 0.5 / cv::sum(towards_plus_x)[0];
     towards_minus_x *= 0.5 / cv::sum(towards_minus_x)[0];
   }
-  DPKernels kernels;
-  // Near (r < 0): the view leaning +x is the left one (cli contract).
-  if (signed_radius_px < 0) {
-    kernels.left = towards_plus_x;
-    kernels.right = towards_minus_x;
-  } else {
-    kernels.left = towards_minus_x;
-    kernels.right = towards_plus_x;
-  }
-  return kernels;
+  return AssignBySign(signed_radius_px, towards_plus_x, towards_minus_x);
 }
 
 double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px) {
