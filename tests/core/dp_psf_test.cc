@@ -246,5 +246,170 @@ TEST(SplitProfilePsf, CentroidOffsetsFollowTheParameters) {
   EXPECT_LT(CentroidOffsetPerRadius(SplitProfilePsf(params), 20), 0.8 * disk);
 }
 
+// The family's path by centroid offset: the closed form agrees with the
+// kernels' numerically integrated centroid, and the path is monotone and
+// reaches both ends.
+TEST(SplitProfilePsf, PathByCentroidOffset) {
+  EXPECT_NEAR(
+      SplitProfileParams::MaxCentroidOffset(), 8 / (3 * M_PI * 2.05), 1e-12);
+  EXPECT_NEAR(
+      SplitProfileParams::MinCentroidOffset(), 8 / (9 * M_PI) * 0.1, 1e-12);
+  EXPECT_LT(SplitProfileParams::MinCentroidOffset(), 0.05);
+  for (const double kappa : {0.03, 0.05, 0.09, 0.2, 0.283, 0.3, 0.36, 0.41}) {
+    const SplitProfileParams params =
+        SplitProfileParams::ForCentroidOffset(kappa);
+    ASSERT_TRUE(params.Check()) << kappa;
+    EXPECT_NEAR(params.CentroidOffset(), kappa, 1e-9);
+    // Independent: the centroid of the pixel-integrated kernels.
+    EXPECT_NEAR(
+        CentroidOffsetPerRadius(SplitProfilePsf(params), 16) / kappa, 1.0, 0.02)
+        << kappa;
+  }
+  EXPECT_THROW(SplitProfileParams::ForCentroidOffset(0.02),
+               std::invalid_argument);
+  EXPECT_THROW(SplitProfileParams::ForCentroidOffset(0.43),
+               std::invalid_argument);
+}
+
+// Magnification about the centre pixel against closed forms.
+TEST(MagnifyKernel, ClosedForms) {
+  cv::Mat delta = cv::Mat::ones(1, 1, CV_32FC1);
+  // x3: the unit square becomes [-1.5, 1.5]^2: nine pixels of 1/9.
+  const cv::Mat three = MagnifyKernel(delta, 3);
+  ASSERT_EQ(three.rows, 3);
+  for (int i = 0; i < 9; ++i) {
+    EXPECT_NEAR(three.at<float>(i / 3, i % 3), 1.0 / 9, 1e-7);
+  }
+  // x2: [-1, 1] per axis: 1/4, 1/2, 1/4, and the outer product.
+  const cv::Mat two = MagnifyKernel(delta, 2);
+  ASSERT_EQ(two.rows, 3);
+  EXPECT_NEAR(two.at<float>(1, 1), 0.25, 1e-7);
+  EXPECT_NEAR(two.at<float>(0, 1), 0.125, 1e-7);
+  EXPECT_NEAR(two.at<float>(0, 0), 0.0625, 1e-7);
+  // x1 is the identity; x0 a delta keeping the sum.
+  cv::Mat k(5, 5, CV_32FC1);
+  cv::randu(k, 0, 1);
+  EXPECT_LT(cv::norm(MagnifyKernel(k, 1), k, cv::NORM_INF), 1e-6);
+  const cv::Mat zero = MagnifyKernel(k, 0);
+  ASSERT_EQ(zero.rows, 1);
+  EXPECT_NEAR(zero.at<float>(0, 0), cv::sum(k)[0], 1e-4);
+  // Any factor keeps the sum. A single pixel at column +2 becomes the
+  // segment [1.5 f, 2.5 f]: centred on a pixel (f = 2, 2.5, 4) its centroid
+  // is 2 f; at f = 1.6 it is [2.4, 4.0]: 0.1, 1 and 0.5 of 1.6 in columns
+  // 2, 3, 4 (mass goes to pixel centres); vertically [-0.8, 0.8] leaves
+  // 1 / 1.6 in the centre row.
+  cv::Mat off = cv::Mat::zeros(5, 5, CV_32FC1);
+  off.at<float>(2, 4) = 1;
+  for (const double f : {0.3, 0.77, 1.6, 2.0, 2.5, 4.0}) {
+    const cv::Mat m = MagnifyKernel(off, f);
+    EXPECT_NEAR(cv::sum(m)[0], 1.0, 1e-6) << f;
+    if (f == 2.0 || f == 2.5 || f == 4.0) {
+      EXPECT_NEAR(KernelCentroid(m).x, 2 * f, 1e-5) << f;
+    }
+  }
+  const cv::Mat m = MagnifyKernel(off, 1.6);
+  const int c = m.cols / 2;
+  EXPECT_NEAR(m.at<float>(c, c + 2), 0.1 / 1.6 / 1.6, 1e-6);
+  EXPECT_NEAR(m.at<float>(c, c + 3), 1.0 / 1.6 / 1.6, 1e-6);
+  EXPECT_NEAR(m.at<float>(c, c + 4), 0.5 / 1.6 / 1.6, 1e-6);
+}
+
+// A measured profile made from the translating disk's own kernels at 12 px
+// reproduces the disk at other radii (scaling), its other side of focus
+// exactly (the disk is symmetric in y, so its 180-degree rotation is the
+// mirror the disk model uses), and keeps each view's light at 0.5.
+TEST(MeasuredKernelPsf, ScalesAndRotatesTheReferencePair) {
+  const TranslatingDiskPsf disk;
+  const DPKernels reference = disk.Kernels(12);
+  const MeasuredKernelPsf measured(reference.left, reference.right, 12, true);
+  const DPKernels near = measured.Kernels(-12);
+  EXPECT_LT(MaxAbsDiff(near.left, disk.Kernels(-12).left), 1e-6);
+  EXPECT_LT(MaxAbsDiff(near.right, disk.Kernels(-12).right), 1e-6);
+  for (const double r : {-9.0, -4.0, -1.5, 0.3, 2.0, 6.0, 18.0}) {
+    const DPKernels m = measured.Kernels(r);
+    EXPECT_EQ(m.left.rows, 2 * measured.KernelRadius(r) + 1) << r;
+    EXPECT_NEAR(cv::sum(m.left)[0], 0.5, 1e-5) << r;
+    EXPECT_NEAR(cv::sum(m.right)[0], 0.5, 1e-5) << r;
+    if (std::abs(r) >= 2) {
+      // Centroid separation scales with |r| like the disk's own.
+      EXPECT_NEAR(CentroidOffsetPerRadius(measured, std::abs(r)),
+                  CentroidOffsetPerRadius(disk, std::abs(r)),
+                  0.01)
+          << r;
+      const double sign_left = KernelCentroid(m.left).x;
+      EXPECT_EQ(sign_left < 0, r > 0) << r;
+    }
+  }
+  // In focus: deltas.
+  const DPKernels focus = measured.Kernels(0);
+  EXPECT_EQ(focus.left.rows, 1);
+  EXPECT_NEAR(focus.left.at<float>(0, 0), 0.5, 1e-6);
+  // The name tells profiles apart.
+  const MeasuredKernelPsf other(
+      disk.Kernels(6).left, disk.Kernels(6).right, 6, true);
+  EXPECT_NE(measured.Name(), other.Name());
+}
+
+// A rotated, asymmetric split (a Pixel-like kernel): the other side of
+// focus rotates it, so the vertical centroid offset changes sign too.
+TEST(MeasuredKernelPsf, RotatedSplitAndConvention) {
+  cv::Mat left = cv::Mat::zeros(9, 9, CV_32FC1);
+  cv::Mat right = cv::Mat::zeros(9, 9, CV_32FC1);
+  for (int i = 0; i < 9; ++i) {
+    for (int j = 0; j < 9; ++j) {
+      const double x = j - 4, y = i - 4;
+      if (x * x + y * y > 16) continue;
+      // Split axis rotated by ~20 degrees; far side: left leans -x.
+      const double t = 0.94 * x + 0.34 * y;
+      left.at<float>(i, j) = static_cast<float>(1 - 0.2 * t);
+      right.at<float>(i, j) = static_cast<float>(1 + 0.2 * t);
+    }
+  }
+  const MeasuredKernelPsf psf(left, right, 4, true);
+  const cv::Point2d far_left = KernelCentroid(psf.Kernels(4).left);
+  const cv::Point2d near_left = KernelCentroid(psf.Kernels(-4).left);
+  EXPECT_LT(far_left.x, 0);
+  EXPECT_LT(far_left.y, 0);
+  EXPECT_NEAR(near_left.x, -far_left.x, 1e-5);
+  EXPECT_NEAR(near_left.y, -far_left.y, 1e-5);
+  // Views swapped: the convention is broken, and said so.
+  EXPECT_THROW(MeasuredKernelPsf(right, left, 4, true), std::invalid_argument);
+  // Negative lobes beyond noise, even sizes: not a PSF.
+  cv::Mat negative = left.clone();
+  negative.at<float>(4, 4) = -1;
+  EXPECT_THROW(MeasuredKernelPsf(negative, right, 4, true),
+               std::invalid_argument);
+  EXPECT_THROW(MeasuredKernelPsf(left(cv::Rect(0, 0, 8, 8)).clone(),
+                                 right(cv::Rect(0, 0, 8, 8)).clone(),
+                                 4,
+                                 true),
+               std::invalid_argument);
+}
+
+TEST(DPPsfLayout, CellLookup) {
+  DPPsfLayout grid;
+  grid.rows = 6;
+  grid.cols = 8;
+  grid.x0 = grid.y0 = 1.0 / 6;
+  grid.x1 = grid.y1 = 5.0 / 6;
+  ASSERT_TRUE(grid.Check());
+  EXPECT_EQ(grid.NumCells(), 48);
+  EXPECT_EQ(grid.CellAt(0.5, 0.5), 3 * 8 + 4);
+  // Outside the region: the nearest cell.
+  EXPECT_EQ(grid.CellAt(0.0, 0.0), 0);
+  EXPECT_EQ(grid.CellAt(1.0, 0.0), 7);
+  EXPECT_EQ(grid.CellAt(0.0, 1.0), 40);
+  EXPECT_EQ(grid.CellAt(0.99, 0.99), 47);
+  // Cell boundaries: x0 + (x1 - x0) * 3 / 8 starts column 3.
+  EXPECT_EQ(grid.CellAt(1.0 / 6 + 2.0 / 3 * 3 / 8 + 1e-9, 0.2), 3);
+  const DPPsfLayout bands = DPPsfLayout::ColumnBands(3);
+  EXPECT_EQ(bands.CellAt(0.1, 0.9), 0);
+  EXPECT_EQ(bands.CellAt(0.5, 0.1), 1);
+  EXPECT_EQ(bands.CellAt(1.0, 0.5), 2);
+  DPPsfLayout bad;
+  bad.x1 = 0;
+  EXPECT_FALSE(bad.Check());
+}
+
 }  // namespace
 }  // namespace dpsfm

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <iomanip>
 #include <sstream>
 #include <vector>
@@ -252,6 +253,205 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
     towards_minus_x *= 0.5 / cv::sum(towards_minus_x)[0];
   }
   return AssignBySign(signed_radius_px, towards_plus_x, towards_minus_x);
+}
+
+double SplitProfileParams::CentroidOffset() const {
+  return 8.0 / (3.0 * M_PI * (split_exponent + 2.0)) * (1.0 - 2.0 * crosstalk);
+}
+
+double SplitProfileParams::MinCentroidOffset() {
+  SplitProfileParams params;
+  params.crosstalk = 0.45;
+  return params.CentroidOffset();
+}
+
+double SplitProfileParams::MaxCentroidOffset() {
+  SplitProfileParams params;
+  params.split_exponent = 0.05;
+  return params.CentroidOffset();
+}
+
+SplitProfileParams SplitProfileParams::ForCentroidOffset(double kappa) {
+  DPSFM_CHECK(kappa >= MinCentroidOffset() * (1 - 1e-9) &&
+              kappa <= MaxCentroidOffset() * (1 + 1e-9))
+      << "centroid offset " << kappa << " R outside the family's ["
+      << MinCentroidOffset() << ", " << MaxCentroidOffset() << "]";
+  SplitProfileParams params;
+  const double linear = SplitProfileParams().CentroidOffset();
+  if (kappa >= linear) {
+    params.split_exponent = std::max(0.05, 8.0 / (3.0 * M_PI * kappa) - 2.0);
+  } else {
+    params.crosstalk = std::min(0.45, 0.5 * (1.0 - kappa / linear));
+  }
+  return params;
+}
+
+cv::Mat MagnifyKernel(const cv::Mat& kernel, double factor) {
+  DPSFM_CHECK(kernel.type() == CV_32FC1 && kernel.rows == kernel.cols &&
+              kernel.rows % 2 == 1)
+      << "MagnifyKernel needs an odd square CV_32FC1 kernel";
+  DPSFM_CHECK(factor >= 0 && std::isfinite(factor))
+      << "magnification must be finite and non-negative, got " << factor;
+  const int in_half = kernel.rows / 2;
+  const int out_half = std::max(
+      0, static_cast<int>(std::ceil((in_half + 0.5) * factor - 0.5 - 1e-9)));
+  const int in_side = kernel.rows, out_side = 2 * out_half + 1;
+  // overlap(k, j): share of input column k's square [(k - 0.5) f,
+  // (k + 0.5) f] lying in output column [j - 0.5, j + 0.5] (rows alike).
+  cv::Mat weights = cv::Mat::zeros(out_side, in_side, CV_64FC1);
+  for (int k = -in_half; k <= in_half; ++k) {
+    const double lo = (k - 0.5) * factor, hi = (k + 0.5) * factor;
+    if (hi - lo < 1e-12) {
+      weights.at<double>(out_half, k + in_half) = 1;  // a point at the centre
+      continue;
+    }
+    for (int j = -out_half; j <= out_half; ++j) {
+      const double overlap = std::min(hi, j + 0.5) - std::max(lo, j - 0.5);
+      if (overlap > 0) {
+        weights.at<double>(j + out_half, k + in_half) = overlap / (hi - lo);
+      }
+    }
+  }
+  cv::Mat in64;
+  kernel.convertTo(in64, CV_64FC1);
+  const cv::Mat out64 = weights * in64 * weights.t();
+  cv::Mat out;
+  out64.convertTo(out, CV_32FC1);
+  return out;
+}
+
+namespace {
+
+cv::Mat CheckedReferenceKernel(const cv::Mat& kernel, const char* which) {
+  DPSFM_CHECK(!kernel.empty() && kernel.channels() == 1 &&
+              (kernel.depth() == CV_32F || kernel.depth() == CV_64F))
+      << "the " << which << " measured kernel must be a float matrix";
+  DPSFM_CHECK(kernel.rows == kernel.cols && kernel.rows % 2 == 1)
+      << "the " << which << " measured kernel must be odd and square, got "
+      << kernel.cols << "x" << kernel.rows;
+  cv::Mat k;
+  kernel.convertTo(k, CV_32FC1);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(k, &lo, &hi);
+  DPSFM_CHECK(std::isfinite(lo) && std::isfinite(hi) && cv::checkRange(k))
+      << "the " << which << " measured kernel has non-finite values";
+  // Measured kernels carry small negative noise after background removal;
+  // a PSF is non-negative, so it is clipped. Larger negative lobes mean the
+  // array is not a PSF.
+  DPSFM_CHECK(lo >= -0.05 * hi)
+      << "the " << which << " measured kernel has negative values down to "
+      << lo << " (max " << hi << "): not a PSF";
+  cv::max(k, 0.0, k);
+  const double sum = cv::sum(k)[0];
+  DPSFM_CHECK(sum > 0) << "the " << which << " measured kernel sums to zero";
+  k *= 0.5 / sum;
+  return k;
+}
+
+std::string HashKernels(const cv::Mat& a, const cv::Mat& b) {
+  // FNV-1a over the normalised kernels' bytes: Name() must tell profiles
+  // apart (kernel caches are keyed by it).
+  uint64_t h = 1469598103934665603ull;
+  for (const cv::Mat* m : {&a, &b}) {
+    const cv::Mat c = m->isContinuous() ? *m : m->clone();
+    const unsigned char* p = c.ptr<unsigned char>();
+    for (size_t i = 0; i < c.total() * c.elemSize(); ++i) {
+      h = (h ^ p[i]) * 1099511628211ull;
+    }
+  }
+  std::ostringstream s;
+  s << std::hex << h;
+  return s.str();
+}
+
+}  // namespace
+
+MeasuredKernelPsf::MeasuredKernelPsf(const cv::Mat& left,
+                                     const cv::Mat& right,
+                                     double reference_radius_px,
+                                     bool far_side)
+    : left_(CheckedReferenceKernel(left, "left")),
+      right_(CheckedReferenceKernel(right, "right")),
+      reference_radius_px_(reference_radius_px),
+      far_side_(far_side) {
+  DPSFM_CHECK(left_.size() == right_.size())
+      << "the left and right measured kernels differ in size (" << left_.cols
+      << " vs " << right_.cols << ")";
+  DPSFM_CHECK(reference_radius_px > 0.5 && std::isfinite(reference_radius_px))
+      << "the reference radius must exceed 0.5 px, got " << reference_radius_px;
+  // Convention: for a far point the left view leans towards -x.
+  const double lx = KernelCentroid(left_).x, rx = KernelCentroid(right_).x;
+  DPSFM_CHECK(far_side ? lx < rx : lx > rx)
+      << "the measured " << (far_side ? "far" : "near")
+      << "-side kernels have the left centroid at x = " << lx
+      << " and the right one at " << rx << ": for a point "
+      << (far_side ? "farther" : "nearer")
+      << " than the focus the left kernel must lie "
+      << (far_side ? "left" : "right")
+      << " of the right one (swap the views, or the side)";
+  std::ostringstream name;
+  name << std::setprecision(6)
+       << "measured_kernels(r_ref=" << reference_radius_px_
+       << ",side=" << (far_side_ ? "far" : "near") << ",size=" << left_.cols
+       << ",hash=" << HashKernels(left_, right_) << ")";
+  name_ = name.str();
+}
+
+std::string MeasuredKernelPsf::Name() const { return name_; }
+
+int MeasuredKernelPsf::KernelRadius(double signed_radius_px) const {
+  DPSFM_CHECK(std::isfinite(signed_radius_px))
+      << "blur radius must be finite, got " << signed_radius_px;
+  const double factor = std::abs(signed_radius_px) / reference_radius_px_;
+  return std::max(0,
+                  static_cast<int>(
+                      std::ceil((left_.rows / 2 + 0.5) * factor - 0.5 - 1e-9)));
+}
+
+DPKernels MeasuredKernelPsf::Kernels(double signed_radius_px) const {
+  DPSFM_CHECK(std::isfinite(signed_radius_px))
+      << "blur radius must be finite, got " << signed_radius_px;
+  const double factor = std::abs(signed_radius_px) / reference_radius_px_;
+  DPKernels kernels;
+  kernels.left = MagnifyKernel(left_, factor);
+  kernels.right = MagnifyKernel(right_, factor);
+  const bool far = signed_radius_px > 0;
+  if (far != far_side_ && signed_radius_px != 0) {
+    cv::flip(kernels.left, kernels.left, -1);
+    cv::flip(kernels.right, kernels.right, -1);
+  }
+  return kernels;
+}
+
+DPPsfLayout DPPsfLayout::ColumnBands(int num_bands) {
+  DPPsfLayout layout;
+  layout.cols = num_bands;
+  return layout;
+}
+
+bool DPPsfLayout::Check() const {
+  return rows >= 1 && cols >= 1 && std::isfinite(x0) && std::isfinite(x1) &&
+         std::isfinite(y0) && std::isfinite(y1) && x0 < x1 && y0 < y1 &&
+         x0 >= 0 && y0 >= 0 && x1 <= 1 && y1 <= 1;
+}
+
+int DPPsfLayout::CellAt(double x_fraction, double y_fraction) const {
+  auto index = [](double f, double lo, double hi, int n) {
+    const double t = (f - lo) / (hi - lo) * n;
+    if (!(t > 0)) return 0;  // also NaN
+    return std::min(n - 1, static_cast<int>(t));
+  };
+  return index(y_fraction, y0, y1, rows) * cols +
+         index(x_fraction, x0, x1, cols);
+}
+
+std::string DPPsfLayout::ToString() const {
+  std::ostringstream s;
+  s << rows << "x" << cols << " grid";
+  if (x0 != 0 || y0 != 0 || x1 != 1 || y1 != 1) {
+    s << " over [" << x0 << ", " << x1 << "] x [" << y0 << ", " << y1 << "]";
+  }
+  return s.str();
 }
 
 double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px) {

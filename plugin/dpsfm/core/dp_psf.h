@@ -117,6 +117,18 @@ struct SplitProfileParams {
   // [0, 0.45], e in [0, 0.5].
   bool Check() const;
   std::string ToString() const;
+
+  // Each view's centroid offset from the origin in units of R, in closed
+  // form: 8 / (3 pi (p + 2)) (1 - 2 c) (the rim's Gaussian keeps it).
+  double CentroidOffset() const;
+  // The one-parameter path through the family that self-calibration and
+  // calibration search, by centroid offset kappa: kappa >= 8 / (9 pi)
+  // (0.283) sharpens the split (p = 8 / (3 pi kappa) - 2, no crosstalk, up
+  // to 0.4155 at p = 0.05), smaller kappa keeps the linear split and adds
+  // crosstalk (down to 0.028 at c = 0.45), the way weak real splits behave.
+  static SplitProfileParams ForCentroidOffset(double kappa);
+  static double MinCentroidOffset();
+  static double MaxCentroidOffset();
 };
 
 class SplitProfilePsf : public DPPsfModel {
@@ -133,6 +145,75 @@ class SplitProfilePsf : public DPPsfModel {
  private:
   SplitProfileParams params_;
   int subsamples_per_pixel_;
+};
+
+// A measured DP profile, the form published DP calibrations come in: a
+// left/right kernel pair recorded at one reference blur radius on one side
+// of the focus. Other radii scale the pair with |r| (the defocus cone is
+// similar at every depth: the kernel of radius R is the reference one
+// magnified R / R_ref, its light kept), and the other side of focus is the
+// 180-degree rotation of each view's kernel (the cone inverts; each
+// photodiode keeps seeing the same half of the exit pupil).
+//
+// Resampling treats every reference pixel as a uniform square of its
+// weight and integrates it exactly over the output pixels (separable area
+// overlaps), so the light is kept for every factor, the centroid scales
+// with |r| (up to the output pixels' quantisation), and the kernels are
+// continuous in r down to the delta at r = 0. cv::resize neither keeps a
+// fixed centre pixel nor integrates when it magnifies.
+class MeasuredKernelPsf : public DPPsfModel {
+ public:
+  // `left`, `right`: CV_32FC1 (or CV_64FC1), odd square, equal size, centre
+  // pixel = origin, non-negative, each with positive sum. `far_side`: the
+  // pair is for a point farther than the focus (r > 0), else nearer.
+  // Each view is normalised to weight 0.5 (DP gain differences between the
+  // views are the images' business: every stage equalises or normalises
+  // them). Throws std::invalid_argument for malformed kernels, or when the
+  // pair breaks the left/right convention (for a far point the left
+  // kernel's centroid must lie at smaller x than the right one's).
+  MeasuredKernelPsf(const cv::Mat& left,
+                    const cv::Mat& right,
+                    double reference_radius_px,
+                    bool far_side);
+
+  std::string Name() const override;
+  DPKernels Kernels(double signed_radius_px) const override;
+  int KernelRadius(double signed_radius_px) const override;
+
+  double ReferenceRadius() const { return reference_radius_px_; }
+  bool FarSide() const { return far_side_; }
+  const cv::Mat& ReferenceLeft() const { return left_; }
+  const cv::Mat& ReferenceRight() const { return right_; }
+
+ private:
+  cv::Mat left_, right_;  // CV_32FC1, 0.5 each
+  double reference_radius_px_;
+  bool far_side_;
+  std::string name_;
+};
+
+// Magnifies a kernel (CV_32FC1, odd square, centre = origin) by `factor`
+// about its centre pixel, keeping its sum: each input pixel becomes a
+// uniform square of side `factor` whose weight is shared among the output
+// pixels it overlaps. factor -> 0 gives a delta. The output has half-size
+// ceil((half + 0.5) * factor - 0.5).
+cv::Mat MagnifyKernel(const cv::Mat& kernel, double factor);
+
+// Where each of several DP PSF profiles applies: a rows x cols grid of
+// equal cells over `region` (x0, y0, x1, y1 as fractions of the frame's
+// width and height); outside it the nearest cell applies. Cells are
+// numbered row-major. Column bands are the 1 x K grid over the frame.
+struct DPPsfLayout {
+  int rows = 1;
+  int cols = 1;
+  double x0 = 0, y0 = 0, x1 = 1, y1 = 1;
+
+  static DPPsfLayout ColumnBands(int num_bands);
+  int NumCells() const { return rows * cols; }
+  // x_fraction, y_fraction: position in the frame, 0 (left / top edge) to 1.
+  int CellAt(double x_fraction, double y_fraction) const;
+  bool Check() const;
+  std::string ToString() const;
 };
 
 // Centroid offset between the views per unit of |r|: (centroid_x(right) -
