@@ -174,7 +174,10 @@ Run Estimate(const std::vector<DPView>& views,
   DPScaleOptions options = Options();
   options.psf_self_calibration = self_calibration;
   const double t0 = Now();
-  DPScaleEstimator estimator(options, psfs);
+  DPPsfField field;
+  field.layout = DPPsfLayout::ColumnBands(static_cast<int>(psfs.size()));
+  field.cells = psfs;
+  DPScaleEstimator estimator(options, field);
   for (const DPView& view : views) estimator.AddView(view);
   const DPScaleResult result = estimator.Estimate();
   Run run;

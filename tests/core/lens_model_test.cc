@@ -98,5 +98,32 @@ TEST(LensModel, RowRejectsNonPositiveDepth) {
                std::invalid_argument);
 }
 
+// Sensor-plane distances into object distances, against the closed form of
+// u + v = D, 1/u + 1/v = 1/f: for f = 50 mm, D = 1000 mm the lens sits
+// v = 1000 - 947.2136 = 52.7864 mm from the sensor (1/947.2136 + 1/52.7864
+// = 1/50), so a target 800 mm from the sensor is 747.2136 mm from the lens.
+TEST(LensModel, SensorDistancesToObjectDistances) {
+  const double u = FocusObjectDistanceMm(1000, 50);
+  EXPECT_NEAR(u, 500 + std::sqrt(200000.0), 1e-9);
+  EXPECT_NEAR(1 / u + 1 / (1000 - u), 1.0 / 50, 1e-12);
+  EXPECT_NEAR(
+      ObjectDistanceFromSensorMm(800, 1000, 50), 800 - (1000 - u), 1e-9);
+  EXPECT_NEAR(SensorDistanceOfFocusMm(u, 50), 1000, 1e-9);
+  // At D = 4 f the lens is at 2 f from both; nearer it cannot focus.
+  EXPECT_NEAR(FocusObjectDistanceMm(200, 50), 100, 1e-9);
+  EXPECT_THROW(FocusObjectDistanceMm(199, 50), std::invalid_argument);
+  // The example: taking the sensor distance for the object
+  // distance (50 mm, focus 1.00 m, target 0.80 m) reads the radius ~12 %
+  // small against the thin lens.
+  DPLensData lens;
+  lens.focal_length_mm = 50;
+  lens.f_number = 2;
+  lens.pixel_pitch_um = 5;
+  const double wrong = SignedBlurDiameterMm(lens, 1000, 800);
+  const double right =
+      SignedBlurDiameterMm(lens, u, ObjectDistanceFromSensorMm(800, 1000, 50));
+  EXPECT_NEAR(wrong / right, 0.88, 0.02);
+}
+
 }  // namespace
 }  // namespace dpsfm

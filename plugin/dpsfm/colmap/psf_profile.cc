@@ -4,10 +4,16 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <set>
 #include <sstream>
 
+#include <boost/filesystem.hpp>
+
+#include "dpsfm/colmap/npy.h"
 #include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
+
+namespace fs = boost::filesystem;
 
 namespace dpsfm {
 namespace {
@@ -24,6 +30,53 @@ double ParseNumber(const std::string& text, const std::string& where) {
 
 }  // namespace
 
+namespace {
+
+// The kernels of a measured profile: (cells, K, K) or (K, K) for one cell.
+std::vector<cv::Mat> ReadKernelStack(const std::string& path,
+                                     int cells,
+                                     const std::string& where) {
+  const NpyArray array = ReadNpy(path);
+  const std::vector<int>& shape = array.shape;
+  const bool single = shape.size() == 2 && cells == 1;
+  if (!(single || (shape.size() == 3 && shape[0] == cells))) {
+    std::ostringstream s;
+    s << where << ": " << path << " has shape (";
+    for (size_t i = 0; i < shape.size(); ++i) s << (i ? ", " : "") << shape[i];
+    s << "); the grid needs (" << cells << ", K, K)";
+    throw InputError(s.str());
+  }
+  const int rows = shape[shape.size() - 2], cols = shape.back();
+  if (rows != cols || rows % 2 == 0 || rows < 1) {
+    throw InputError(where + ": " + path + " holds kernels of " +
+                     std::to_string(cols) + "x" + std::to_string(rows) +
+                     "; they must be square with an odd side (centre pixel = "
+                     "origin)");
+  }
+  std::vector<cv::Mat> kernels;
+  const size_t per = static_cast<size_t>(rows) * cols;
+  for (int c = 0; c < cells; ++c) {
+    cv::Mat k(rows, cols, CV_32FC1);
+    for (size_t i = 0; i < per; ++i) {
+      k.at<float>(static_cast<int>(i / cols), static_cast<int>(i % cols)) =
+          static_cast<float>(array.values[c * per + i]);
+    }
+    kernels.push_back(k);
+  }
+  return kernels;
+}
+
+std::vector<double> ParseNumbers(const std::string& text,
+                                 const std::string& where) {
+  std::istringstream stream(text);
+  std::string item;
+  std::vector<double> numbers;
+  while (stream >> item) numbers.push_back(ParseNumber(item, where));
+  return numbers;
+}
+
+}  // namespace
+
 PsfProfileFile ReadPsfProfile(const std::string& path) {
   std::ifstream file(path);
   if (!file) throw InputError("cannot read DP PSF profile " + path);
@@ -32,6 +85,20 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
   std::map<std::string, int> lines;
   std::string line;
   int number = 0;
+  const std::set<std::string> known = {"format",
+                                       "model",
+                                       "split_exponent",
+                                       "crosstalk",
+                                       "rim_softness",
+                                       "band_split_exponents",
+                                       "reference_radius_px",
+                                       "side",
+                                       "grid",
+                                       "region",
+                                       "left",
+                                       "right",
+                                       "camera",
+                                       "lens"};
   while (std::getline(file, line)) {
     ++number;
     const std::string where = path + ":" + std::to_string(number);
@@ -47,9 +114,7 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
       profile.fit_info.emplace_back(key, value);
       continue;
     }
-    if (key != "format" && key != "model" && key != "split_exponent" &&
-        key != "crosstalk" && key != "rim_softness" &&
-        key != "band_split_exponents") {
+    if (known.count(key) == 0) {
       throw InputError(where + ": unknown key '" + key + "'");
     }
     if (!values.emplace(key, value).second) {
@@ -65,9 +130,89 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                      " is not a dp-sfm DP PSF profile (needs 'format 1'; "
                      "write one with colmap dp_psf_calibrator)");
   }
-  if (values.count("model") == 0 || values["model"] != "split_profile") {
-    throw InputError(path + ": needs 'model split_profile'");
+  profile.camera = values["camera"];
+  profile.lens = values["lens"];
+  const std::string model = values["model"];
+  auto refuse_keys = [&](const std::vector<std::string>& keys) {
+    for (const std::string& key : keys) {
+      if (values.count(key)) {
+        throw InputError(where(key) + ": '" + key +
+                         "' does not belong to "
+                         "model " +
+                         model);
+      }
+    }
+  };
+  if (model == "measured_kernels") {
+    profile.model = model;
+    refuse_keys({"split_exponent",
+                 "crosstalk",
+                 "rim_softness",
+                 "band_split_exponents"});
+    for (const char* key : {"reference_radius_px", "side", "left", "right"}) {
+      if (values.count(key) == 0) {
+        throw InputError(path + ": model measured_kernels needs '" + key + "'");
+      }
+    }
+    profile.reference_radius_px = ParseNumber(values["reference_radius_px"],
+                                              where("reference_radius_px"));
+    if (!(profile.reference_radius_px > 0.5)) {
+      throw InputError(where("reference_radius_px") +
+                       ": the reference radius must exceed 0.5 px");
+    }
+    if (values["side"] != "far" && values["side"] != "near") {
+      throw InputError(where("side") + ": side must be far or near, got '" +
+                       values["side"] + "'");
+    }
+    profile.far_side = values["side"] == "far";
+    if (values.count("grid")) {
+      const std::vector<double> g = ParseNumbers(values["grid"], where("grid"));
+      if (g.size() != 2 || g[0] < 1 || g[1] < 1 || g[0] != std::floor(g[0]) ||
+          g[1] != std::floor(g[1]) || g[0] * g[1] > 10000) {
+        throw InputError(where("grid") + ": expected 'grid ROWS COLS'");
+      }
+      profile.layout.rows = static_cast<int>(g[0]);
+      profile.layout.cols = static_cast<int>(g[1]);
+    }
+    if (values.count("region")) {
+      const std::vector<double> r =
+          ParseNumbers(values["region"], where("region"));
+      if (r.size() != 4) {
+        throw InputError(where("region") + ": expected 'region x0 y0 x1 y1'");
+      }
+      profile.layout.x0 = r[0];
+      profile.layout.y0 = r[1];
+      profile.layout.x1 = r[2];
+      profile.layout.y1 = r[3];
+    }
+    if (!profile.layout.Check()) {
+      throw InputError(where("region") +
+                       ": the region must satisfy 0 <= x0 < x1 <= 1 and 0 <= "
+                       "y0 < y1 <= 1");
+    }
+    const fs::path dir = fs::path(path).parent_path();
+    auto resolve = [&](const std::string& name) {
+      const fs::path p(name);
+      return (p.is_absolute() ? p : dir / p).string();
+    };
+    const int cells = profile.layout.NumCells();
+    profile.left_kernels =
+        ReadKernelStack(resolve(values["left"]), cells, where("left"));
+    profile.right_kernels =
+        ReadKernelStack(resolve(values["right"]), cells, where("right"));
+    if (profile.left_kernels[0].size() != profile.right_kernels[0].size()) {
+      throw InputError(path + ": the left and right kernels differ in size");
+    }
+    profile.MakeField(path);  // the conventions, checked once here
+    return profile;
   }
+  if (model != "split_profile") {
+    throw InputError(path +
+                     ": needs 'model split_profile' or 'model "
+                     "measured_kernels'");
+  }
+  refuse_keys(
+      {"reference_radius_px", "side", "grid", "region", "left", "right"});
   if (values.count("split_exponent") == 0) {
     throw InputError(path + ": needs 'split_exponent'");
   }
@@ -82,13 +227,11 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
         ParseNumber(values["rim_softness"], where("rim_softness"));
   }
   if (values.count("band_split_exponents")) {
-    std::istringstream stream(values["band_split_exponents"]);
-    std::string item;
-    while (stream >> item) {
-      profile.band_split_exponents.push_back(
-          ParseNumber(item, where("band_split_exponents")));
+    for (const double p : ParseNumbers(values["band_split_exponents"],
+                                       where("band_split_exponents"))) {
+      profile.band_split_exponents.push_back(p);
       SplitProfileParams band = profile.params;
-      band.split_exponent = profile.band_split_exponents.back();
+      band.split_exponent = p;
       if (!band.Check()) {
         throw InputError(where("band_split_exponents") +
                          ": split exponents must lie in [0.05, 8]");
@@ -108,6 +251,38 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
   return profile;
 }
 
+DPPsfField PsfProfileFile::MakeField(const std::string& path) const {
+  DPPsfField field;
+  if (model == "measured_kernels") {
+    field.layout = layout;
+    for (size_t c = 0; c < left_kernels.size(); ++c) {
+      try {
+        field.cells.push_back(std::make_shared<MeasuredKernelPsf>(
+            left_kernels[c], right_kernels[c], reference_radius_px, far_side));
+      } catch (const std::invalid_argument& e) {
+        std::string what = e.what();
+        const size_t colon = what.find("): ");
+        if (colon != std::string::npos) what = what.substr(colon + 3);
+        throw InputError(path + ", grid cell " + std::to_string(c) + " (row " +
+                         std::to_string(c / layout.cols) + ", column " +
+                         std::to_string(c % layout.cols) + "): " + what);
+      }
+    }
+    return field;
+  }
+  if (band_split_exponents.empty()) {
+    return DPPsfField::Uniform(std::make_shared<SplitProfilePsf>(params));
+  }
+  field.layout =
+      DPPsfLayout::ColumnBands(static_cast<int>(band_split_exponents.size()));
+  for (const double p : band_split_exponents) {
+    SplitProfileParams band = params;
+    band.split_exponent = p;
+    field.cells.push_back(std::make_shared<SplitProfilePsf>(band));
+  }
+  return field;
+}
+
 void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
   std::ofstream file(path);
   if (!file) throw InputError("cannot write DP PSF profile " + path);
@@ -117,15 +292,47 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
           "--DPScaleEstimator.psf_path "
        << path << "\n"
        << "format 1\n"
-       << "model split_profile\n"
-       << std::setprecision(6) << "split_exponent "
-       << profile.params.split_exponent << "\n"
-       << "crosstalk " << profile.params.crosstalk << "\n"
-       << "rim_softness " << profile.params.rim_softness << "\n";
-  if (!profile.band_split_exponents.empty()) {
-    file << "band_split_exponents";
-    for (const double p : profile.band_split_exponents) file << " " << p;
-    file << "\n";
+       << "model " << profile.model << "\n";
+  if (!profile.camera.empty()) file << "camera " << profile.camera << "\n";
+  if (!profile.lens.empty()) file << "lens " << profile.lens << "\n";
+  file << std::setprecision(6);
+  if (profile.model == "measured_kernels") {
+    const fs::path p(path);
+    const std::string stem = p.stem().string();
+    file << "reference_radius_px " << profile.reference_radius_px << "\n"
+         << "side " << (profile.far_side ? "far" : "near") << "\n"
+         << "grid " << profile.layout.rows << " " << profile.layout.cols << "\n"
+         << "region " << profile.layout.x0 << " " << profile.layout.y0 << " "
+         << profile.layout.x1 << " " << profile.layout.y1 << "\n"
+         << "left " << stem << "_left.npy\n"
+         << "right " << stem << "_right.npy\n";
+    for (const bool left : {true, false}) {
+      const std::vector<cv::Mat>& kernels =
+          left ? profile.left_kernels : profile.right_kernels;
+      NpyArray array;
+      const int k = kernels.empty() ? 0 : kernels[0].rows;
+      array.shape = {static_cast<int>(kernels.size()), k, k};
+      for (const cv::Mat& m : kernels) {
+        for (int i = 0; i < m.rows; ++i) {
+          for (int j = 0; j < m.cols; ++j) {
+            array.values.push_back(m.at<float>(i, j));
+          }
+        }
+      }
+      WriteNpyFloat32(
+          (p.parent_path() / (stem + (left ? "_left.npy" : "_right.npy")))
+              .string(),
+          array);
+    }
+  } else {
+    file << "split_exponent " << profile.params.split_exponent << "\n"
+         << "crosstalk " << profile.params.crosstalk << "\n"
+         << "rim_softness " << profile.params.rim_softness << "\n";
+    if (!profile.band_split_exponents.empty()) {
+      file << "band_split_exponents";
+      for (const double p : profile.band_split_exponents) file << " " << p;
+      file << "\n";
+    }
   }
   for (const auto& entry : profile.fit_info) {
     file << entry.first << " " << entry.second << "\n";
@@ -133,10 +340,9 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
   if (!file) throw InputError("cannot write DP PSF profile " + path);
 }
 
-std::vector<std::shared_ptr<const DPPsfModel>> MakePsfModels(
-    const std::string& psf_model,
-    const std::string& psf_path,
-    DPScaleOptions* core) {
+DPPsfField MakePsfField(const std::string& psf_model,
+                        const std::string& psf_path,
+                        DPScaleOptions* core) {
   if (psf_model == "translating_disk" || psf_model == "auto") {
     if (!psf_path.empty()) {
       throw InputError(
@@ -145,27 +351,17 @@ std::vector<std::shared_ptr<const DPPsfModel>> MakePsfModels(
           psf_model + ")");
     }
     core->psf_self_calibration = psf_model == "auto";
-    return {std::make_shared<TranslatingDiskPsf>()};
+    return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   }
   if (psf_model == "calibrated") {
     if (psf_path.empty()) {
       throw InputError(
           "--DPScaleEstimator.psf_model calibrated needs "
           "--DPScaleEstimator.psf_path (a profile written by colmap "
-          "dp_psf_calibrator)");
+          "dp_psf_calibrator, or measured kernels)");
     }
     core->psf_self_calibration = false;
-    const PsfProfileFile profile = ReadPsfProfile(psf_path);
-    if (profile.band_split_exponents.empty()) {
-      return {std::make_shared<SplitProfilePsf>(profile.params)};
-    }
-    std::vector<std::shared_ptr<const DPPsfModel>> bands;
-    for (const double p : profile.band_split_exponents) {
-      SplitProfileParams params = profile.params;
-      params.split_exponent = p;
-      bands.push_back(std::make_shared<SplitProfilePsf>(params));
-    }
-    return bands;
+    return ReadPsfProfile(psf_path).MakeField(psf_path);
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");

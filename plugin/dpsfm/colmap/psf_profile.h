@@ -1,9 +1,8 @@
 // DP PSF profiles on disk, and the PSF a run uses.
 //
 // A profile file is plain text, one "key value" pair per line, '#' starts a
-// comment (docs/user-guide.md, "DP PSF profiles"):
+// comment (docs/user-guide.md, "DP PSF profiles"). Two models:
 //
-//   # dp-sfm DP PSF profile
 //   format 1
 //   model split_profile
 //   split_exponent 0.62
@@ -12,7 +11,22 @@
 //   band_split_exponents 0.45 0.62 0.80   (optional: the split exponent of
 //                          each equal-width column band, left to right, for
 //                          a profile that changes across the frame)
-//   fit_<anything> ...    (how it was fitted; kept for people, ignored here)
+//
+//   format 1
+//   model measured_kernels
+//   reference_radius_px 11.5      the |r| at which the kernels were measured
+//   side far                      far or near: the side of focus they are for
+//   grid 6 8                      rows cols, row-major (default 1 1)
+//   region 0.1667 0.1667 0.8333 0.8333   x0 y0 x1 y1 of the grid, fractions
+//                                 of the frame (default 0 0 1 1)
+//   left kernels_left.npy         float32/float64 (rows*cols, K, K) or
+//   right kernels_right.npy       (K, K) for one cell; relative to the file
+//
+// (docs/cli-contract.md, "DP profiles": published calibrations import as
+// they are). Both may carry
+//   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
+// for the profile library, and fit_<anything> lines (how it was made; kept
+// for people, ignored by the estimator).
 #pragma once
 
 #include <memory>
@@ -20,33 +34,48 @@
 #include <utility>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "dpsfm/core/dp_psf.h"
 #include "dpsfm/core/dp_scale_estimator.h"
 
 namespace dpsfm {
 
 struct PsfProfileFile {
+  std::string model = "split_profile";  // or "measured_kernels"
+  // split_profile.
   SplitProfileParams params;
   // Empty = one profile for the whole frame.
   std::vector<double> band_split_exponents;
+  // measured_kernels: one CV_32FC1 pair per layout cell (row-major).
+  double reference_radius_px = 0;
+  bool far_side = true;
+  DPPsfLayout layout;
+  std::vector<cv::Mat> left_kernels, right_kernels;
+  // For the profile library (may be empty).
+  std::string camera, lens;
   // The fit_* lines, in file order.
   std::vector<std::pair<std::string, std::string>> fit_info;
+
+  // The PSF of every stage. Throws InputError (naming `path`) for kernels
+  // that are no PSF pair under the DP conventions.
+  DPPsfField MakeField(const std::string& path) const;
 };
 
 // Throws InputError naming the file and line of what is wrong.
 PsfProfileFile ReadPsfProfile(const std::string& path);
+// measured_kernels writes <stem>_left.npy and <stem>_right.npy beside it.
 void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
 
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
-// model), "calibrated" (the profile in psf_path, from dp_psf_calibrator; one
-// per column band if it has bands), or "auto" (the translating disk,
-// self-calibrated from the data: sets core->psf_self_calibration). Throws
-// InputError for an unknown model, a missing or malformed psf_path, or a
-// psf_path the model does not use.
-std::vector<std::shared_ptr<const DPPsfModel>> MakePsfModels(
-    const std::string& psf_model,
-    const std::string& psf_path,
-    DPScaleOptions* core);
+// model), "calibrated" (the profile in psf_path: a split profile from
+// dp_psf_calibrator, one per column band if it has bands, or measured
+// kernels), or "auto" (the translating disk, self-calibrated from the data:
+// sets core->psf_self_calibration). Throws InputError for an unknown model,
+// a missing or malformed psf_path, or a psf_path the model does not use.
+DPPsfField MakePsfField(const std::string& psf_model,
+                        const std::string& psf_path,
+                        DPScaleOptions* core);
 
 // One row of a calibration targets file (dp_psf_calibrator): a DP capture
 // of a planar, fronto-parallel textured target.

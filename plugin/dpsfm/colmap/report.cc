@@ -73,13 +73,15 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     const SplitProfileFit& fit = result.psf_fit;
     psf["fit"] = {
         {"determined", fit.determined},
+        {"at_edge_of_family", fit.at_edge},
         {"translating_disk_kept", fit.translating_disk},
         {"split_exponent", Number(fit.params.split_exponent)},
-        {"split_exponent_ci",
-         Interval(fit.exponent_ci_low, fit.exponent_ci_high)},
+        {"crosstalk", Number(fit.params.crosstalk)},
         {"centroid_offset_per_radius", Number(fit.centroid_offset)},
         {"centroid_offset_ci",
          Interval(fit.centroid_offset_ci_low, fit.centroid_offset_ci_high)},
+        {"consistent_centroid_offsets",
+         Interval(fit.consistent_low, fit.consistent_high)},
         {"translating_disk_centroid_offset",
          Number(fit.translating_disk_centroid_offset)},
         {"patches", fit.num_patches},
@@ -87,11 +89,13 @@ nlohmann::json MakeReport(const DPScaleResult& result,
         {"translating_disk_criterion", Number(fit.translating_disk_criterion)},
         {"seconds", fit.seconds}};
     nlohmann::json curve = nlohmann::json::array();
-    for (size_t i = 0; i < fit.exponents.size() && i < fit.criterion.size();
+    for (size_t i = 0;
+         i < fit.centroid_offsets.size() && i < fit.criterion.size();
          ++i) {
-      curve.push_back({Number(fit.exponents[i]), Number(fit.criterion[i])});
+      curve.push_back(
+          {Number(fit.centroid_offsets[i]), Number(fit.criterion[i])});
     }
-    // Trimmed mean relative residual per split exponent tried.
+    // Trimmed mean relative residual per centroid offset tried.
     psf["fit"]["criterion_curve"] = curve;
     // A profile that changes across the frame: each column band's fit.
     nlohmann::json bands = nlohmann::json::array();
@@ -99,13 +103,19 @@ nlohmann::json MakeReport(const DPScaleResult& result,
       bands.push_back(
           {{"translating_disk_kept", band.translating_disk},
            {"split_exponent", Number(band.params.split_exponent)},
-           {"split_exponent_ci",
-            Interval(band.exponent_ci_low, band.exponent_ci_high)},
+           {"crosstalk", Number(band.params.crosstalk)},
            {"centroid_offset_per_radius", Number(band.centroid_offset)},
+           {"centroid_offset_ci",
+            Interval(band.centroid_offset_ci_low,
+                     band.centroid_offset_ci_high)},
+           {"consistent_centroid_offsets",
+            Interval(band.consistent_low, band.consistent_high)},
            {"patches", band.num_patches}});
     }
     psf["fit"]["bands"] = bands;
   }
+  psf["scale_factors_allowed_by_profile"] = Interval(
+      result.profile_scale_factor_low, result.profile_scale_factor_high);
   report["psf"] = psf;
 
   std::map<std::string, const ViewSource*> source_by_name;

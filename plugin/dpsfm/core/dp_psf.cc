@@ -454,6 +454,39 @@ std::string DPPsfLayout::ToString() const {
   return s.str();
 }
 
+DPPsfField DPPsfField::Uniform(std::shared_ptr<const DPPsfModel> psf) {
+  DPPsfField field;
+  field.cells.push_back(std::move(psf));
+  return field;
+}
+
+const DPPsfModel& DPPsfField::At(double x_fraction, double y_fraction) const {
+  return *cells[layout.CellAt(x_fraction, y_fraction)];
+}
+
+void DPPsfField::CheckValid() const {
+  DPSFM_CHECK(layout.Check()) << "invalid DP PSF layout " << layout.ToString();
+  DPSFM_CHECK_EQ(static_cast<int>(cells.size()), layout.NumCells())
+      << "the DP PSF layout " << layout.ToString() << " needs "
+      << layout.NumCells() << " profiles, got " << cells.size();
+  for (const auto& psf : cells) {
+    DPSFM_CHECK(psf != nullptr) << "a DP PSF model is required";
+  }
+}
+
+std::string DPPsfField::Name() const {
+  if (cells.size() == 1) return cells[0]->Name();
+  std::ostringstream name;
+  name << layout.ToString() << ":";
+  if (cells.size() <= 4) {
+    for (const auto& psf : cells) name << " " << psf->Name();
+  } else {
+    name << " " << cells.front()->Name() << " ... " << cells.back()->Name()
+         << " (" << cells.size() << " cells)";
+  }
+  return name.str();
+}
+
 double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px) {
   DPSFM_CHECK(radius_px > 0 && std::isfinite(radius_px))
       << "radius must be positive, got " << radius_px;

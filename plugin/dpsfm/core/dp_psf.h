@@ -18,7 +18,9 @@
 //   lies at larger x than the right one's when r < 0.
 #pragma once
 
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -124,7 +126,7 @@ struct SplitProfileParams {
   // The one-parameter path through the family that self-calibration and
   // calibration search, by centroid offset kappa: kappa >= 8 / (9 pi)
   // (0.283) sharpens the split (p = 8 / (3 pi kappa) - 2, no crosstalk, up
-  // to 0.4155 at p = 0.05), smaller kappa keeps the linear split and adds
+  // to 0.414 at p = 0.05), smaller kappa keeps the linear split and adds
   // crosstalk (down to 0.028 at c = 0.45), the way weak real splits behave.
   static SplitProfileParams ForCentroidOffset(double kappa);
   static double MinCentroidOffset();
@@ -214,6 +216,22 @@ struct DPPsfLayout {
   int CellAt(double x_fraction, double y_fraction) const;
   bool Check() const;
   std::string ToString() const;
+};
+
+// The DP PSF of a whole frame: one profile per cell of a layout (a single
+// cell for a profile that does not change across the frame).
+struct DPPsfField {
+  DPPsfLayout layout;
+  std::vector<std::shared_ptr<const DPPsfModel>> cells;  // layout.NumCells()
+
+  static DPPsfField Uniform(std::shared_ptr<const DPPsfModel> psf);
+  // The cell's profile at a position (fractions of the frame).
+  const DPPsfModel& At(double x_fraction, double y_fraction) const;
+  // Throws std::invalid_argument for a bad layout or a missing profile.
+  void CheckValid() const;
+  // The profile's name for one cell, else the layout and the cells' names
+  // (the first and last of more than four).
+  std::string Name() const;
 };
 
 // Centroid offset between the views per unit of |r|: (centroid_x(right) -

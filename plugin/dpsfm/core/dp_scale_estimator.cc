@@ -125,7 +125,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GE(psf_fit_bands, 1);
   DPSFM_CHECK_GE(max_psf_fit_depth_spread, 0);
   if (psf_self_calibration) psf_fit.Check();
-  blur.Check();
+  DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
   linear.Check();
   intensity.Check();
   return true;
@@ -146,22 +146,16 @@ struct DPScaleEstimator::ViewData {
 
 DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
                                    std::shared_ptr<const DPPsfModel> psf)
-    : DPScaleEstimator(
-          options,
-          std::vector<std::shared_ptr<const DPPsfModel>>{std::move(psf)}) {}
+    : DPScaleEstimator(options, DPPsfField::Uniform(std::move(psf))) {}
 
-DPScaleEstimator::DPScaleEstimator(
-    const DPScaleOptions& options,
-    std::vector<std::shared_ptr<const DPPsfModel>> band_psfs)
-    : options_(options), band_psfs_(std::move(band_psfs)) {
+DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
+                                   DPPsfField field)
+    : options_(options), field_(std::move(field)) {
   options_.Check();
-  DPSFM_CHECK(!band_psfs_.empty()) << "a DP PSF model is required";
-  for (const auto& psf : band_psfs_) {
-    DPSFM_CHECK(psf != nullptr) << "a DP PSF model is required";
-  }
-  DPSFM_CHECK(band_psfs_.size() == 1 || !options_.psf_self_calibration)
+  field_.CheckValid();
+  DPSFM_CHECK(field_.cells.size() == 1 || !options_.psf_self_calibration)
       << "self-calibration fits one profile for the whole frame";
-  psf_ = band_psfs_[0];
+  psf_ = field_.cells[0];
 }
 
 DPScaleEstimator::~DPScaleEstimator() = default;
@@ -228,14 +222,13 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   BlurEstimationOptions blur = options_.blur;
   blur.max_radius_px = geometry.max_radius_px;
   int border = 0;
-  for (const auto& psf : band_psfs_) {
+  for (const auto& psf : field_.cells) {
     border = std::max(border, psf->KernelRadius(geometry.max_radius_px));
   }
-  const int num_bands = static_cast<int>(band_psfs_.size());
   auto band_of = [&](const cv::Rect& interior) {
-    const double cx = interior.x + 0.5 * interior.width;
-    return std::min(num_bands - 1,
-                    static_cast<int>(cx / left.cols * num_bands));
+    return field_.layout.CellAt(
+        (interior.x + 0.5 * interior.width) / left.cols,
+        (interior.y + 0.5 * interior.height) / left.rows);
   };
   const int p = geometry.patch_size;
   const int crop = p + 2 * border;
@@ -400,7 +393,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   // Blur per searched patch (the expensive part), in parallel.
   if (num_searched > 0) {
     std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
-    for (const auto& psf : band_psfs_) {
+    for (const auto& psf : field_.cells) {
       estimators.emplace_back(
           new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
       DPSFM_CHECK_LE(estimators.back()->Border(), crop_border);
@@ -528,7 +521,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   // psf_fit_radius_factor x the search bound (see the option).
   int store_border = border;
   if (options_.psf_self_calibration) {
-    for (const auto& psf : band_psfs_) {
+    for (const auto& psf : field_.cells) {
       store_border = std::max(
           store_border,
           psf->KernelRadius(options_.psf_fit_radius_factor *
@@ -582,7 +575,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 
 void DPScaleEstimator::CalibrateProfile(
     std::vector<std::vector<PatchSample>>* samples,
-    std::vector<std::shared_ptr<const DPPsfModel>>* band_psfs,
+    DPPsfField* field,
     DPScaleResult* result) const {
   // Stored crops by geometry (crop size, radius bound): FitSplitProfile
   // takes one geometry; the largest group feeds it.
@@ -609,6 +602,13 @@ void DPScaleEstimator::CalibrateProfile(
       largest = &g.second;
       bound = g.first.second;
     }
+  }
+  if (largest == nullptr) {
+    result->psf_status =
+        "self-calibration could not determine the DP profile (no stored "
+        "patch to fit it to: no view had usable texture and depth); " +
+        psf_->Name() + " kept";
+    return;
   }
   SplitProfileFitOptions fit_options = options_.psf_fit;
   fit_options.blur = options_.blur;
@@ -692,16 +692,18 @@ void DPScaleEstimator::CalibrateProfile(
   } else {
     fitted.push_back(profile_of(fit));
   }
-  const int num_bands = static_cast<int>(fitted.size());
+  DPPsfField fitted_field;
+  fitted_field.layout =
+      DPPsfLayout::ColumnBands(static_cast<int>(fitted.size()));
+  fitted_field.cells = fitted;
   // Every stored patch searched again with its fitted profile; the others
   // (estimated with the old one) leave the selection.
   for (auto& view_samples : *samples) {
     for (PatchSample& s : view_samples) {
       s.selected = false;
-      const double x_fraction =
-          (s.x + 0.5) / views_[s.view]->summary.frame_size.width;
-      s.psf_band = std::max(
-          0, std::min(num_bands - 1, static_cast<int>(x_fraction * num_bands)));
+      const cv::Size frame = views_[s.view]->summary.frame_size;
+      s.psf_band = fitted_field.layout.CellAt((s.x + 0.5) / frame.width,
+                                              (s.y + 0.5) / frame.height);
     }
   }
   int reestimated = 0;
@@ -744,7 +746,42 @@ void DPScaleEstimator::CalibrateProfile(
          << reestimated << " stored patches re-estimated with it";
   result->psf_status = status.str();
   result->psf_self_calibrated = true;
-  *band_psfs = fitted;
+  *field = fitted_field;
+}
+
+namespace {
+
+// Scale factors the self-calibrated profile leaves open (see
+// DPScaleResult::profile_scale_factor_low): per cell of the field, the
+// consistent centroid offsets over the one used (the translating disk's
+// when it was kept); the widest over the cells.
+void ProfileScaleFactorsOf(const std::vector<SplitProfileFit>& fits,
+                           bool fitted_profile_used,
+                           double* low,
+                           double* high) {
+  *low = 1;
+  *high = 1;
+  for (const SplitProfileFit& fit : fits) {
+    const double used = fitted_profile_used && !fit.translating_disk
+                            ? fit.centroid_offset
+                            : fit.translating_disk_centroid_offset;
+    *low = std::min(*low, fit.consistent_low / used);
+    *high = std::max(*high, fit.consistent_high / used);
+  }
+}
+
+}  // namespace
+
+void DPScaleEstimator::ProfileScaleFactors(const DPPsfField& field,
+                                           const DPScaleResult& result,
+                                           double* low,
+                                           double* high) const {
+  if (!result.psf_band_fits.empty() && field.cells.size() > 1) {
+    ProfileScaleFactorsOf(result.psf_band_fits, true, low, high);
+  } else {
+    ProfileScaleFactorsOf(
+        {result.psf_fit}, result.psf_self_calibrated, low, high);
+  }
 }
 
 DPScaleResult DPScaleEstimator::Estimate() const {
@@ -760,21 +797,15 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   // self-calibration may replace both.
   std::vector<std::vector<PatchSample>> samples(num_views);
   for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
-  std::vector<std::shared_ptr<const DPPsfModel>> psfs = band_psfs_;
-  if (options_.psf_self_calibration && band_psfs_.size() == 1) {
+  DPPsfField field = field_;
+  if (options_.psf_self_calibration && field_.cells.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
-    CalibrateProfile(&samples, &psfs, &result);
+    CalibrateProfile(&samples, &field, &result);
     result.seconds_psf_fit = SecondsSince(fit_start);
   }
-  const std::shared_ptr<const DPPsfModel> psf = psfs[0];
-  result.psf_model = psf->Name();
-  const bool banded = psfs.size() > 1;
-  if (banded) {
-    std::ostringstream name;
-    name << psfs.size() << " column bands:";
-    for (const auto& band : psfs) name << " " << band->Name();
-    result.psf_model = name.str();
-  }
+  const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
+  result.psf_model = field.Name();
+  const bool banded = field.cells.size() > 1;
 
   // --- Linear stage. ---
   auto start = std::chrono::steady_clock::now();
@@ -886,18 +917,56 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     *lo = s - std::sqrt(dl * dl + sys * sys);
     *hi = s + std::sqrt(dh * dh + sys * sys);
   };
+  // The profile's own uncertainty (self-calibration): scale ~ the assumed
+  // centroid offset, so the offsets the data allow move it by their ratio.
+  if (options_.psf_self_calibration) {
+    ProfileScaleFactors(field,
+                        result,
+                        &result.profile_scale_factor_low,
+                        &result.profile_scale_factor_high);
+  }
+  auto own_profile = [&](double* lo, double* hi) {
+    *lo *= result.profile_scale_factor_low;
+    *hi *= result.profile_scale_factor_high;
+  };
+  const double statistical_width =
+      (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
   widen(linear.scale, &linear.scale_ci_low, &linear.scale_ci_high);
+  const double statistical_ci_low = linear.scale_ci_low;
+  const double statistical_ci_high = linear.scale_ci_high;
+  own_profile(&linear.scale_ci_low, &linear.scale_ci_high);
   {
     const double width =
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
     std::ostringstream s;
-    if (linear.num_rows < options_.min_total_patches ||
+    const bool no_interval = !std::isfinite(statistical_width);
+    const bool profile_open =
+        !no_interval &&
+        (statistical_ci_high - statistical_ci_low) / linear.scale <=
+            options_.max_scale_ci_relative_width &&
+        !(width <= options_.max_scale_ci_relative_width);
+    if (linear.num_rows < options_.min_total_patches || no_interval ||
         !(width <= options_.max_scale_ci_relative_width)) {
       s << leading_cause;
     }
     if (linear.num_rows < options_.min_total_patches) {
       s << "too few usable patches for a scale (" << linear.num_rows
         << " in the joint solve, need " << options_.min_total_patches << ")";
+    } else if (no_interval) {
+      s << "the scale's interval could not be measured ("
+        << linear.interval_status << "): a scale without one is not reported";
+    } else if (profile_open) {
+      s << "the sensor's DP profile is unknown: "
+        << (result.psf_status.empty() ? "" : result.psf_status + "; ")
+        << "profiles consistent with the data give scales from "
+        << linear.scale_ci_low << " to " << linear.scale_ci_high
+        << " (estimate " << linear.scale
+        << " with the profile used). Calibrate the camera's DP profile "
+           "once with colmap dp_psf_calibrator (a textured plane at two or "
+           "more distances) and run with --DPScaleEstimator.psf_model "
+           "calibrated --DPScaleEstimator.psf_path FILE";
+      result.failure_reason = s.str();
+      return result;
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
       s << "the data do not determine the scale: its bootstrap interval ["
         << linear.scale_ci_low << ", " << linear.scale_ci_high << "] spans "
@@ -951,7 +1020,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         if (!samples[i][st.sample].selected) continue;
         ip.depth = samples[i][st.sample].depth;
         if (banded) {
-          ip.psf = psfs[samples[i][st.sample].psf_band].get();
+          ip.psf = field.cells[samples[i][st.sample].psf_band].get();
         }
         ip.left = st.left;
         ip.right = st.right;
@@ -999,19 +1068,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                << search.relative_range
                << ")): the linear and intensity cues disagree; linear "
                   "estimate kept";
-      } else if (search.num_bootstrap > 0 &&
-                 width > options_.max_intensity_ci_relative_width) {
+      } else if (search.num_bootstrap == 0) {
+        status << "no bootstrap (num_bootstrap 0), so no interval; linear "
+                  "estimate kept";
+      } else if (width > options_.max_intensity_ci_relative_width) {
         status << "loss curve too flat ("
                << std::lround(100 * search.confidence_level) << " % interval "
                << std::fixed << std::setprecision(1) << width * 100
                << " % of the scale); linear estimate kept";
-      } else if (search.num_bootstrap > 0 &&
-                 intensity.bootstrap_support <
-                     options_.min_intensity_bootstrap_support) {
+      } else if (intensity.bootstrap_support <
+                 options_.min_intensity_bootstrap_support) {
         status << "minimum not stable under resampling (support "
                << intensity.bootstrap_support << "); linear estimate kept";
-      } else if (search.num_bootstrap > 0 &&
-                 !IntervalContains(intensity.scale,
+      } else if (!IntervalContains(intensity.scale,
                                    intensity.scale_ci_low,
                                    intensity.scale_ci_high,
                                    options_.scale_systematic_uncertainty,
@@ -1035,6 +1104,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         result.scale_ci_low = intensity.scale_ci_low;
         result.scale_ci_high = intensity.scale_ci_high;
         widen(result.scale, &result.scale_ci_low, &result.scale_ci_high);
+        own_profile(&result.scale_ci_low, &result.scale_ci_high);
         result.num_patches = intensity.num_patches;
       }
     }

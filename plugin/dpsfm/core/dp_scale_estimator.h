@@ -200,7 +200,7 @@ struct DPViewSummary {
 
 struct PatchSample {
   int view = -1;
-  int psf_band = 0;            // column band of the DP PSF (see constructor)
+  int psf_band = 0;            // cell of the DP PSF's layout (constructor)
   double x = 0, y = 0;         // centre, DP-frame pixels
   double depth = 0;            // z'
   double depth_spread = 0;     // (p90 - p10) / median of z' inside
@@ -267,18 +267,21 @@ struct DPScaleResult {
   SplitProfileFit psf_fit;
   std::vector<SplitProfileFit> psf_band_fits;
   double seconds_psf_fit = 0;
+  // The factors by which the profiles the data allow move the scale
+  // against the one used (self-calibration: the fits' consistent centroid
+  // offsets over the one used; 1 when the profile was given). The reported
+  // intervals include them; 0 / inf = not bounded.
+  double profile_scale_factor_low = 1, profile_scale_factor_high = 1;
 };
 
 class DPScaleEstimator {
  public:
   DPScaleEstimator(const DPScaleOptions& options,
                    std::shared_ptr<const DPPsfModel> psf);
-  // A profile that changes across the frame: band_psfs[k] serves the
-  // patches whose centre lies in the k-th of K equal-width column bands of
-  // the DP frame (left to right), in every stage. K = 1 is the constructor
-  // above; self-calibration needs K = 1.
-  DPScaleEstimator(const DPScaleOptions& options,
-                   std::vector<std::shared_ptr<const DPPsfModel>> band_psfs);
+  // A profile that changes across the frame: field.cells[k] serves the
+  // patches whose centre lies in cell k of field.layout, in every stage.
+  // Self-calibration needs a single cell.
+  DPScaleEstimator(const DPScaleOptions& options, DPPsfField field);
   ~DPScaleEstimator();
 
   // Estimates patch blurs in one view and keeps only what later stages need
@@ -301,13 +304,17 @@ class DPScaleEstimator {
   // Self-calibration: fits the split profile to the stored patches and, if
   // it replaces the given PSF, re-estimates them (samples[i] of view i; only
   // the stored ones stay selected) and sets *psf.
-  void CalibrateProfile(
-      std::vector<std::vector<PatchSample>>* samples,
-      std::vector<std::shared_ptr<const DPPsfModel>>* band_psfs,
-      DPScaleResult* result) const;
+  void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
+                        DPPsfField* field,
+                        DPScaleResult* result) const;
+  // See DPScaleResult::profile_scale_factor_low.
+  void ProfileScaleFactors(const DPPsfField& field,
+                           const DPScaleResult& result,
+                           double* low,
+                           double* high) const;
   DPScaleOptions options_;
-  std::vector<std::shared_ptr<const DPPsfModel>> band_psfs_;
-  std::shared_ptr<const DPPsfModel> psf_;  // band_psfs_[0]
+  DPPsfField field_;
+  std::shared_ptr<const DPPsfModel> psf_;  // field_.cells[0]
   std::vector<std::unique_ptr<ViewData>> views_;
 };
 

@@ -32,6 +32,30 @@ double SignedBlurDiameterMm(const DPLensData& lens,
   return lens.ApertureDiameterMm() * f / (1.0 - f * inv_g) * (inv_g - inv_z);
 }
 
+double FocusObjectDistanceMm(double sensor_to_focus_mm,
+                             double focal_length_mm) {
+  const double d = sensor_to_focus_mm, f = focal_length_mm;
+  DPSFM_CHECK(f > 0 && d >= 4 * f && std::isfinite(d))
+      << "a lens of " << f << " mm cannot focus at " << d
+      << " mm from the sensor (needs at least 4 f)";
+  return 0.5 * (d + std::sqrt(d * d - 4 * d * f));
+}
+
+double ObjectDistanceFromSensorMm(double sensor_to_point_mm,
+                                  double sensor_to_focus_mm,
+                                  double focal_length_mm) {
+  const double u = FocusObjectDistanceMm(sensor_to_focus_mm, focal_length_mm);
+  return sensor_to_point_mm - (sensor_to_focus_mm - u);
+}
+
+double SensorDistanceOfFocusMm(double focus_object_distance_mm,
+                               double focal_length_mm) {
+  const double u = focus_object_distance_mm, f = focal_length_mm;
+  DPSFM_CHECK(u > f) << "focus object distance " << u
+                     << " mm must exceed the focal length " << f << " mm";
+  return u + f * u / (u - f);
+}
+
 double PredictBlurRadiusPx(const DPLensData& lens,
                            double pixel_pitch_mm,
                            double scale,

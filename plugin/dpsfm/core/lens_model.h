@@ -47,6 +47,21 @@ inline double BlurDiameterMmFromRadiusPx(double r_px, double pixel_pitch_mm) {
   return 2.0 * r_px * pixel_pitch_mm;
 }
 
+// Distances measured from the camera's focal-plane mark (the sensor) into
+// the thin lens's object distances (from the lens). A lens focused at
+// sensor distance D_g sits at v = D_g - u_g from the sensor, with u_g the
+// root of u^2 - D_g u + D_g f = 0 nearer D_g (1/u + 1/v = 1/f, u + v = D_g);
+// any other point at sensor distance D lies at D - v from the lens. Throws
+// std::invalid_argument when D_g < 4 f (no real focus: closer than the
+// lens can focus).
+double FocusObjectDistanceMm(double sensor_to_focus_mm, double focal_length_mm);
+double ObjectDistanceFromSensorMm(double sensor_to_point_mm,
+                                  double sensor_to_focus_mm,
+                                  double focal_length_mm);
+// The inverse of FocusObjectDistanceMm: u + f u / (u - f).
+double SensorDistanceOfFocusMm(double focus_object_distance_mm,
+                               double focal_length_mm);
+
 // Eq. (solution01) in pixels: blur radius of a point at model depth z' seen by
 // a view with model focus distance g' under scale s (metres per model unit).
 // `pixel_pitch_mm` is the pitch of the pixels r is measured in (it differs

@@ -613,7 +613,8 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
 
   // Bootstrap: resample rows within each kept view (stratified, so every
   // column keeps its rows) and re-solve.
-  estimate.scale_ci_low = estimate.scale_ci_high = estimate.scale;
+  estimate.scale_ci_low = estimate.scale_ci_high = kNaN;
+  estimate.interval_status = "num_bootstrap is 0";
   if (options.num_bootstrap > 0) {
     const DPLinearSystem system = BuildSystem(views, selected);
     std::vector<std::vector<int>> rows_of_view(n);
@@ -643,6 +644,12 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
           std::min(estimate.scale, Percentile(samples, alpha));
       estimate.scale_ci_high =
           std::max(estimate.scale, Percentile(samples, 1.0 - alpha));
+      estimate.interval_status.clear();
+    } else {
+      estimate.interval_status = "only " + std::to_string(samples.size()) +
+                                 " of " +
+                                 std::to_string(options.num_bootstrap) +
+                                 " bootstrap resamples solved, need 10";
     }
   }
   return estimate;

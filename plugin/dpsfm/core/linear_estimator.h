@@ -171,7 +171,11 @@ struct LinearEstimate {
   bool success = false;
   std::string failure_reason;
   double scale = 0;  // s* (metres per model unit)
+  // The bootstrap's interval; NaN when it could not be measured
+  // (num_bootstrap 0, or fewer than 10 resamples solved), and then
+  // interval_status says why.
   double scale_ci_low = 0, scale_ci_high = 0;
+  std::string interval_status;
   std::vector<LinearViewResult> views;
   std::vector<int> selected_views;
   int num_rows = 0;  // rows in the joint system

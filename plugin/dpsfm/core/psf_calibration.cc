@@ -40,8 +40,8 @@ double TrimmedMean(const std::vector<double>& residual,
   return std::accumulate(v.begin(), v.begin() + keep, 0.0) / keep;
 }
 
-// Calibration criterion: median of r / r_known - 1 (signed; radii grow as
-// the split softens, so it rises with the exponent).
+// Calibration criterion: median of r / r_known - 1 (signed; radii shrink as
+// the assumed centroid offset grows, so it falls along the path).
 double MedianRadiusError(const std::vector<double>& radius,
                          const std::vector<double>& known,
                          const std::vector<int>& members) {
@@ -52,12 +52,12 @@ double MedianRadiusError(const std::vector<double>& radius,
   return Percentile(v, 0.5);
 }
 
-// Where an increasing-ish curve crosses 0, by linear interpolation between
+// Where a monotone-ish curve crosses 0, by linear interpolation between
 // the bracketing nodes; NaN if it does not.
 double ZeroCrossing(const std::vector<double>& xs,
                     const std::vector<double>& ys) {
   for (size_t k = 0; k + 1 < xs.size(); ++k) {
-    if (ys[k] <= 0 && ys[k + 1] >= 0) {
+    if ((ys[k] <= 0 && ys[k + 1] >= 0) || (ys[k] >= 0 && ys[k + 1] <= 0)) {
       if (ys[k + 1] == ys[k]) return 0.5 * (xs[k] + xs[k + 1]);
       return xs[k] - ys[k] * (xs[k + 1] - xs[k]) / (ys[k + 1] - ys[k]);
     }
@@ -68,9 +68,15 @@ double ZeroCrossing(const std::vector<double>& xs,
 }  // namespace
 
 bool SplitProfileFitOptions::Check() const {
-  DPSFM_CHECK(min_exponent >= 0.05 && max_exponent <= 8 &&
-              min_exponent < max_exponent)
-      << "split exponent range must lie in [0.05, 8]";
+  DPSFM_CHECK(min_centroid_offset >=
+                  SplitProfileParams::MinCentroidOffset() * (1 - 1e-9) &&
+              max_centroid_offset <=
+                  SplitProfileParams::MaxCentroidOffset() * (1 + 1e-9) &&
+              min_centroid_offset < max_centroid_offset)
+      << "centroid offset range must lie in ["
+      << SplitProfileParams::MinCentroidOffset() << ", "
+      << SplitProfileParams::MaxCentroidOffset() << "]";
+  DPSFM_CHECK_GE(consistency_tolerance, 0);
   DPSFM_CHECK_GE(num_grid, 5);
   DPSFM_CHECK_GE(num_refine, 0);
   DPSFM_CHECK_GE(min_abs_radius_px, 0);
@@ -90,9 +96,12 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   const auto start = std::chrono::steady_clock::now();
   SplitProfileFit fit;
   fit.translating_disk_centroid_offset =
-      CentroidOffsetPerRadius(TranslatingDiskPsf(), 8);
+      TranslatingDiskPsf::CentroidOffsetPerRadius();
   fit.params.split_exponent = 1;
   fit.centroid_offset = fit.translating_disk_centroid_offset;
+  // Until determined, the data allow any profile.
+  fit.consistent_low = 0;
+  fit.consistent_high = std::numeric_limits<double>::infinity();
   auto finish = [&]() {
     fit.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
@@ -121,13 +130,12 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       options.num_threads > 0 ? options.num_threads : omp_get_max_threads();
 #endif
 
-  std::map<double, Evaluation> evaluations;  // by log exponent
-  auto evaluate = [&](double log_p) -> const Evaluation& {
-    auto it = evaluations.find(log_p);
+  std::map<double, Evaluation> evaluations;  // by log centroid offset
+  auto evaluate = [&](double log_kappa) -> const Evaluation& {
+    auto it = evaluations.find(log_kappa);
     if (it != evaluations.end()) return it->second;
-    SplitProfileParams params;
-    params.split_exponent = std::exp(log_p);
-    const SplitProfilePsf psf(params);
+    const SplitProfilePsf psf(
+        SplitProfileParams::ForCentroidOffset(std::exp(log_kappa)));
     const PatchBlurEstimator estimator(psf, options.blur, size);
     Evaluation e;
     e.radius.assign(n, kNaN);
@@ -147,14 +155,16 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
         // No estimate: counts as unexplained.
       }
     }
-    return evaluations.emplace(log_p, std::move(e)).first->second;
+    return evaluations.emplace(log_kappa, std::move(e)).first->second;
   };
 
   // Patches with enough blur for the shape to matter.
   std::vector<int> usable;
   std::vector<double> known_radius(n, kNaN);
   {
-    const Evaluation& disk = evaluate(0.0);  // p = 1: the translating disk
+    // The linear split, next to the translating disk.
+    const Evaluation& disk =
+        evaluate(std::log(SplitProfileParams().CentroidOffset()));
     for (int i = 0; i < n; ++i) {
       known_radius[i] = patches[i].known_radius_px;
       const double r = known ? known_radius[i] : disk.radius[i];
@@ -189,7 +199,8 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       ys->push_back(criterion(entry.second, members));
     }
   };
-  // The fitted log exponent of a curve; NaN when it leaves the range.
+  // The fitted log centroid offset of a curve; NaN when it leaves the
+  // range.
   auto solve = [&](const std::vector<double>& xs,
                    const std::vector<double>& ys,
                    bool* at_edge) {
@@ -205,8 +216,8 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   };
 
   // Coarse grid, then a finer one around its solution.
-  const double lo = std::log(options.min_exponent);
-  const double hi = std::log(options.max_exponent);
+  const double lo = std::log(options.min_centroid_offset);
+  const double hi = std::log(options.max_centroid_offset);
   std::vector<double> grid;
   for (int k = 0; k < options.num_grid; ++k) {
     grid.push_back(lo + (hi - lo) * k / (options.num_grid - 1));
@@ -216,7 +227,9 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   curve(usable, &xs, &ys);
   bool at_edge = false;
   double best = solve(xs, ys, &at_edge);
-  if (!at_edge && options.num_refine > 0) {
+  // Refined also next to an end node: the minimum may lie between it and
+  // its neighbour (the edge is judged on the refined curve).
+  if (std::isfinite(best) && options.num_refine > 0) {
     const double step = (hi - lo) / (options.num_grid - 1);
     const double a = std::max(lo, best - step), b = std::min(hi, best + step);
     for (int k = 1; k <= options.num_refine; ++k) {
@@ -225,22 +238,25 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
     curve(usable, &xs, &ys);
     best = solve(xs, ys, &at_edge);
   }
-  fit.exponents.clear();
-  for (const double x : xs) fit.exponents.push_back(std::exp(x));
+  fit.centroid_offsets.clear();
+  for (const double x : xs) fit.centroid_offsets.push_back(std::exp(x));
   fit.criterion = ys;
-  if (at_edge || !std::isfinite(best)) {
+  fit.at_edge = at_edge || !std::isfinite(best);
+  if (fit.at_edge) {
     std::ostringstream s;
     if (known) {
-      s << "no split exponent in [" << options.min_exponent << ", "
-        << options.max_exponent
-        << "] makes the recovered radii agree with the known ones (median "
+      s << "no profile with a centroid offset in ["
+        << options.min_centroid_offset << ", " << options.max_centroid_offset
+        << "] R makes the recovered radii agree with the known ones (median "
            "error from "
         << ys.front() << " to " << ys.back() << ")";
     } else {
-      s << "the residual is lowest at the edge of the split exponents tried ("
+      s << "the residual is lowest at the edge of the profiles tried "
+           "(centroid offset "
         << std::exp(xs[std::min_element(ys.begin(), ys.end()) - ys.begin()])
-        << " in [" << options.min_exponent << ", " << options.max_exponent
-        << "])";
+        << " R in [" << options.min_centroid_offset << ", "
+        << options.max_centroid_offset
+        << "]): the sensor's profile may lie outside the family";
     }
     fit.reason = s.str();
     return finish();
@@ -258,23 +274,38 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       curve(members, &bx, &by);
       bool edge = false;
       const double x = solve(bx, by, &edge);
-      samples.push_back(std::isfinite(x) ? x : (by.front() < 0 ? hi : lo));
+      // No crossing: radii read too small (< 0) everywhere call for the
+      // weakest profile, too large for the strongest.
+      samples.push_back(std::isfinite(x) ? x : (by.front() < 0 ? lo : hi));
     }
   } else {
     samples.push_back(best);
   }
-  fit.params.split_exponent = std::exp(best);
-  fit.exponent_ci_low = std::exp(std::min(best, Percentile(samples, 0.025)));
-  fit.exponent_ci_high = std::exp(std::max(best, Percentile(samples, 0.975)));
-  auto centroid = [](double p) {
-    SplitProfileParams params;
-    params.split_exponent = p;
-    return CentroidOffsetPerRadius(SplitProfilePsf(params), 8);
-  };
-  fit.centroid_offset = centroid(fit.params.split_exponent);
-  // The centroid offset falls as the exponent grows.
-  fit.centroid_offset_ci_low = centroid(fit.exponent_ci_high);
-  fit.centroid_offset_ci_high = centroid(fit.exponent_ci_low);
+  fit.params = SplitProfileParams::ForCentroidOffset(std::exp(best));
+  fit.centroid_offset = std::exp(best);
+  fit.centroid_offset_ci_low =
+      std::exp(std::min(best, Percentile(samples, 0.025)));
+  fit.centroid_offset_ci_high =
+      std::exp(std::max(best, Percentile(samples, 0.975)));
+  fit.consistent_low = fit.centroid_offset_ci_low;
+  fit.consistent_high = fit.centroid_offset_ci_high;
+  if (!known) {
+    const double floor = *std::min_element(ys.begin(), ys.end());
+    for (size_t k = 0; k < xs.size(); ++k) {
+      if (ys[k] <= (1 + options.consistency_tolerance) * floor) {
+        fit.consistent_low = std::min(fit.consistent_low, std::exp(xs[k]));
+        fit.consistent_high = std::max(fit.consistent_high, std::exp(xs[k]));
+      }
+    }
+    // A consistent node at the end of the range: the data allow profiles
+    // beyond it.
+    if (fit.consistent_low <= std::exp(xs.front()) * (1 + 1e-9)) {
+      fit.consistent_low = 0;
+    }
+    if (fit.consistent_high >= std::exp(xs.back()) * (1 - 1e-9)) {
+      fit.consistent_high = std::numeric_limits<double>::infinity();
+    }
+  }
 
   const Evaluation& at_fit = evaluate(best);
   if (!known) {
@@ -321,6 +352,14 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       }
     }
     fit.translating_disk = resamples == 0 || family_better < 0.95 * resamples;
+    if (fit.translating_disk ||
+        fit.translating_disk_criterion <=
+            (1 + options.consistency_tolerance) * criterion(at_fit, usable)) {
+      fit.consistent_low =
+          std::min(fit.consistent_low, fit.translating_disk_centroid_offset);
+      fit.consistent_high =
+          std::max(fit.consistent_high, fit.translating_disk_centroid_offset);
+    }
   }
   std::vector<double> residuals;
   for (int i : usable) residuals.push_back(at_fit.residual[i]);
@@ -341,9 +380,9 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                fit.centroid_offset_ci_high - fit.centroid_offset) /
       fit.centroid_offset;
   std::ostringstream s;
-  s << "split exponent " << fit.params.split_exponent << " (95 % interval "
-    << fit.exponent_ci_low << " - " << fit.exponent_ci_high
-    << "), centroid offset " << fit.centroid_offset << " R (translating disk "
+  s << "centroid offset " << fit.centroid_offset << " R (95 % interval "
+    << fit.centroid_offset_ci_low << " - " << fit.centroid_offset_ci_high
+    << "; " << fit.params.ToString() << "; translating disk "
     << fit.translating_disk_centroid_offset << " R) from " << fit.num_patches
     << " patches";
   if (worst_side > options.max_relative_uncertainty) {
@@ -386,6 +425,7 @@ std::vector<ProfilePatch> ExtractProfilePatches(const cv::Mat& gray_left,
       patch.right = gray_right(rect).clone();
       patch.known_radius_px = known_radius_px;
       patch.x_fraction = (x + 0.5 * crop) / gray_left.cols;
+      patch.y_fraction = (y + 0.5 * crop) / gray_left.rows;
       patches.push_back(patch);
     }
   }
@@ -439,7 +479,7 @@ SplitProfileCalibration CalibrateSplitProfile(
   // Bands when they differ, or when only they are determined (a profile
   // that changes across the frame fits no single one well). Without a
   // whole-frame profile, a band the data leave open (a few patches) takes
-  // the geometric mean of its determined neighbours' exponents (the
+  // the geometric mean of its determined neighbours' centroid offsets (the
   // profile changes smoothly across the frame), when two or more bands are
   // determined.
   int num_determined = 0;
@@ -452,12 +492,15 @@ SplitProfileCalibration CalibrateSplitProfile(
       if (fit.determined) continue;
       double log_sum = 0;
       int count = 0;
+      double low = std::numeric_limits<double>::infinity(), high = 0;
       for (int step : {-1, 1}) {
         for (int n = b + step; n >= 0 && n < num_bands; n += step) {
-          if (calibration.bands[n].determined &&
-              calibration.bands[n].reason.find("interpolated") ==
-                  std::string::npos) {
-            log_sum += std::log(calibration.bands[n].params.split_exponent);
+          const SplitProfileFit& neighbour = calibration.bands[n];
+          if (neighbour.determined &&
+              neighbour.reason.find("interpolated") == std::string::npos) {
+            log_sum += std::log(neighbour.centroid_offset);
+            low = std::min(low, neighbour.consistent_low);
+            high = std::max(high, neighbour.consistent_high);
             ++count;
             break;
           }
@@ -466,12 +509,14 @@ SplitProfileCalibration CalibrateSplitProfile(
       fit = SplitProfileFit();
       fit.determined = true;
       fit.self_calibrated = calibration.frame.self_calibrated;
-      fit.params.split_exponent = std::exp(log_sum / count);
-      fit.centroid_offset =
-          CentroidOffsetPerRadius(SplitProfilePsf(fit.params), 8);
+      fit.centroid_offset = std::exp(log_sum / count);
+      fit.params = SplitProfileParams::ForCentroidOffset(fit.centroid_offset);
+      // What its neighbours allow (the profile changes smoothly).
+      fit.centroid_offset_ci_low = fit.consistent_low = low;
+      fit.centroid_offset_ci_high = fit.consistent_high = high;
       std::ostringstream reason;
-      reason << "split exponent " << fit.params.split_exponent
-             << " interpolated from the neighbouring bands";
+      reason << "centroid offset " << fit.centroid_offset
+             << " R interpolated from the neighbouring bands";
       fit.reason = reason.str();
       summary << "; band " << b + 1 << " " << fit.reason;
     }

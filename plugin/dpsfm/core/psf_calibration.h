@@ -1,4 +1,5 @@
-// Fitting the DP split profile (SplitProfilePsf's split_exponent) to data:
+// Fitting the DP split profile (SplitProfilePsf along its path by centroid
+// offset, SplitProfileParams::ForCentroidOffset) to data:
 // the profile is the largest systematic error source on real sensors (notes,
 // section 5): a wrong one scales every recovered radius, and the scale
 // inherits the factor.
@@ -49,15 +50,25 @@ struct ProfilePatch {
   // Horizontal position of the patch centre in the frame, 0 (left edge) to
   // 1 (right edge): profiles change across the frame.
   double x_fraction = 0.5;
+  double y_fraction = 0.5;  // vertical, 0 (top) to 1 (bottom)
 };
 
 struct SplitProfileFitOptions {
-  // Search range of split_exponent (log-spaced grid, then a finer grid
-  // between the neighbours of the best node, then a parabola in log p).
-  double min_exponent = 0.1;
-  double max_exponent = 6.0;
-  int num_grid = 9;
+  // Search range along the family's path by centroid offset per radius
+  // (SplitProfileParams::ForCentroidOffset): a log-spaced grid, then a
+  // finer grid between the neighbours of the best node, then a parabola in
+  // log kappa. The default spans what real DP sensors show (weak splits of
+  // ~0.09 R to the sharp half disk's 0.42 R).
+  double min_centroid_offset = 0.03;
+  double max_centroid_offset = 0.414;
+  int num_grid = 11;
   int num_refine = 4;
+  // Self-calibration: profiles whose criterion lies within this fraction
+  // above the minimum count as consistent with the data (the criterion is
+  // a residual of model misfit more than of noise: on a sensor outside the
+  // family the minimum can sit tens of % of centroid offset away from the
+  // truth while its neighbours fit almost as well).
+  double consistency_tolerance = 0.1;
   // Patches with |r| below this (under the translating disk, or known) carry
   // no information on the profile's shape and are left out.
   double min_abs_radius_px = 2.0;
@@ -96,20 +107,26 @@ struct SplitProfileFit {
   bool translating_disk = false;
   double translating_disk_criterion = 0;
   SplitProfileParams params;
-  double exponent_ci_low = 0, exponent_ci_high = 0;
   // Centroid offset per radius of the fitted profile and of the translating
   // disk (at 8 px): their ratio is roughly the factor by which radii (and
   // the scale) change against a translating-disk estimate.
   double centroid_offset = 0;
   double centroid_offset_ci_low = 0, centroid_offset_ci_high = 0;
+  // Self-calibration: the centroid offsets the data allow (the bootstrap
+  // interval, the translating disk's when it fits as well, and every
+  // evaluated profile within consistency_tolerance of the minimum; the
+  // family's limit where the minimum lies at the edge of the range). The
+  // scale is uncertain by the same factors.
+  double consistent_low = 0, consistent_high = 0;
+  bool at_edge = false;
   double translating_disk_centroid_offset = 0;
   int num_patches = 0;
   // Mean relative residual of the patches at the fitted profile, and median
   // |r_recovered / r_known - 1| (calibration only, else NaN).
   double mean_relative_residual = 0;
   double median_radius_error = std::numeric_limits<double>::quiet_NaN();
-  // The criterion over the evaluated exponents (sorted).
-  std::vector<double> exponents, criterion;
+  // The criterion over the evaluated centroid offsets (sorted).
+  std::vector<double> centroid_offsets, criterion;
   double seconds = 0;
 };
 

@@ -213,8 +213,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     std::ostringstream v;
     add("captures", std::to_string(targets.size()));
     add("patches", std::to_string(fit.num_patches));
-    v << fit.exponent_ci_low << " " << fit.exponent_ci_high;
-    add("split_exponent_ci95", v.str());
+    v << fit.centroid_offset_ci_low << " " << fit.centroid_offset_ci_high;
+    add("centroid_offset_ci95", v.str());
     v.str("");
     v << fit.centroid_offset << " (translating disk "
       << fit.translating_disk_centroid_offset << ")";

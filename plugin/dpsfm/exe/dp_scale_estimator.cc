@@ -234,17 +234,14 @@ int RunDPScaleEstimator(int argc, char** argv) {
     }
 
     colmap::PrintHeading2("Per-patch DP blur estimation");
-    const std::vector<std::shared_ptr<const DPPsfModel>> psfs =
-        MakePsfModels(options.psf_model, options.psf_path, &core_options);
-    LOG(INFO) << "DP PSF: " << options.psf_model << " (" << psfs[0]->Name()
-              << (psfs.size() > 1 ? " ... in " + std::to_string(psfs.size()) +
-                                        " column bands"
-                                  : std::string())
+    const DPPsfField psf_field =
+        MakePsfField(options.psf_model, options.psf_path, &core_options);
+    LOG(INFO) << "DP PSF: " << options.psf_model << " (" << psf_field.Name()
               << (core_options.psf_self_calibration
                       ? ", self-calibrated from the data before the scale"
                       : "")
               << ")";
-    DPScaleEstimator estimator(core_options, psfs);
+    DPScaleEstimator estimator(core_options, psf_field);
     RunTimings timings;
     std::vector<DPViewSummary> summaries;
     // A few views' images for the report's patch overlays (8-bit, to keep

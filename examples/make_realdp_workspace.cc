@@ -1,0 +1,167 @@
+// Makes a complete single-view scale problem from a real DP capture with
+// measured depth (the layout of ../shared/realdp: l.png, r.png, d.png): a
+// COLMAP dense workspace with one PINHOLE view whose geometric depth map is
+// the measured depth divided by a known factor (the "up to scale" depth),
+// the DP views under dp/left and dp/right, a lens.csv, and truth.json with
+// the factor the estimator must recover (metres per model unit).
+//
+//   dpsfm_make_realdp_workspace --capture_path CAPTURE --output_path OUT
+//       [--true_scale 0.37] [--focal_length_mm 49.57] [--f_number 4]
+//       [--pixel_pitch_um 46.875] [--name scene]
+//
+// Depth files: 16-bit single channel = millimetres (0 = none); 8-bit RGB(A)
+// = metres x 255 / 10 in the first channel (the DP119 "box" scenes), at any
+// resolution (area-resized to the frame; patches straddling depth edges are
+// the estimator's to reject).
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include <boost/filesystem.hpp>
+#include <boost/program_options.hpp>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "colmap/mvs/depth_map.h"
+#include "colmap/scene/reconstruction.h"
+
+namespace fs = boost::filesystem;
+namespace po = boost::program_options;
+
+namespace {
+
+// Measured depth in metres at the frame's size; 0 where unknown.
+cv::Mat ReadDepthMetres(const std::string& path, const cv::Size& frame) {
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (raw.empty()) throw std::runtime_error("cannot read " + path);
+  cv::Mat metres;
+  if (raw.depth() == CV_16U && raw.channels() == 1) {
+    raw.convertTo(metres, CV_32FC1, 1e-3);
+  } else if (raw.depth() == CV_8U) {
+    cv::Mat first;
+    cv::extractChannel(raw, first, raw.channels() >= 3 ? 2 : 0);  // BGR(A)
+    first.convertTo(metres, CV_32FC1, 10.0 / 255.0);
+  } else {
+    throw std::runtime_error(path + ": unknown depth encoding");
+  }
+  if (metres.size() != frame) {
+    // Area averaging mixes depths only across edges; the mask keeps holes
+    // from pulling neighbours towards 0.
+    cv::Mat valid = metres > 0;
+    valid.convertTo(valid, CV_32FC1, 1.0 / 255);
+    cv::Mat sum, weight;
+    cv::resize(metres, sum, frame, 0, 0, cv::INTER_AREA);
+    cv::resize(valid, weight, frame, 0, 0, cv::INTER_AREA);
+    metres = cv::Mat::zeros(frame, CV_32FC1);
+    for (int r = 0; r < frame.height; ++r) {
+      for (int c = 0; c < frame.width; ++c) {
+        const float w = weight.at<float>(r, c);
+        if (w > 0.99f) metres.at<float>(r, c) = sum.at<float>(r, c) / w;
+      }
+    }
+  }
+  return metres;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string capture, output, name = "view";
+  double true_scale = 0.37, focal_mm = 49.57, f_number = 4, pitch_um = 46.875;
+  po::options_description desc("dpsfm_make_realdp_workspace");
+  desc.add_options()("capture_path", po::value(&capture)->required(),
+                     "folder with l.png, r.png, d.png")(
+      "output_path", po::value(&output)->required(), "workspace to create")(
+      "true_scale", po::value(&true_scale), "metres per model unit")(
+      "focal_length_mm", po::value(&focal_mm), "lens focal length")(
+      "f_number", po::value(&f_number), "aperture")(
+      "pixel_pitch_um", po::value(&pitch_um), "DP frame pixel pitch")(
+      "name", po::value(&name), "image name (without extension)");
+  try {
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, desc), vm);
+    po::notify(vm);
+    if (!(true_scale > 0)) throw std::runtime_error("true_scale must be > 0");
+    const fs::path in(capture), out(output);
+    const cv::Mat left = cv::imread((in / "l.png").string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat right =
+        cv::imread((in / "r.png").string(), cv::IMREAD_UNCHANGED);
+    if (left.empty() || right.empty() || left.size() != right.size()) {
+      throw std::runtime_error("cannot read l.png / r.png of equal size in " +
+                               capture);
+    }
+    const cv::Mat metres = ReadDepthMetres((in / "d.png").string(), left.size());
+    const std::string image_name = name + ".png";
+    for (const char* dir : {"dense/sparse", "dense/images",
+                            "dense/stereo/depth_maps", "dp/left", "dp/right"}) {
+      fs::create_directories(out / dir);
+    }
+    cv::imwrite((out / "dp/left" / image_name).string(), left);
+    cv::imwrite((out / "dp/right" / image_name).string(), right);
+    cv::Mat sum;
+    cv::addWeighted(left, 0.5, right, 0.5, 0, sum);
+    cv::imwrite((out / "dense/images" / image_name).string(), sum);
+
+    // Model depth z' = z / s.
+    double lo = 1e30, hi = 0;
+    colmap::mvs::DepthMap map(left.cols, left.rows, 0, 1);
+    int valid = 0;
+    for (int r = 0; r < left.rows; ++r) {
+      for (int c = 0; c < left.cols; ++c) {
+        const float z = metres.at<float>(r, c);
+        // Time-of-flight dropouts read a few mm; nothing is in focus nearer
+        // than 0.2 m with these lenses.
+        const float model =
+            z > 0.2f ? static_cast<float>(z / true_scale) : 0.f;
+        map.Set(r, c, model);
+        if (model > 0) {
+          lo = std::min(lo, static_cast<double>(model));
+          hi = std::max(hi, static_cast<double>(model));
+          ++valid;
+        }
+      }
+    }
+    if (valid == 0) throw std::runtime_error("no valid depth in " + capture);
+    colmap::mvs::DepthMap ranged(left.cols, left.rows, lo, hi);
+    for (int r = 0; r < left.rows; ++r) {
+      for (int c = 0; c < left.cols; ++c) ranged.Set(r, c, map.Get(r, c));
+    }
+    ranged.Write(
+        (out / "dense/stereo/depth_maps" / (image_name + ".geometric.bin"))
+            .string());
+
+    const double focal_px = focal_mm / (pitch_um * 1e-3);
+    colmap::Reconstruction reconstruction;
+    reconstruction.AddCamera(colmap::Camera::CreateFromModelName(
+        1, "PINHOLE", focal_px, left.cols, left.rows));
+    colmap::Image image;
+    image.SetImageId(1);
+    image.SetName(image_name);
+    image.SetCameraId(1);
+    image.CamFromWorld() = colmap::Rigid3d();
+    reconstruction.AddImage(image);
+    reconstruction.RegisterImage(1);
+    reconstruction.WriteBinary((out / "dense/sparse").string());
+
+    std::ofstream lens((out / "lens.csv").string());
+    lens << "name,focal_length_mm,f_number,pixel_pitch_um\n"
+         << image_name << "," << focal_mm << "," << f_number << ","
+         << pitch_um << "\n";
+    nlohmann::json truth = {{"true_scale", true_scale},
+                            {"capture", capture},
+                            {"depth_range_m", {lo * true_scale, hi * true_scale}},
+                            {"valid_depth_fraction",
+                             static_cast<double>(valid) / left.total()}};
+    std::ofstream((out / "truth.json").string()) << truth.dump(2) << "\n";
+    std::cout << "workspace " << output << ": " << image_name << ", depth "
+              << lo * true_scale << "-" << hi * true_scale << " m on "
+              << 100.0 * valid / left.total() << " % of the frame, true scale "
+              << true_scale << "\n";
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "ERROR: dpsfm_make_realdp_workspace: " << e.what() << "\n";
+    return 1;
+  }
+}
