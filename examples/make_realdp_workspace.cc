@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
   std::string capture, output, name = "view";
   double true_scale = 0.37, focal_mm = 49.57, f_number = 4, pitch_um = 46.875;
   po::options_description desc("dpsfm_make_realdp_workspace");
-  desc.add_options()("capture_path", po::value(&capture)->required(),
+  desc.add_options()("capture_path",
+                     po::value(&capture)->required(),
                      "folder with l.png, r.png, d.png")(
       "output_path", po::value(&output)->required(), "workspace to create")(
       "true_scale", po::value(&true_scale), "metres per model unit")(
@@ -85,17 +86,22 @@ int main(int argc, char** argv) {
     po::notify(vm);
     if (!(true_scale > 0)) throw std::runtime_error("true_scale must be > 0");
     const fs::path in(capture), out(output);
-    const cv::Mat left = cv::imread((in / "l.png").string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat left =
+        cv::imread((in / "l.png").string(), cv::IMREAD_UNCHANGED);
     const cv::Mat right =
         cv::imread((in / "r.png").string(), cv::IMREAD_UNCHANGED);
     if (left.empty() || right.empty() || left.size() != right.size()) {
       throw std::runtime_error("cannot read l.png / r.png of equal size in " +
                                capture);
     }
-    const cv::Mat metres = ReadDepthMetres((in / "d.png").string(), left.size());
+    const cv::Mat metres =
+        ReadDepthMetres((in / "d.png").string(), left.size());
     const std::string image_name = name + ".png";
-    for (const char* dir : {"dense/sparse", "dense/images",
-                            "dense/stereo/depth_maps", "dp/left", "dp/right"}) {
+    for (const char* dir : {"dense/sparse",
+                            "dense/images",
+                            "dense/stereo/depth_maps",
+                            "dp/left",
+                            "dp/right"}) {
       fs::create_directories(out / dir);
     }
     cv::imwrite((out / "dp/left" / image_name).string(), left);
@@ -113,8 +119,7 @@ int main(int argc, char** argv) {
         const float z = metres.at<float>(r, c);
         // Time-of-flight dropouts read a few mm; nothing is in focus nearer
         // than 0.2 m with these lenses.
-        const float model =
-            z > 0.2f ? static_cast<float>(z / true_scale) : 0.f;
+        const float model = z > 0.2f ? static_cast<float>(z / true_scale) : 0.f;
         map.Set(r, c, model);
         if (model > 0) {
           lo = std::min(lo, static_cast<double>(model));
@@ -147,13 +152,13 @@ int main(int argc, char** argv) {
 
     std::ofstream lens((out / "lens.csv").string());
     lens << "name,focal_length_mm,f_number,pixel_pitch_um\n"
-         << image_name << "," << focal_mm << "," << f_number << ","
-         << pitch_um << "\n";
-    nlohmann::json truth = {{"true_scale", true_scale},
-                            {"capture", capture},
-                            {"depth_range_m", {lo * true_scale, hi * true_scale}},
-                            {"valid_depth_fraction",
-                             static_cast<double>(valid) / left.total()}};
+         << image_name << "," << focal_mm << "," << f_number << "," << pitch_um
+         << "\n";
+    nlohmann::json truth = {
+        {"true_scale", true_scale},
+        {"capture", capture},
+        {"depth_range_m", {lo * true_scale, hi * true_scale}},
+        {"valid_depth_fraction", static_cast<double>(valid) / left.total()}};
     std::ofstream((out / "truth.json").string()) << truth.dump(2) << "\n";
     std::cout << "workspace " << output << ": " << image_name << ", depth "
               << lo * true_scale << "-" << hi * true_scale << " m on "

@@ -56,8 +56,9 @@ DPLensData Lens() {
 // focus at `focus_mm` from the sensor, from the thin lens written out here
 // (u + v = D, 1/u + 1/v = 1/f): independent of the code under test.
 double TrueRadius(double target_mm, double focus_mm) {
-  const double u_g = 0.5 * (focus_mm + std::sqrt(focus_mm * focus_mm -
-                                                 4 * focus_mm * kFocalMm));
+  const double u_g =
+      0.5 *
+      (focus_mm + std::sqrt(focus_mm * focus_mm - 4 * focus_mm * kFocalMm));
   const double v = focus_mm - u_g;
   const double u_t = target_mm - v;
   // Image of the target at v_t; signed blur diameter L (v - v_t) / v_t
@@ -67,8 +68,10 @@ double TrueRadius(double target_mm, double focus_mm) {
   return b / (2 * kPitchMm);
 }
 
-CalibrationCapture Capture(const Sensor& sensor, double target_mm,
-                           double focus_mm, int seed) {
+CalibrationCapture Capture(const Sensor& sensor,
+                           double target_mm,
+                           double focus_mm,
+                           int seed) {
   const cv::Size size(420, 280);
   const double r = TrueRadius(target_mm, focus_mm);
   test::TextureOptions texture;
@@ -89,8 +92,12 @@ CalibrationCapture Capture(const Sensor& sensor, double target_mm,
   CalibrationCapture capture;
   capture.name = std::to_string(static_cast<int>(target_mm)) + " mm";
   capture.patches = ExtractProfilePatches(test::ToGray(pair.left),
-                                          test::ToGray(pair.right), 41, 20,
-                                          16, std::nan(""), 1.5);
+                                          test::ToGray(pair.right),
+                                          41,
+                                          20,
+                                          16,
+                                          std::nan(""),
+                                          1.5);
   capture.lens = Lens();
   capture.working_pitch_mm = kPitchMm;
   capture.target_distance_mm = target_mm;
@@ -113,9 +120,10 @@ TargetCalibrationOptions Options() {
 TEST(CalibrateFromTargets, UnknownFocusAndAProfileOutsideTheFamily) {
   const Sensor sensor;
   const double focus = 1000;
-  std::vector<CalibrationCapture> captures = {
-      Capture(sensor, 700, focus, 10), Capture(sensor, 1700, focus, 20)};
-  std::printf("true radii %.2f and %.2f px\n", TrueRadius(700, focus),
+  std::vector<CalibrationCapture> captures = {Capture(sensor, 700, focus, 10),
+                                              Capture(sensor, 1700, focus, 20)};
+  std::printf("true radii %.2f and %.2f px\n",
+              TrueRadius(700, focus),
               TrueRadius(1700, focus));
   const TargetCalibration c = CalibrateFromTargets(captures, Options());
   std::printf("%s (%.1f s)\n", c.reason.c_str(), c.seconds);
@@ -127,8 +135,10 @@ TEST(CalibrateFromTargets, UnknownFocusAndAProfileOutsideTheFamily) {
   const double left_truth = CentroidOffsetPerRadius(sensor.left_half, 6);
   const double right_truth = CentroidOffsetPerRadius(sensor.right_half, 6);
   std::printf("cells %.4f %.4f, truth %.4f %.4f\n",
-              c.cell_centroid_offsets[0], c.cell_centroid_offsets[1],
-              left_truth, right_truth);
+              c.cell_centroid_offsets[0],
+              c.cell_centroid_offsets[1],
+              left_truth,
+              right_truth);
   ASSERT_EQ(c.cell_centroid_offsets.size(), 2u);
   EXPECT_NEAR(c.cell_centroid_offsets[0] / left_truth, 1.0, 0.06);
   EXPECT_NEAR(c.cell_centroid_offsets[1] / right_truth, 1.0, 0.06);

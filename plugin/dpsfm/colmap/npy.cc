@@ -40,8 +40,8 @@ NpyArray ReadNpy(const std::string& path) {
   } else if (major == 2 || major == 3) {
     unsigned char b[4];
     if (!file.read(reinterpret_cast<char*>(b), 4)) throw fail("truncated");
-    header_length = b[0] | (b[1] << 8) | (b[2] << 16) |
-                    (static_cast<uint32_t>(b[3]) << 24);
+    header_length =
+        b[0] | (b[1] << 8) | (b[2] << 16) | (static_cast<uint32_t>(b[3]) << 24);
   } else {
     throw fail("format version " + std::to_string(major));
   }
@@ -60,13 +60,13 @@ NpyArray ReadNpy(const std::string& path) {
     throw fail("dtype " + m[0].str() + " (need float32 or float64)");
   }
   const bool little = order == '<' || (order == '=' && HostIsLittleEndian());
-  if (!std::regex_search(header,
-                         m,
-                         std::regex("'fortran_order'\\s*:\\s*(True|False)"))) {
+  if (!std::regex_search(
+          header, m, std::regex("'fortran_order'\\s*:\\s*(True|False)"))) {
     throw fail("no fortran_order in the header");
   }
   const bool fortran = m[1].str() == "True";
-  if (!std::regex_search(header, m, std::regex("'shape'\\s*:\\s*\\(([^)]*)\\)"))) {
+  if (!std::regex_search(
+          header, m, std::regex("'shape'\\s*:\\s*\\(([^)]*)\\)"))) {
     throw fail("no shape in the header");
   }
   NpyArray array;
@@ -85,7 +85,8 @@ NpyArray ReadNpy(const std::string& path) {
   if (count > (size_t{1} << 28)) throw fail("array too large");
   std::vector<unsigned char> raw(count * bytes);
   if (!file.read(reinterpret_cast<char*>(raw.data()), raw.size())) {
-    throw fail("truncated data (" + std::to_string(count) + " values expected)");
+    throw fail("truncated data (" + std::to_string(count) +
+               " values expected)");
   }
   const bool swap = little != HostIsLittleEndian();
   std::vector<double> values(count);
@@ -137,8 +138,9 @@ void WriteNpyFloat32(const std::string& path, const NpyArray& array) {
   if (count != array.values.size()) {
     throw InputError("cannot write " + path + ": shape and values disagree");
   }
-  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " +
-                       shape.str() + ", }";
+  std::string header =
+      "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape.str() +
+      ", }";
   // Magic (6) + version (2) + length (2) + header + '\n', padded to 64.
   const size_t unpadded = 10 + header.size() + 1;
   header.append((64 - unpadded % 64) % 64, ' ');

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -98,7 +99,8 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                                        "left",
                                        "right",
                                        "camera",
-                                       "lens"};
+                                       "lens",
+                                       "uncertainty"};
   while (std::getline(file, line)) {
     ++number;
     const std::string where = path + ":" + std::to_string(number);
@@ -132,6 +134,14 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
   }
   profile.camera = values["camera"];
   profile.lens = values["lens"];
+  if (values.count("uncertainty")) {
+    profile.uncertainty =
+        ParseNumber(values["uncertainty"], where("uncertainty"));
+    if (!(profile.uncertainty >= 0 && profile.uncertainty < 1)) {
+      throw InputError(where("uncertainty") +
+                       ": the relative uncertainty must lie in [0, 1)");
+    }
+  }
   const std::string model = values["model"];
   auto refuse_keys = [&](const std::vector<std::string>& keys) {
     for (const std::string& key : keys) {
@@ -296,6 +306,10 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
   if (!profile.camera.empty()) file << "camera " << profile.camera << "\n";
   if (!profile.lens.empty()) file << "lens " << profile.lens << "\n";
   file << std::setprecision(6);
+  if (profile.uncertainty > 0) {
+    file << "uncertainty " << profile.uncertainty
+         << "  # relative (95 %) uncertainty of the profile's strength\n";
+  }
   if (profile.model == "measured_kernels") {
     const fs::path p(path);
     const std::string stem = p.stem().string();
@@ -361,7 +375,9 @@ DPPsfField MakePsfField(const std::string& psf_model,
           "dp_psf_calibrator, or measured kernels)");
     }
     core->psf_self_calibration = false;
-    return ReadPsfProfile(psf_path).MakeField(psf_path);
+    const PsfProfileFile profile = ReadPsfProfile(psf_path);
+    core->profile_relative_uncertainty = profile.uncertainty;
+    return profile.MakeField(psf_path);
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");
@@ -394,17 +410,26 @@ std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
     CalibrationTarget target;
     target.name = cells[0];
     target.target_distance_m = ParseNumber(cells[1], where);
-    target.focus_distance_m = ParseNumber(cells[2], where);
+    // Empty = unknown: dp_psf_calibrator fits it.
+    target.focus_distance_m = cells[2].empty()
+                                  ? std::numeric_limits<double>::quiet_NaN()
+                                  : ParseNumber(cells[2], where);
     target.lens.focal_length_mm = ParseNumber(cells[3], where);
     target.lens.f_number = ParseNumber(cells[4], where);
     target.lens.pixel_pitch_um = ParseNumber(cells[5], where);
+    const bool focus_known = !std::isnan(target.focus_distance_m);
     if (!target.lens.Check() || !(target.target_distance_m > 0) ||
-        !(target.focus_distance_m > 0)) {
+        (focus_known && !(target.focus_distance_m > 0))) {
       throw InputError(where + ": distances and lens data must be positive");
     }
-    if (target.focus_distance_m * 1000 <= target.lens.focal_length_mm) {
-      throw InputError(where +
-                       ": the focus distance must exceed the focal length");
+    // Distances are from the focal-plane mark: a lens focuses no nearer
+    // than 4 f from the sensor.
+    for (const double d : {target.target_distance_m, target.focus_distance_m}) {
+      if (!std::isnan(d) && d * 1000 < 4 * target.lens.focal_length_mm) {
+        throw InputError(where +
+                         ": distances from the focal-plane mark must "
+                         "be at least 4 focal lengths");
+      }
     }
     targets.push_back(target);
   }

@@ -25,8 +25,9 @@
 // (docs/cli-contract.md, "DP profiles": published calibrations import as
 // they are). Both may carry
 //   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
-// for the profile library, and fit_<anything> lines (how it was made; kept
-// for people, ignored by the estimator).
+// for the profile library, uncertainty <relative 95 % of the strength>, and
+// fit_<anything> lines (how it was made; kept for people, ignored by the
+// estimator).
 #pragma once
 
 #include <memory>
@@ -54,6 +55,10 @@ struct PsfProfileFile {
   std::vector<cv::Mat> left_kernels, right_kernels;
   // For the profile library (may be empty).
   std::string camera, lens;
+  // Relative 95 % uncertainty of the profile's strength (the calibration's
+  // interval): the scale inherits it (DPScaleOptions::
+  // profile_relative_uncertainty). 0 = not given.
+  double uncertainty = 0;
   // The fit_* lines, in file order.
   std::vector<std::pair<std::string, std::string>> fit_info;
 
@@ -80,10 +85,12 @@ DPPsfField MakePsfField(const std::string& psf_model,
 // One row of a calibration targets file (dp_psf_calibrator): a DP capture
 // of a planar, fronto-parallel textured target.
 struct CalibrationTarget {
-  std::string name;              // DP view file name (as under left/)
-  double target_distance_m = 0;  // sensor plane to target
-  double focus_distance_m = 0;   // sensor plane to the focal plane
-  DPLensData lens;               // pitch: of the DP frame's pixels
+  std::string name;  // DP view file name (as under left/)
+  // From the camera's focal-plane mark (the sensor plane); the calibration
+  // turns them into the thin lens's object distances.
+  double target_distance_m = 0;
+  double focus_distance_m = 0;  // NaN = unknown (an empty cell): fitted
+  DPLensData lens;              // pitch: of the DP frame's pixels
 };
 
 // CSV with the header

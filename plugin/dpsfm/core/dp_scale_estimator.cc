@@ -116,6 +116,9 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GT(max_scale_ci_relative_width, 0);
   DPSFM_CHECK_GE(min_total_patches, 0);
   DPSFM_CHECK_GE(scale_systematic_uncertainty, 0);
+  DPSFM_CHECK(profile_relative_uncertainty >= 0 &&
+              profile_relative_uncertainty < 1)
+      << "profile_relative_uncertainty must lie in [0, 1)";
   DPSFM_CHECK(min_intensity_bootstrap_support >= 0 &&
               min_intensity_bootstrap_support <= 1);
   DPSFM_CHECK(num_threads == -1 || num_threads > 0);
@@ -924,6 +927,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                         result,
                         &result.profile_scale_factor_low,
                         &result.profile_scale_factor_high);
+  } else {
+    result.profile_scale_factor_low = 1 - options_.profile_relative_uncertainty;
+    result.profile_scale_factor_high =
+        1 + options_.profile_relative_uncertainty;
   }
   auto own_profile = [&](double* lo, double* hi) {
     *lo *= result.profile_scale_factor_low;
@@ -940,11 +947,15 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
     std::ostringstream s;
     const bool no_interval = !std::isfinite(statistical_width);
+    // The profile is what leaves the scale open: on its own, or on top of
+    // an interval that would have been narrow enough.
+    const double profile_width =
+        result.profile_scale_factor_high - result.profile_scale_factor_low;
     const bool profile_open =
-        !no_interval &&
-        (statistical_ci_high - statistical_ci_low) / linear.scale <=
-            options_.max_scale_ci_relative_width &&
-        !(width <= options_.max_scale_ci_relative_width);
+        !no_interval && !(width <= options_.max_scale_ci_relative_width) &&
+        (!(profile_width <= options_.max_scale_ci_relative_width) ||
+         (statistical_ci_high - statistical_ci_low) / linear.scale <=
+             options_.max_scale_ci_relative_width);
     if (linear.num_rows < options_.min_total_patches || no_interval ||
         !(width <= options_.max_scale_ci_relative_width)) {
       s << leading_cause;
@@ -955,6 +966,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     } else if (no_interval) {
       s << "the scale's interval could not be measured ("
         << linear.interval_status << "): a scale without one is not reported";
+    } else if (profile_open && !options_.psf_self_calibration) {
+      s << "the DP profile's own uncertainty (+-" << std::fixed
+        << std::setprecision(1) << 100 * options_.profile_relative_uncertainty
+        << " % from its calibration) and the data's leave the scale between "
+        << std::setprecision(4) << linear.scale_ci_low << " and "
+        << linear.scale_ci_high << " (estimate " << linear.scale
+        << "), wider than the limit of " << std::setprecision(0)
+        << 100 * options_.max_scale_ci_relative_width
+        << " %. Calibrate from more captures of the target (more distances, "
+           "finer texture), or allow a wider interval with "
+           "--DPScaleEstimator.max_scale_ci_relative_width";
+      result.failure_reason = s.str();
+      return result;
     } else if (profile_open) {
       s << "the sensor's DP profile is unknown: "
         << (result.psf_status.empty() ? "" : result.psf_status + "; ")

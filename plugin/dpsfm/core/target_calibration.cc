@@ -66,7 +66,8 @@ double KappaForRadius(const std::vector<double>& kappas,
 double PredictedRadiusPx(const CalibrationCapture& c, double focus_mm) {
   const double f = c.lens.focal_length_mm;
   const double u_g = FocusObjectDistanceMm(focus_mm, f);
-  const double u_t = ObjectDistanceFromSensorMm(c.target_distance_mm, focus_mm, f);
+  const double u_t =
+      ObjectDistanceFromSensorMm(c.target_distance_mm, focus_mm, f);
   return BlurRadiusPxFromDiameterMm(SignedBlurDiameterMm(c.lens, u_g, u_t),
                                     c.working_pitch_mm);
 }
@@ -88,6 +89,7 @@ struct Solution {
   double kappa = kNaN;
   std::vector<double> capture_kappa;
   std::vector<double> cell_kappa;
+  double strength = kNaN;  // see TargetCalibration::strength
   double near_kappa = kNaN, far_kappa = kNaN;
 };
 
@@ -122,9 +124,9 @@ TargetCalibration CalibrateFromTargets(
   out.layout.rows = options.grid_rows;
   out.layout.cols = options.grid_cols;
   auto finish = [&]() {
-    out.seconds = std::chrono::duration<double>(
-                      std::chrono::steady_clock::now() - start)
-                      .count();
+    out.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+            .count();
     return out;
   };
   const int num_captures = static_cast<int>(captures.size());
@@ -159,11 +161,10 @@ TargetCalibration CalibrateFromTargets(
   // Readings along the path (the expensive part), in parallel.
   std::vector<double> kappas;
   for (int k = 0; k < options.num_nodes; ++k) {
-    kappas.push_back(std::exp(
-        std::log(options.min_centroid_offset) +
-        (std::log(options.max_centroid_offset) -
-         std::log(options.min_centroid_offset)) *
-            k / (options.num_nodes - 1)));
+    kappas.push_back(std::exp(std::log(options.min_centroid_offset) +
+                              (std::log(options.max_centroid_offset) -
+                               std::log(options.min_centroid_offset)) *
+                                  k / (options.num_nodes - 1)));
   }
   Readings readings(kappas.size(), std::vector<double>(n, kNaN));
 #ifdef _OPENMP
@@ -206,11 +207,13 @@ TargetCalibration CalibrateFromTargets(
   if (focus_unknown) {
     const double a = 1 / options.max_focus_mm, b = 1 / options.min_focus_mm;
     for (int k = 0; k < options.num_focus_steps; ++k) {
-      focus_grid.push_back(
-          1 / (a + (b - a) * (k + 0.5) / options.num_focus_steps));
+      focus_grid.push_back(1 /
+                           (a + (b - a) * (k + 0.5) / options.num_focus_steps));
     }
   }
 
+  std::vector<double> cell_weight(out.layout.NumCells(), 0);
+  for (int p = 0; p < n; ++p) cell_weight[cell_of[p]] += 1;
   // One solution from patch members (with multiplicity) per capture.
   auto solve = [&](const std::vector<std::vector<int>>& members,
                    std::vector<double>* readings_px) -> Solution {
@@ -236,7 +239,8 @@ TargetCalibration CalibrateFromTargets(
         if (!blurred[i]) continue;
         const double f = focus_of(i, candidate);
         if (f < 4 * captures[i].lens.focal_length_mm) continue;
-        k[i] = KappaForRadius(kappas, curves[i], PredictedRadiusPx(captures[i], f));
+        k[i] = KappaForRadius(
+            kappas, curves[i], PredictedRadiusPx(captures[i], f));
       }
       return k;
     };
@@ -297,6 +301,14 @@ TargetCalibration CalibrateFromTargets(
       }
       s.cell_kappa[c] = GeometricMean(k);
     }
+    double log_sum = 0, weight = 0;
+    for (int c = 0; c < out.layout.NumCells(); ++c) {
+      const double k =
+          std::isfinite(s.cell_kappa[c]) ? s.cell_kappa[c] : s.kappa;
+      log_sum += cell_weight[c] * std::log(k);
+      weight += cell_weight[c];
+    }
+    s.strength = weight > 0 ? std::exp(log_sum / weight) : s.kappa;
     return s;
   };
 
@@ -310,8 +322,9 @@ TargetCalibration CalibrateFromTargets(
     const CalibrationCapture& c = captures[i];
     out.capture_names.push_back(c.name);
     out.capture_reading_px.push_back(reading_px[i]);
-    const double focus =
-        std::isfinite(c.focus_distance_mm) ? c.focus_distance_mm : best.focus_mm;
+    const double focus = std::isfinite(c.focus_distance_mm)
+                             ? c.focus_distance_mm
+                             : best.focus_mm;
     out.capture_radius_px.push_back(
         std::isfinite(focus) ? PredictedRadiusPx(c, focus) : kNaN);
     out.capture_centroid_offset.push_back(
@@ -351,7 +364,7 @@ TargetCalibration CalibrateFromTargets(
   out.far_centroid_offset = best.far_kappa;
 
   // Bootstrap over patches within each capture.
-  std::vector<double> b_focus, b_kappa;
+  std::vector<double> b_focus, b_kappa, b_strength;
   std::vector<std::vector<double>> b_cells(out.layout.NumCells());
   if (options.num_bootstrap > 0) {
     std::mt19937_64 rng(options.seed);
@@ -368,34 +381,43 @@ TargetCalibration CalibrateFromTargets(
       // A resample without a solution counts at the range's ends (it
       // widens the interval rather than vanishing from it).
       b_kappa.push_back(std::isfinite(s.kappa) ? s.kappa : kNaN);
+      b_strength.push_back(std::isfinite(s.kappa) ? s.strength : kNaN);
       if (focus_unknown) b_focus.push_back(s.focus_mm);
       for (int c = 0; c < out.layout.NumCells(); ++c) {
         if (!s.cell_kappa.empty()) b_cells[c].push_back(s.cell_kappa[c]);
       }
     }
   }
-  auto interval = [&](std::vector<double> v, double value, double* lo,
-                      double* hi) {
-    const size_t total = v.size();
-    v.erase(std::remove_if(v.begin(), v.end(),
-                           [](double x) { return !std::isfinite(x); }),
+  auto interval =
+      [&](std::vector<double> v, double value, double* lo, double* hi) {
+        const size_t total = v.size();
+        v.erase(
+            std::remove_if(
+                v.begin(), v.end(), [](double x) { return !std::isfinite(x); }),
             v.end());
-    if (total == 0) {
-      *lo = *hi = kNaN;
-      return;
-    }
-    if (v.size() < 0.95 * total) {
-      *lo = 0;
-      *hi = std::numeric_limits<double>::infinity();
-      return;
-    }
-    *lo = std::min(value, Percentile(v, 0.025));
-    *hi = std::max(value, Percentile(v, 0.975));
-  };
-  interval(b_kappa, out.centroid_offset, &out.centroid_offset_ci_low,
+        if (total == 0) {
+          *lo = *hi = kNaN;
+          return;
+        }
+        if (v.size() < 0.95 * total) {
+          *lo = 0;
+          *hi = std::numeric_limits<double>::infinity();
+          return;
+        }
+        *lo = std::min(value, Percentile(v, 0.025));
+        *hi = std::max(value, Percentile(v, 0.975));
+      };
+  interval(b_kappa,
+           out.centroid_offset,
+           &out.centroid_offset_ci_low,
            &out.centroid_offset_ci_high);
+  out.strength = best.strength;
+  interval(
+      b_strength, out.strength, &out.strength_ci_low, &out.strength_ci_high);
   if (focus_unknown) {
-    interval(b_focus, out.focus_distance_mm, &out.focus_ci_low_mm,
+    interval(b_focus,
+             out.focus_distance_mm,
+             &out.focus_ci_low_mm,
              &out.focus_ci_high_mm);
   } else {
     out.focus_ci_low_mm = out.focus_ci_high_mm = out.focus_distance_mm;
@@ -428,10 +450,12 @@ TargetCalibration CalibrateFromTargets(
     any_own = true;
     worst_side = std::max(worst_side,
                           relative(out.cell_centroid_offsets[c],
-                                   out.cell_ci_low[c], out.cell_ci_high[c]));
+                                   out.cell_ci_low[c],
+                                   out.cell_ci_high[c]));
   }
   if (!any_own || options.num_bootstrap == 0) {
-    worst_side = relative(out.centroid_offset, out.centroid_offset_ci_low,
+    worst_side = relative(out.centroid_offset,
+                          out.centroid_offset_ci_low,
                           out.centroid_offset_ci_high);
   }
   if (options.num_bootstrap == 0) worst_side = kNaN;
@@ -450,6 +474,8 @@ TargetCalibration CalibrateFromTargets(
     s << "; nearer than the focus " << out.near_centroid_offset
       << " R, farther " << out.far_centroid_offset << " R";
   }
+  s << "; strength " << out.strength << " R (95 % interval "
+    << out.strength_ci_low << " - " << out.strength_ci_high << ")";
   s << "; per cell of the " << out.layout.ToString() << ":";
   for (int c = 0; c < out.layout.NumCells(); ++c) {
     s << " " << out.cell_centroid_offsets[c] << " [" << out.cell_ci_low[c]
@@ -457,8 +483,9 @@ TargetCalibration CalibrateFromTargets(
   }
   if (!(worst_side <= options.max_relative_uncertainty)) {
     s << ": not determined (a centroid offset is uncertain by "
-      << (std::isfinite(worst_side) ? std::to_string(std::lround(100 * worst_side)) + " %"
-                                    : std::string("an unbounded amount"))
+      << (std::isfinite(worst_side)
+              ? std::to_string(std::lround(100 * worst_side)) + " %"
+              : std::string("an unbounded amount"))
       << ", limit " << std::lround(100 * options.max_relative_uncertainty)
       << " %)";
     out.reason = s.str();

@@ -51,8 +51,9 @@ struct TargetCalibrationOptions {
   double max_centroid_offset = 0.414;
   int num_nodes = 17;
   // A capture whose patches read less than this (median |r| under the
-  // linear split) carries too little blur to see the profile.
-  double min_reading_px = 0.4;
+  // linear split) carries too little blur to see the profile: sharp
+  // captures read 0.5-0.7 px of noise (real f/20 planes: 0.52 px).
+  double min_reading_px = 0.7;
   // A median needs this many valid patch readings.
   int min_patches = 12;
   // Grid of regions (the whole frame is fitted too).
@@ -89,6 +90,12 @@ struct TargetCalibration {
   std::vector<double> cell_ci_low, cell_ci_high;
   std::vector<int> cell_patches;
   std::vector<bool> cell_own;
+  // The profile's overall strength: the patch-weighted geometric mean of
+  // the cells' centroid offsets, and its 95 % interval (the bootstrap
+  // moves every cell together through the shared focus, so this, not the
+  // worst cell's interval, is what the scale inherits).
+  double strength = 0;
+  double strength_ci_low = 0, strength_ci_high = 0;
   // Per capture: predicted radius (px) at the focus used, median reading
   // under the linear split, and the capture's own kappa (NaN if it has too
   // little blur); nearer and farther than the focus separately when both

@@ -4,6 +4,7 @@
 #include <ctime>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include <boost/filesystem.hpp>
@@ -20,6 +21,7 @@
 #include "dpsfm/core/kernel_grid.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/psf_calibration.h"
+#include "dpsfm/core/target_calibration.h"
 
 namespace fs = boost::filesystem;
 
@@ -41,9 +43,31 @@ struct CalibratorOptions {
   int stride = 0;
   double max_radius_px = 0;
   double min_texture_snr = 1.5;
-  int max_patches_per_capture = 80;
+  int max_patches_per_capture = 150;
+  // Regions of the frame fitted on their own (the profile changes across
+  // the frame on real sensors; on the Canon R6 II mostly from the centre
+  // to the left and right edges, and a 2 x 3 grid left a corner cell 25 %
+  // uncertain from two planes).
+  int grid_rows = 1;
+  int grid_cols = 3;
+  int num_bootstrap = 200;
+  // For the profile library: the camera body (EXIF "Make / Model") and
+  // lens (EXIF LensModel) the profile belongs to.
+  std::string camera;
+  std::string lens;
   int num_threads = -1;
 };
+
+// Patches evenly spread over the list, at most `count`.
+std::vector<ProfilePatch> Spread(const std::vector<ProfilePatch>& found,
+                                 int count) {
+  if (static_cast<int>(found.size()) <= count) return found;
+  std::vector<ProfilePatch> spread;
+  for (int k = 0; k < count; ++k) {
+    spread.push_back(found[k * found.size() / count]);
+  }
+  return spread;
+}
 
 }  // namespace
 
@@ -77,6 +101,22 @@ int RunDPPsfCalibrator(int argc, char** argv) {
   manager.AddDefaultOption("DPPsfCalibrator.max_patches_per_capture",
                            &options.max_patches_per_capture,
                            "patches used per capture (evenly spread)");
+  manager.AddDefaultOption("DPPsfCalibrator.grid_rows",
+                           &options.grid_rows,
+                           "rows of frame regions fitted on their own");
+  manager.AddDefaultOption("DPPsfCalibrator.grid_cols",
+                           &options.grid_cols,
+                           "columns of frame regions fitted on their own");
+  manager.AddDefaultOption("DPPsfCalibrator.num_bootstrap",
+                           &options.num_bootstrap,
+                           "bootstrap resamples for the intervals");
+  manager.AddDefaultOption("DPPsfCalibrator.camera",
+                           &options.camera,
+                           "camera body for the profile library (EXIF Make "
+                           "/ Model, e.g. 'Canon / Canon EOS R6m2')");
+  manager.AddDefaultOption("DPPsfCalibrator.lens",
+                           &options.lens,
+                           "lens for the profile library (EXIF LensModel)");
   manager.AddDefaultOption("DPPsfCalibrator.num_threads",
                            &options.num_threads,
                            "threads (-1: all cores)");
@@ -87,9 +127,13 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     timer.Start();
     colmap::PrintHeading1("DP PSF calibration");
     if (options.max_patches_per_capture < 1 ||
-        !(options.min_texture_snr >= 0) ||
+        !(options.min_texture_snr >= 0) || options.grid_rows < 1 ||
+        options.grid_cols < 1 || options.num_bootstrap < 10 ||
         (options.num_threads != -1 && options.num_threads < 1)) {
-      throw InputError("invalid DPPsfCalibrator option values");
+      throw InputError(
+          "invalid DPPsfCalibrator option values (max_patches_per_capture, "
+          "grid_rows and grid_cols >= 1, num_bootstrap >= 10, "
+          "min_texture_snr >= 0)");
     }
     const std::vector<CalibrationTarget> targets =
         ReadCalibrationTargets(options.targets_path);
@@ -110,7 +154,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     }
     const DPImageIndex index(layout);
 
-    std::vector<ProfilePatch> patches;
+    std::vector<CalibrationCapture> captures;
     cv::Size frame_size;
     PatchGeometry geometry{};
     int border = 0;
@@ -125,6 +169,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
         if (options.max_radius_px > 0) {
           geometry.max_radius_px = options.max_radius_px;
         }
+        // The border the weakest profile of the path needs at the bound.
         border = DPKernelGrid(TranslatingDiskPsf(),
                               BlurEstimationOptions().grid_step_px,
                               geometry.max_radius_px,
@@ -143,88 +188,111 @@ int RunDPPsfCalibrator(int argc, char** argv) {
         cv::resize(left, left, size, 0, 0, cv::INTER_AREA);
         cv::resize(right_view, right_view, size, 0, 0, cv::INTER_AREA);
       }
-      // The blur of the target in working-frame pixels (metric, s = 1).
-      const double radius = PredictBlurRadiusPx(target.lens,
-                                                target.lens.PixelPitchMm() / rf,
-                                                1.0,
-                                                target.focus_distance_m,
-                                                target.target_distance_m);
-      std::vector<ProfilePatch> found =
+      CalibrationCapture capture;
+      capture.name = target.name;
+      capture.lens = target.lens;
+      capture.working_pitch_mm = target.lens.PixelPitchMm() / rf;
+      capture.target_distance_mm = 1000 * target.target_distance_m;
+      capture.focus_distance_mm = 1000 * target.focus_distance_m;  // NaN stays
+      const std::vector<ProfilePatch> found =
           ExtractProfilePatches(left,
                                 right_view,
                                 geometry.patch_size,
                                 geometry.stride,
                                 border,
-                                radius,
+                                std::numeric_limits<double>::quiet_NaN(),
                                 options.min_texture_snr);
-      const size_t textured = found.size();
-      if (static_cast<int>(found.size()) > options.max_patches_per_capture) {
-        std::vector<ProfilePatch> spread;
-        for (int k = 0; k < options.max_patches_per_capture; ++k) {
-          spread.push_back(
-              found[k * found.size() / options.max_patches_per_capture]);
-        }
-        found.swap(spread);
-      }
-      std::ostringstream line;
-      line << "  " << target.name << ": target " << target.target_distance_m
-           << " m, focus " << target.focus_distance_m << " m, f "
-           << target.lens.focal_length_mm << " mm f/" << target.lens.f_number
-           << " -> blur radius " << std::fixed << std::setprecision(2) << radius
-           << " px; " << textured << " textured patches";
-      if (std::abs(radius) > geometry.max_radius_px - 0.5) {
-        LOG(WARNING) << line.str() << ": beyond the search bound "
-                     << geometry.max_radius_px << " px, skipped";
-        continue;
-      }
-      LOG(INFO) << line.str() << ", " << found.size() << " used";
-      patches.insert(patches.end(), found.begin(), found.end());
+      capture.patches = Spread(found, options.max_patches_per_capture);
+      LOG(INFO) << "  " << target.name << ": target "
+                << target.target_distance_m << " m, focus "
+                << (std::isnan(target.focus_distance_m)
+                        ? std::string("unknown")
+                        : std::to_string(target.focus_distance_m) + " m")
+                << " (from the focal-plane mark), f "
+                << target.lens.focal_length_mm << " mm f/"
+                << target.lens.f_number << "; " << found.size()
+                << " textured patches, " << capture.patches.size() << " used";
+      captures.push_back(std::move(capture));
     }
 
-    SplitProfileFitOptions fit_options;
+    TargetCalibrationOptions fit_options;
     fit_options.blur.max_radius_px = geometry.max_radius_px;
+    fit_options.grid_rows = options.grid_rows;
+    fit_options.grid_cols = options.grid_cols;
+    fit_options.num_bootstrap = options.num_bootstrap;
     fit_options.num_threads = options.num_threads;
-    colmap::PrintHeading2("Fitting the split profile");
-    const SplitProfileCalibration calibration =
-        CalibrateSplitProfile(patches, 3, fit_options);
-    const SplitProfileFit& fit = calibration.frame;
-    if (!fit.determined) {
-      return Fail("the captures do not determine the profile: " + fit.reason +
-                  ". Capture the target nearer or farther than the focus so "
-                  "its blur is 3-15 px, with fine texture filling the frame");
+    fit_options.Check();
+    colmap::PrintHeading2("Fitting the DP profile");
+    const TargetCalibration calibration =
+        CalibrateFromTargets(captures, fit_options);
+    for (size_t i = 0; i < captures.size(); ++i) {
+      LOG(INFO) << "  " << calibration.capture_names[i] << ": blur radius "
+                << std::fixed << std::setprecision(2)
+                << calibration.capture_radius_px[i]
+                << " px at the focus used, read as "
+                << calibration.capture_reading_px[i]
+                << " px by the linear split; centroid offset "
+                << std::setprecision(4)
+                << calibration.capture_centroid_offset[i] << " R";
     }
-    LOG(INFO) << fit.reason;
-    LOG(INFO) << "Median radius error with the fitted profile: " << std::fixed
-              << std::setprecision(2) << 100 * fit.median_radius_error
-              << " %; mean relative residual " << std::setprecision(6)
-              << fit.mean_relative_residual;
+    if (!calibration.determined) {
+      return Fail("the captures do not determine the DP profile: " +
+                  calibration.reason +
+                  ". Capture the textured target (filling the frame) at two "
+                  "or more distances nearer and farther than the focus, so "
+                  "that its blur is several pixels");
+    }
+    LOG(INFO) << calibration.reason;
+    LOG(INFO) << "Fitted in " << std::fixed << std::setprecision(1)
+              << calibration.seconds << " s";
 
-    LOG(INFO) << calibration.summary;
+    // The profile file: each cell's fitted profile as a measured kernel pair
+    // at the search bound (far side); the estimator magnifies it for every
+    // other radius.
     PsfProfileFile profile;
-    profile.params = fit.params;
-    if (calibration.banded) {
-      for (const SplitProfileFit& band : calibration.bands) {
-        profile.band_split_exponents.push_back(band.params.split_exponent);
-      }
+    profile.model = "measured_kernels";
+    profile.reference_radius_px = geometry.max_radius_px;
+    profile.far_side = true;
+    profile.layout = calibration.layout;
+    profile.camera = options.camera;
+    profile.lens = options.lens;
+    for (int c = 0; c < calibration.layout.NumCells(); ++c) {
+      const DPKernels k =
+          SplitProfilePsf(SplitProfileParams::ForCentroidOffset(
+                              calibration.cell_centroid_offsets[c]))
+              .Kernels(profile.reference_radius_px);
+      profile.left_kernels.push_back(k.left);
+      profile.right_kernels.push_back(k.right);
     }
+    // What the scale inherits: the overall strength's interval.
+    const double uncertainty =
+        std::max(calibration.strength - calibration.strength_ci_low,
+                 calibration.strength_ci_high - calibration.strength) /
+        calibration.strength;
+    profile.uncertainty = uncertainty;
     auto add = [&](const std::string& key, const std::string& value) {
       profile.fit_info.emplace_back("fit_" + key, value);
     };
     std::ostringstream v;
+    v << std::setprecision(4);
+    add("summary", calibration.reason);
     add("captures", std::to_string(targets.size()));
-    add("patches", std::to_string(fit.num_patches));
-    v << fit.centroid_offset_ci_low << " " << fit.centroid_offset_ci_high;
-    add("centroid_offset_ci95", v.str());
+    v << calibration.focus_distance_mm / 1000 << " m from the focal-plane mark"
+      << (calibration.focus_fitted ? " (fitted; 95 % interval " : " (given")
+      << (calibration.focus_fitted
+              ? std::to_string(calibration.focus_ci_low_mm / 1000) + " - " +
+                    std::to_string(calibration.focus_ci_high_mm / 1000) + " m)"
+              : ")");
+    add("focus_distance", v.str());
     v.str("");
-    v << fit.centroid_offset << " (translating disk "
-      << fit.translating_disk_centroid_offset << ")";
+    for (int c = 0; c < calibration.layout.NumCells(); ++c) {
+      v << (c ? " " : "") << calibration.cell_centroid_offsets[c];
+    }
+    add("cell_centroid_offsets", v.str());
+    v.str("");
+    v << calibration.centroid_offset << " (translating disk "
+      << TranslatingDiskPsf::CentroidOffsetPerRadius() << ")";
     add("centroid_offset_per_radius", v.str());
-    v.str("");
-    v << fit.median_radius_error;
-    add("median_radius_error", v.str());
-    v.str("");
-    v << fit.mean_relative_residual;
-    add("mean_relative_residual", v.str());
     add("frame_size",
         std::to_string(frame_size.width) + "x" +
             std::to_string(frame_size.height));
@@ -236,8 +304,12 @@ int RunDPPsfCalibrator(int argc, char** argv) {
       add("created", date);
     }
     WritePsfProfile(options.output_path, profile);
-    LOG(INFO) << "Profile: " << options.output_path << " (" << std::fixed
-              << std::setprecision(1) << timer.ElapsedSeconds() << " s)";
+    LOG(INFO) << "Profile: " << options.output_path << " ("
+              << calibration.layout.ToString() << " of measured kernels at "
+              << profile.reference_radius_px << " px, uncertainty "
+              << std::setprecision(1) << 100 * uncertainty << " %; "
+              << std::fixed << std::setprecision(1) << timer.ElapsedSeconds()
+              << " s)";
     return EXIT_SUCCESS;
   } catch (const InputError& error) {
     return Fail(error.what());

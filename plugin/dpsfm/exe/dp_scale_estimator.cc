@@ -132,6 +132,11 @@ void AddCommandOptions(colmap::OptionManager* manager,
                             &core->intensity_refinement,
                             "run the intensity-based search after the "
                             "linear estimate");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.max_scale_ci_relative_width",
+      &core->max_scale_ci_relative_width,
+      "refuse when the scale's 95 % interval (data and DP profile) is "
+      "wider than this fraction of it");
   manager->AddDefaultOption("DPScaleEstimator.num_threads",
                             &core->num_threads,
                             "threads (-1: all cores)");
