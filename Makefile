@@ -1,5 +1,5 @@
 # The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench accuracy profiles clean-cache
+.PHONY: example test build bench accuracy profiles real clean-cache
 
 example:
 	bash scripts/run_example.sh
@@ -20,6 +20,11 @@ accuracy:
 # DP PSF profiles x estimation modes on generated scenes (a table).
 profiles:
 	bash scripts/run_profile_bench.sh
+
+# Real DP captures (../shared/realdp): calibration from their flat planes,
+# then r_s per scene and profile mode (a table; gates nothing).
+real:
+	bash scripts/run_real_bench.sh
 
 clean-cache:
 	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"

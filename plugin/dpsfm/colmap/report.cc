@@ -114,6 +114,8 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     }
     psf["fit"]["bands"] = bands;
   }
+  report["lens_geometry_uncertainty"] =
+      Number(result.lens_geometry_uncertainty);
   psf["scale_factors_allowed_by_profile"] = Interval(
       result.profile_scale_factor_low, result.profile_scale_factor_high);
   report["psf"] = psf;

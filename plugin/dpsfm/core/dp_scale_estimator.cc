@@ -15,6 +15,7 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/curve_math.h"
 #include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
@@ -116,6 +117,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GT(max_scale_ci_relative_width, 0);
   DPSFM_CHECK_GE(min_total_patches, 0);
   DPSFM_CHECK_GE(scale_systematic_uncertainty, 0);
+  DPSFM_CHECK_GE(lens_geometry_uncertainty, 0);
   DPSFM_CHECK(profile_relative_uncertainty >= 0 &&
               profile_relative_uncertainty < 1)
       << "profile_relative_uncertainty must lie in [0, 1)";
@@ -913,9 +915,31 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     result.failure_reason = s.str();
     return result;
   }
-  // Intervals: the bootstrap's, widened by the systematic term.
+  // Intervals: the bootstrap's, widened by the systematic terms: the
+  // estimator's own, and the thin lens's single plane against a real
+  // lens's principal planes and entrance pupil (the origin of SfM depth),
+  // which lie within about a focal length of each other: a relative depth
+  // error of up to f / z at the patches' median distance.
+  double lens_geometry = 0;
+  if (options_.lens_geometry_uncertainty > 0) {
+    std::vector<double> ratios;
+    for (int i : linear.selected_views) {
+      for (const PatchSample& p : samples[i]) {
+        if (p.selected && p.depth > 0) {
+          ratios.push_back(views_[i]->lens.focal_length_mm /
+                           (ModelUnitMm(linear.scale) * p.depth));
+        }
+      }
+    }
+    if (!ratios.empty()) {
+      lens_geometry =
+          options_.lens_geometry_uncertainty * Percentile(ratios, 0.5);
+    }
+  }
+  result.lens_geometry_uncertainty = lens_geometry;
   auto widen = [&](double s, double* lo, double* hi) {
-    const double sys = options_.scale_systematic_uncertainty * s;
+    const double sys =
+        std::hypot(options_.scale_systematic_uncertainty, lens_geometry) * s;
     const double dl = std::max(0.0, s - *lo), dh = std::max(0.0, *hi - s);
     *lo = s - std::sqrt(dl * dl + sys * sys);
     *hi = s + std::sqrt(dh * dh + sys * sys);

@@ -150,6 +150,12 @@ struct DPScaleOptions {
   // calibration's interval: the scale ~ the strength, so the intervals are
   // widened by the factors 1 -+ this.
   double profile_relative_uncertainty = 0;
+  // The thin lens has one plane where a real lens has two principal planes
+  // and an entrance pupil (the origin of SfM depth), within about a focal
+  // length of each other; the intervals carry a relative depth error of
+  // this times f / z at the patches' median distance (in quadrature with
+  // the term above). 0 disables it (a thin-lens camera, e.g. renders).
+  double lens_geometry_uncertainty = 1;
 
   // DP PSF self-calibration (the `auto` profile, issue 7): before the
   // linear stage, fit the split profile to the stored patches of all views,
@@ -280,6 +286,9 @@ struct DPScaleResult {
   // offsets over the one used; 1 when the profile was given). The reported
   // intervals include them; 0 / inf = not bounded.
   double profile_scale_factor_low = 1, profile_scale_factor_high = 1;
+  // The relative systematic term of the lens geometry (see
+  // DPScaleOptions::lens_geometry_uncertainty).
+  double lens_geometry_uncertainty = 0;
 };
 
 class DPScaleEstimator {

@@ -334,6 +334,17 @@ TargetCalibration CalibrateFromTargets(
                        ? 1
                        : 0;
   }
+  if (num_blurred == 0) {
+    std::ostringstream s;
+    s << "none of the " << num_captures
+      << " captures shows visible blur (median reading under the linear "
+         "split below "
+      << options.min_reading_px
+      << " px): the target was too close to the "
+         "focus or the aperture too small";
+    out.reason = s.str();
+    return finish();
+  }
   if (focus_unknown && num_blurred < 2) {
     std::ostringstream s;
     s << "with the focus distance unknown the profile needs two or more "
