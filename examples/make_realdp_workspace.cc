@@ -7,7 +7,7 @@
 //
 //   dpsfm_make_realdp_workspace --capture_path CAPTURE --output_path OUT
 //       [--true_scale 0.37] [--focal_length_mm 49.57] [--f_number 4]
-//       [--pixel_pitch_um 46.875] [--name scene]
+//       [--pixel_pitch_um 46.875] [--name scene] [--recorded_focus_m 1.0]
 //
 // Depth files: 16-bit single channel = millimetres (0 = none); 8-bit RGB(A)
 // = metres x 255 / 10 in the first channel (the DP119 "box" scenes), at any
@@ -70,6 +70,7 @@ cv::Mat ReadDepthMetres(const std::string& path, const cv::Size& frame) {
 int main(int argc, char** argv) {
   std::string capture, output, name = "view";
   double true_scale = 0.37, focal_mm = 49.57, f_number = 4, pitch_um = 46.875;
+  double recorded_focus_m = 0;
   po::options_description desc("dpsfm_make_realdp_workspace");
   desc.add_options()("capture_path",
                      po::value(&capture)->required(),
@@ -79,7 +80,10 @@ int main(int argc, char** argv) {
       "focal_length_mm", po::value(&focal_mm), "lens focal length")(
       "f_number", po::value(&f_number), "aperture")(
       "pixel_pitch_um", po::value(&pitch_um), "DP frame pixel pitch")(
-      "name", po::value(&name), "image name (without extension)");
+      "name", po::value(&name), "image name (without extension)")(
+      "recorded_focus_m",
+      po::value(&recorded_focus_m),
+      "focus distance the camera recorded (lens.csv; 0: none)");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -151,9 +155,11 @@ int main(int argc, char** argv) {
     reconstruction.WriteBinary((out / "dense/sparse").string());
 
     std::ofstream lens((out / "lens.csv").string());
-    lens << "name,focal_length_mm,f_number,pixel_pitch_um\n"
-         << image_name << "," << focal_mm << "," << f_number << "," << pitch_um
-         << "\n";
+    lens << "name,focal_length_mm,f_number,pixel_pitch_um"
+         << (recorded_focus_m > 0 ? ",focus_distance_m" : "") << "\n"
+         << image_name << "," << focal_mm << "," << f_number << "," << pitch_um;
+    if (recorded_focus_m > 0) lens << "," << recorded_focus_m;
+    lens << "\n";
     nlohmann::json truth = {
         {"true_scale", true_scale},
         {"capture", capture},

@@ -67,6 +67,7 @@ for scene in "${scenes[@]}"; do
   name="${scene//\//_}"
   "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/$scene" \
     --output_path "$out/$name" --name "$name" --true_scale "$truth" \
+    --recorded_focus_m 1.0 \
     >"$out/$name.make.log" 2>&1 || die "workspace failed: $out/$name.make.log"
   for mode in "${modes[@]}"; do
     args=()
@@ -91,11 +92,14 @@ except Exception:
 if r.get("success") and r.get("scale"):
     v = next(iter(r["views"].values()))
     lo, hi = r["scale_ci_low"] / truth, r["scale_ci_high"] / truth
+    fc = r.get("focus_check", {})
+    rec = "%.3f" % (fc["scale_from_recorded_focus"] / truth) if fc.get("scale_from_recorded_focus") else ""
     print("\t".join([name, mode, "%.3f" % (r["scale"] / truth), "%.3f" % lo, "%.3f" % hi,
-                     "%.2f" % (v.get("focus_distance_m") or float("nan")), ""]))
+                     "%.2f" % (v.get("focus_distance_m") or float("nan")), "", rec,
+                     "agrees" if fc.get("agrees") else ("DISAGREES" if fc else "")]))
 else:
     err = open(log).read().split("ERROR: dp_scale_estimator: no scale: ")[-1]
-    print("\t".join([name, mode, "", "", "", "", err.strip().splitlines()[0][:110] if err.strip() else "failed"]))
+    print("\t".join([name, mode, "", "", "", "", err.strip().splitlines()[0][:110] if err.strip() else "failed", "", ""]))
 PY
   done
 done
@@ -103,13 +107,13 @@ done
 python3 - "$results" <<'PY'
 import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
-print("\n| scene | mode | r_s | 95 % interval | focus (m) | or refused because |")
-print("|---|---|---|---|---|---|")
-for name, mode, rs, lo, hi, g, why in rows:
+print("\n| scene | mode | r_s | 95 % interval | focus (m) | r_s from the recorded 1 m focus | or refused because |")
+print("|---|---|---|---|---|---|---|")
+for name, mode, rs, lo, hi, g, why, rec, agree in rows:
     if rs:
-        print("| %s | %s | %s | [%s, %s] | %s | |" % (name, mode, rs, lo, hi, g))
+        print("| %s | %s | %s | [%s, %s] | %s | %s %s | |" % (name, mode, rs, lo, hi, g, rec, agree))
     else:
-        print("| %s | %s | | | | %s |" % (name, mode, why))
+        print("| %s | %s | | | | | %s |" % (name, mode, why))
 print("\n| mode | answered | e_s over answers | intervals holding the truth |")
 print("|---|---|---|---|")
 for mode in ["defaults", "translating_disk", "calibrated"]:

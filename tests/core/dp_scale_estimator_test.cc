@@ -306,6 +306,27 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   }
   EXPECT_LT(std::abs(fitted.result.scale / scale - 1), 0.03);
 
+  // The recorded focus (from the sensor plane: u + f u / (u - f) for the
+  // thin lens focused at u) is profile-free evidence: with the wrong
+  // profile the DP scale is off, the focus-implied one is not, and the
+  // check says how far apart they are.
+  std::vector<DPView> recorded = views;
+  for (size_t i = 0; i < recorded.size(); ++i) {
+    const double u = 1000 * specs[i].focus_m;
+    const double f = specs[i].lens.focal_length_mm;
+    recorded[i].lens.recorded_focus_mm = u + f * u / (u - f);
+  }
+  const RunOutput checked = RunPipeline(recorded, plain);
+  ASSERT_TRUE(checked.result.success) << checked.result.failure_reason;
+  std::printf("  focus check: %s\n", checked.result.focus_check.c_str());
+  EXPECT_NEAR(checked.result.focus_scale / scale, 1.0, 0.03);
+  EXPECT_NEAR(checked.result.focus_scale_ratio,
+              checked.result.scale / checked.result.focus_scale,
+              1e-12);
+  if (std::abs(checked.result.focus_scale_ratio - 1) > 0.25) {
+    EXPECT_FALSE(checked.result.focus_agrees);
+  }
+
   const std::vector<DPView> model_views = RenderAll(specs, scale);
   const RunOutput model = RunPipeline(model_views, self);
   ASSERT_TRUE(model.result.success) << model.result.failure_reason;

@@ -4,16 +4,16 @@
 // real scene through the real `colmap` binary, checked against the measured
 // depth (the workspace's depth is it divided by a known factor).
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
+#include <boost/filesystem.hpp>
 #include <nlohmann/json.hpp>
 
 #include "tests/e2e/e2e_helpers.h"
@@ -25,9 +25,12 @@ namespace {
 namespace fs = boost::filesystem;
 
 constexpr double kTrueScale = 0.37;
-const std::vector<std::string> kGeometry = {
-    "--DPScaleEstimator.max_radius_px", "10", "--DPScaleEstimator.patch_size",
-    "51", "--DPScaleEstimator.stride", "25"};
+const std::vector<std::string> kGeometry = {"--DPScaleEstimator.max_radius_px",
+                                            "10",
+                                            "--DPScaleEstimator.patch_size",
+                                            "51",
+                                            "--DPScaleEstimator.stride",
+                                            "25"};
 
 // The captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the source
 // tree, else /work/shared/realdp.
@@ -67,31 +70,50 @@ class RealCaptures : public ::testing::Test {
     for (const std::string& c : captures) {  // e.g. "0600/f4"
       const std::string name = c.substr(0, 4) + "_" + c.substr(5) + ".png";
       const fs::path from = fs::path(real_) / "flat/001" / c;
-      fs::copy_file(from / "l.png", dir + "/dp/left/" + name,
+      fs::copy_file(from / "l.png",
+                    dir + "/dp/left/" + name,
                     fs::copy_option::overwrite_if_exists);
-      fs::copy_file(from / "r.png", dir + "/dp/right/" + name,
+      fs::copy_file(from / "r.png",
+                    dir + "/dp/right/" + name,
                     fs::copy_option::overwrite_if_exists);
-      targets << name << "," << std::stod(c.substr(0, 4)) / 1000 << ","
-              << focus << ",49.57," << c.substr(6) << ",46.875\n";
+      targets << name << "," << std::stod(c.substr(0, 4)) / 1000 << "," << focus
+              << ",49.57," << c.substr(6) << ",46.875\n";
     }
     return dir;
   }
 
   CommandResult Calibrate(const std::string& dir, const std::string& out) {
-    return RunCommand({kColmap, "dp_psf_calibrator", "--dp_image_path",
-                       dir + "/dp", "--targets_path", dir + "/targets.csv",
-                       "--output_path", out,
-                       "--DPPsfCalibrator.max_radius_px", "10",
-                       "--DPPsfCalibrator.patch_size", "51",
-                       "--DPPsfCalibrator.stride", "25"});
+    return RunCommand({kColmap,
+                       "dp_psf_calibrator",
+                       "--dp_image_path",
+                       dir + "/dp",
+                       "--targets_path",
+                       dir + "/targets.csv",
+                       "--output_path",
+                       out,
+                       "--DPPsfCalibrator.max_radius_px",
+                       "10",
+                       "--DPPsfCalibrator.patch_size",
+                       "51",
+                       "--DPPsfCalibrator.stride",
+                       "25",
+                       "--DPPsfCalibrator.camera",
+                       "Canon / Canon EOS R6m2",
+                       "--DPPsfCalibrator.lens",
+                       "RF50mm F1.8 STM"});
   }
 
   std::string Workspace(const std::string& scene) {
     const std::string out = dir_ / scene;
-    const CommandResult made = RunCommand(
-        {DPSFM_MAKE_REALDP_EXE, "--capture_path", real_ + "/" + scene,
-         "--output_path", out, "--name", "view", "--true_scale",
-         std::to_string(kTrueScale)});
+    const CommandResult made = RunCommand({DPSFM_MAKE_REALDP_EXE,
+                                           "--capture_path",
+                                           real_ + "/" + scene,
+                                           "--output_path",
+                                           out,
+                                           "--name",
+                                           "view",
+                                           "--true_scale",
+                                           std::to_string(kTrueScale)});
     EXPECT_EQ(made.exit_code, 0) << made.err;
     return out;
   }
@@ -99,11 +121,16 @@ class RealCaptures : public ::testing::Test {
   CommandResult Estimate(const std::string& workspace,
                          const std::string& report,
                          std::vector<std::string> extra) {
-    std::vector<std::string> args = {
-        "--workspace_path", workspace + "/dense", "--dp_image_path",
-        workspace + "/dp",  "--lens_path",        workspace + "/lens.csv",
-        "--dry_run",        "1",                  "--report_path",
-        report};
+    std::vector<std::string> args = {"--workspace_path",
+                                     workspace + "/dense",
+                                     "--dp_image_path",
+                                     workspace + "/dp",
+                                     "--lens_path",
+                                     workspace + "/lens.csv",
+                                     "--dry_run",
+                                     "1",
+                                     "--report_path",
+                                     report};
     args.insert(args.end(), kGeometry.begin(), kGeometry.end());
     args.insert(args.end(), extra.begin(), extra.end());
     return RunEstimator(args);
@@ -120,14 +147,15 @@ class RealCaptures : public ::testing::Test {
 TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
   const std::string dir =
       Calibration({"0600/f4", "1500/f4", "0600/f20", "1500/f20"}, "");
-  const std::string profile = dir_ / "r6m2.dpsf";
+  fs::create_directories(dir_ / "library");
+  const std::string profile = dir_ / "library/r6m2.dpsf";
   const CommandResult calibrated = Calibrate(dir, profile);
   ASSERT_EQ(calibrated.exit_code, 0) << calibrated.err;
   std::ifstream file(profile);
   std::string text((std::istreambuf_iterator<char>(file)),
                    std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("model measured_kernels"), std::string::npos) << text;
-  EXPECT_TRUE(fs::exists(dir_ / "r6m2_left.npy"));
+  EXPECT_TRUE(fs::exists(dir_ / "library/r6m2_left.npy"));
   // The fitted focus (from the focal-plane mark) and the strength.
   const size_t at = text.find("fit_focus_distance ");
   ASSERT_NE(at, std::string::npos);
@@ -146,14 +174,17 @@ TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
 
   const std::string box = Workspace("box/001");
   const std::string report = dir_ / "box.json";
-  const CommandResult run =
-      Estimate(box, report,
-               {"--DPScaleEstimator.psf_model", "calibrated",
-                "--DPScaleEstimator.psf_path", profile});
+  const CommandResult run = Estimate(box,
+                                     report,
+                                     {"--DPScaleEstimator.psf_model",
+                                      "calibrated",
+                                      "--DPScaleEstimator.psf_path",
+                                      profile});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json r = ReadJson(report);
   const double ratio = r.at("scale").get<double>() / kTrueScale;
-  std::printf("box/001 calibrated: r_s %.3f in [%.3f, %.3f]\n", ratio,
+  std::printf("box/001 calibrated: r_s %.3f in [%.3f, %.3f]\n",
+              ratio,
               r.at("scale_ci_low").get<double>() / kTrueScale,
               r.at("scale_ci_high").get<double>() / kTrueScale);
   EXPECT_NEAR(ratio, 1.0, 0.15);
@@ -161,6 +192,35 @@ TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
   EXPECT_GE(r.at("scale_ci_high").get<double>(), kTrueScale);
   EXPECT_NE(r.at("psf").at("model").get<std::string>().find("measured"),
             std::string::npos);
+
+  // The same profile from the library, picked by the camera and lens of
+  // lens.csv with the defaults; the recorded focus ("1 m") is checked
+  // against the estimate.
+  {
+    std::ofstream lens(box + "/lens.csv");
+    lens << "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m,"
+            "camera,lens\n"
+         << "view.png,49.57,4,46.875,1.0,Canon / Canon EOS R6m2,"
+            "rf50mm f1.8 stm\n";
+  }
+  const std::string library_report = dir_ / "library.json";
+  const CommandResult from_library =
+      Estimate(box,
+               library_report,
+               {"--DPScaleEstimator.psf_library", dir_ / "library"});
+  ASSERT_EQ(from_library.exit_code, 0) << from_library.err;
+  const nlohmann::json l = ReadJson(library_report);
+  EXPECT_EQ(l.at("psf").at("source").get<std::string>().rfind("library", 0), 0u)
+      << l.at("psf").at("source");
+  EXPECT_DOUBLE_EQ(l.at("scale").get<double>(), r.at("scale").get<double>());
+  ASSERT_TRUE(l.contains("focus_check")) << l.dump(2);
+  const double focus_ratio =
+      l.at("focus_check").at("scale_from_recorded_focus").get<double>() /
+      kTrueScale;
+  std::printf("box/001: recorded 1 m focus gives r_s %.3f (%s)\n",
+              focus_ratio,
+              l.at("focus_check").at("status").get<std::string>().c_str());
+  EXPECT_NEAR(focus_ratio, 1.0, 0.3);
 }
 
 // With nothing calibrated the defaults must not answer confidently wrong:

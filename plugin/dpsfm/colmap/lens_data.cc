@@ -1,5 +1,6 @@
 #include "dpsfm/colmap/lens_data.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -49,6 +50,18 @@ double RationalTag(FIBITMAP* bitmap, const char* key) {
   return static_cast<double>(value[0]) / static_cast<double>(value[1]);
 }
 
+std::string AsciiTag(FIBITMAP* bitmap,
+                     FREE_IMAGE_MDMODEL model,
+                     const char* key) {
+  FITAG* tag = nullptr;
+  if (!FreeImage_GetMetadata(model, bitmap, key, &tag) || !tag ||
+      FreeImage_GetTagType(tag) != FIDT_ASCII) {
+    return "";
+  }
+  const char* value = static_cast<const char*>(FreeImage_GetTagValue(tag));
+  return value == nullptr ? "" : Trim(std::string(value));
+}
+
 }  // namespace
 
 std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
@@ -61,23 +74,39 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
     throw InputError("lens file is empty: " + path);
   }
   const std::vector<std::string> header = SplitCsvLine(line);
-  const std::vector<std::string> expected = {
+  const std::vector<std::string> required = {
       "name", "focal_length_mm", "f_number", "pixel_pitch_um"};
-  if (header != expected) {
+  bool valid = header.size() >= required.size() &&
+               std::equal(required.begin(), required.end(), header.begin());
+  int focus_column = -1, camera_column = -1, lens_column = -1;
+  for (size_t c = required.size(); valid && c < header.size(); ++c) {
+    int* column = header[c] == "focus_distance_m" ? &focus_column
+                  : header[c] == "camera"         ? &camera_column
+                  : header[c] == "lens"           ? &lens_column
+                                                  : nullptr;
+    valid = column != nullptr && *column < 0;
+    if (valid) *column = static_cast<int>(c);
+  }
+  if (!valid) {
     throw InputError("lens file " + path +
                      " must start with the header "
-                     "name,focal_length_mm,f_number,pixel_pitch_um");
+                     "name,focal_length_mm,f_number,pixel_pitch_um (optionally "
+                     "followed by focus_distance_m, camera, lens, each once)");
   }
+  const size_t max_cells = header.size();
+  const bool with_focus = focus_column >= 0;
   std::map<std::string, LensCsvRow> rows;
   int line_number = 1;
   while (std::getline(file, line)) {
     ++line_number;
     if (Trim(line).empty()) continue;
     const std::vector<std::string> cells = SplitCsvLine(line);
-    if (cells.size() < 3 || cells.size() > 4 || cells[0].empty()) {
-      throw InputError(path + ":" + std::to_string(line_number) +
-                       ": expected name,focal_length_mm,f_number[,"
-                       "pixel_pitch_um]");
+    if (cells.size() < 3 || cells.size() > max_cells || cells[0].empty()) {
+      throw InputError(
+          path + ":" + std::to_string(line_number) +
+          ": expected name,focal_length_mm,f_number[,"
+          "pixel_pitch_um" +
+          (with_focus ? std::string("[,...]]") : std::string("]")));
     }
     LensCsvRow row;
     row.focal_length_mm =
@@ -87,6 +116,15 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
         cells.size() == 4
             ? ParseCell(cells[3], path, line_number, "pixel_pitch_um", true)
             : 0;
+    auto cell = [&](int column) {
+      return column >= 0 && column < static_cast<int>(cells.size())
+                 ? cells[column]
+                 : std::string();
+    };
+    row.focus_distance_m = ParseCell(
+        cell(focus_column), path, line_number, "focus_distance_m", true);
+    row.camera = cell(camera_column);
+    row.lens = cell(lens_column);
     if (!rows.emplace(cells[0], row).second) {
       throw InputError(path + ":" + std::to_string(line_number) + ": image " +
                        cells[0] + " is listed twice");
@@ -108,6 +146,10 @@ ExifLens ReadExifLens(const std::string& path) {
   }
   exif.focal_length_mm = RationalTag(bitmap, "FocalLength");
   exif.f_number = RationalTag(bitmap, "FNumber");
+  const std::string make = AsciiTag(bitmap, FIMD_EXIF_MAIN, "Make");
+  const std::string model = AsciiTag(bitmap, FIMD_EXIF_MAIN, "Model");
+  if (!make.empty() || !model.empty()) exif.camera = make + " / " + model;
+  exif.lens = AsciiTag(bitmap, FIMD_EXIF_EXIF, "LensModel");
   FreeImage_Unload(bitmap);
   return exif;
 }
@@ -152,6 +194,16 @@ ResolvedLens ResolveLens(const std::string& image_name,
        0,
        &resolved.lens.pixel_pitch_um,
        &resolved.pixel_pitch_source);
+
+  if (csv_row && csv_row->focus_distance_m > 0) {
+    resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
+  }
+  resolved.camera = csv_row && !csv_row->camera.empty()
+                        ? csv_row->camera
+                        : (exif ? exif->camera : "");
+  resolved.lens_model = csv_row && !csv_row->lens.empty()
+                            ? csv_row->lens
+                            : (exif ? exif->lens : "");
 
   const char* kHowTo =
       " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "

@@ -15,10 +15,16 @@ struct LensCsvRow {
   double focal_length_mm = 0;
   double f_number = 0;
   double pixel_pitch_um = 0;
+  double focus_distance_m = 0;  // recorded, from the focal-plane mark
+  std::string camera, lens;     // for the DP profile library
 };
 
-// Reads lens.csv (header `name,focal_length_mm,f_number,pixel_pitch_um`; the
-// last column may be empty). Throws InputError naming the file and line.
+// Reads lens.csv (header `name,focal_length_mm,f_number,pixel_pitch_um`,
+// optionally followed by any of `focus_distance_m` (the recorded focus
+// distance from the camera's focal-plane mark), `camera` and `lens` (the
+// DP profile library's keys, as EXIF Make / Model and LensModel); empty
+// cells are allowed after f_number). Throws InputError naming the file and
+// line.
 std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
 
 // EXIF FocalLength and FNumber of an image file, read as exact rationals.
@@ -26,6 +32,8 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
 struct ExifLens {
   double focal_length_mm = 0;
   double f_number = 0;
+  std::string camera;  // "Make / Model", empty if absent
+  std::string lens;    // LensModel
 };
 ExifLens ReadExifLens(const std::string& path);
 
@@ -36,6 +44,8 @@ struct ResolvedLens {
   std::string focal_length_source;
   std::string f_number_source;
   std::string pixel_pitch_source;
+  // The DP profile library's keys (lens.csv > EXIF; empty if unknown).
+  std::string camera, lens_model;
 };
 
 struct LensFlags {

@@ -1,6 +1,9 @@
 #include "dpsfm/colmap/psf_profile.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -381,6 +384,57 @@ DPPsfField MakePsfField(const std::string& psf_model,
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");
+}
+
+namespace {
+
+std::string Key(const std::string& text) {
+  std::string key = Trim(text);
+  std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  return key;
+}
+
+}  // namespace
+
+std::string FindLibraryProfile(const std::string& library_dir,
+                               const std::string& camera,
+                               const std::string& lens,
+                               std::vector<std::string>* skipped) {
+  if (Key(camera).empty() || Key(lens).empty() ||
+      !fs::is_directory(library_dir)) {
+    return "";
+  }
+  std::vector<std::string> files;
+  for (fs::directory_iterator it(library_dir), end; it != end; ++it) {
+    if (fs::is_regular_file(it->path()) && it->path().extension() == ".dpsf") {
+      files.push_back(it->path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  for (const std::string& file : files) {
+    try {
+      const PsfProfileFile profile = ReadPsfProfile(file);
+      if (Key(profile.camera) == Key(camera) &&
+          Key(profile.lens) == Key(lens)) {
+        return file;
+      }
+    } catch (const InputError& e) {
+      if (skipped) skipped->push_back(e.what());
+    }
+  }
+  return "";
+}
+
+std::string DefaultProfileLibrary() {
+  if (const char* env = std::getenv("DPSFM_PROFILE_LIBRARY")) return env;
+  if (const char* data = std::getenv("XDG_DATA_HOME")) {
+    return (fs::path(data) / "dp-sfm/profiles").string();
+  }
+  const char* home = std::getenv("HOME");
+  return (fs::path(home ? home : ".") / ".local/share/dp-sfm/profiles")
+      .string();
 }
 
 std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {

@@ -114,6 +114,13 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     }
     psf["fit"]["bands"] = bands;
   }
+  if (!result.focus_check.empty()) {
+    report["focus_check"] = {
+        {"scale_from_recorded_focus", Number(result.focus_scale)},
+        {"ratio", Number(result.focus_scale_ratio)},
+        {"agrees", result.focus_agrees},
+        {"status", result.focus_check}};
+  }
   report["lens_geometry_uncertainty"] =
       Number(result.lens_geometry_uncertainty);
   psf["scale_factors_allowed_by_profile"] = Interval(
@@ -136,6 +143,10 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     entry["reason"] = view.reason;
     entry["focus_distance_m"] =
         result.success ? Number(view.focus_distance_m) : nullptr;
+    if (std::isfinite(view.recorded_focus_m)) {
+      entry["recorded_focus_distance_m"] = view.recorded_focus_m;
+      entry["scale_from_recorded_focus"] = Number(view.focus_scale);
+    }
     entry["focus_distance_model"] = Number(view.focus_distance_model);
     entry["single_view_scale"] = Number(view.single_view_scale);
     entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);

@@ -62,6 +62,10 @@ struct DPScaleEstimatorOptions {
   // psf_profile.h.
   std::string psf_model = "auto";
   std::string psf_path;
+  // The DP profile library (psf_profile.h, FindLibraryProfile); "" = the
+  // default folder. With psf_model auto, a library profile whose camera and
+  // lens match every view's is used as calibrated.
+  std::string psf_library;
 
   // Throws InputError naming the option and the value.
   void Check() const;

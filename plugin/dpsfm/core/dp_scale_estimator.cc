@@ -1180,8 +1180,59 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                                   s.depth)
             : kNaN;
   }
+  CheckAgainstRecordedFocus(&result);
   result.success = true;
   return result;
+}
+
+void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
+  // The fitted focal plane g' is where the disparity changes sign, whatever
+  // the DP profile; a recorded focus distance (converted to the thin lens's
+  // object distance) then gives the scale without any PSF.
+  std::vector<double> scales;
+  result->focus_scale = kNaN;
+  for (size_t i = 0; i < result->views.size(); ++i) {
+    DPViewResult& out = result->views[i];
+    const DPLensData& lens = views_[i]->lens;
+    out.recorded_focus_m = lens.recorded_focus_mm / 1000;
+    out.focus_scale = kNaN;
+    if (!out.used || !std::isfinite(lens.recorded_focus_mm) ||
+        !(out.focus_distance_model > 0)) {
+      continue;
+    }
+    try {
+      out.focus_scale =
+          FocusObjectDistanceMm(lens.recorded_focus_mm, lens.focal_length_mm) /
+          1000 / out.focus_distance_model;
+      scales.push_back(out.focus_scale);
+    } catch (const std::invalid_argument&) {
+      // A recorded focus nearer than the lens can focus: no evidence.
+    }
+  }
+  if (scales.empty()) return;
+  result->focus_scale = Percentile(scales, 0.5);
+  result->focus_scale_ratio = result->scale / result->focus_scale;
+  const double tol = options_.recorded_focus_tolerance;
+  result->focus_agrees =
+      result->focus_scale >= result->scale_ci_low * (1 - tol) &&
+      result->focus_scale <= result->scale_ci_high * (1 + tol);
+  std::ostringstream s;
+  s << std::setprecision(4) << "the recorded focus distances of "
+    << scales.size() << " used view(s) give a scale of " << result->focus_scale
+    << " (profile-free); the DP estimate " << result->scale << " is "
+    << std::showpos << std::fixed << std::setprecision(1)
+    << 100 * (result->focus_scale_ratio - 1) << std::noshowpos << " % off it";
+  if (result->focus_agrees) {
+    s << ": consistent within the interval and the recorded focus's "
+      << std::setprecision(0) << 100 * tol << " %";
+  } else {
+    s << ": they DISAGREE beyond the interval and the recorded focus's "
+      << std::setprecision(0) << 100 * tol << " %; a DP profile "
+      << std::setprecision(2) << 1 / result->focus_scale_ratio
+      << " x as strong as the one used would reconcile them. Check the "
+         "profile (calibrate it) and the recorded focus";
+  }
+  result->focus_check = s.str();
 }
 
 }  // namespace dpsfm

@@ -156,6 +156,10 @@ struct DPScaleOptions {
   // this times f / z at the patches' median distance (in quadrature with
   // the term above). 0 disables it (a thin-lens camera, e.g. renders).
   double lens_geometry_uncertainty = 1;
+  // Recorded focus distances (DPLensData::recorded_focus_mm) are taken as
+  // accurate to this fraction: cameras record focus coarsely (steps of the
+  // focus encoder), users measure it to a few cm.
+  double recorded_focus_tolerance = 0.1;
 
   // DP PSF self-calibration (the `auto` profile, issue 7): before the
   // linear stage, fit the split profile to the stored patches of all views,
@@ -238,6 +242,11 @@ struct DPViewResult {
   double focus_distance_model = 0;  // g' (model units); NaN if unknown
   double focus_distance_m = 0;      // s * g'
   double single_view_scale = 0;     // NaN if the view could not be solved
+  // The recorded focus (m, from the focal-plane mark; NaN if none) and the
+  // scale it implies with the fitted focal plane g' (profile-free: where
+  // the disparity changes sign does not depend on the DP profile).
+  double recorded_focus_m = 0;
+  double focus_scale = 0;
   double predicted_blur_range_px = 0;
   double median_abs_residual_px = 0;
   int patches_tried = 0;
@@ -286,6 +295,14 @@ struct DPScaleResult {
   // offsets over the one used; 1 when the profile was given). The reported
   // intervals include them; 0 / inf = not bounded.
   double profile_scale_factor_low = 1, profile_scale_factor_high = 1;
+  // Focus distances as evidence: the median scale the recorded focus
+  // distances imply (NaN without any), its ratio to `scale`, whether they
+  // agree within the interval and DPScaleOptions::recorded_focus_tolerance,
+  // and a sentence for people.
+  double focus_scale = 0;
+  double focus_scale_ratio = 0;
+  bool focus_agrees = true;
+  std::string focus_check;
   // The relative systematic term of the lens geometry (see
   // DPScaleOptions::lens_geometry_uncertainty).
   double lens_geometry_uncertainty = 0;
@@ -324,6 +341,8 @@ class DPScaleEstimator {
   void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
                         DPPsfField* field,
                         DPScaleResult* result) const;
+  // Fills the focus_* fields of the result (recorded focus as evidence).
+  void CheckAgainstRecordedFocus(DPScaleResult* result) const;
   // See DPScaleResult::profile_scale_factor_low.
   void ProfileScaleFactors(const DPPsfField& field,
                            const DPScaleResult& result,

@@ -7,6 +7,7 @@
 // depth z' is z = 1000 * s * z' millimetres.
 #pragma once
 
+#include <limits>
 #include <string>
 
 namespace dpsfm {
@@ -21,6 +22,11 @@ struct DPLensData {
   // Pitch of the DP frame's pixels as given to the core (before any internal
   // resize), in micrometres.
   double pixel_pitch_um = 0;
+  // The focus distance the camera or the user recorded, from the
+  // focal-plane mark (sensor plane), in mm; NaN = not recorded. Evidence
+  // only: the estimate checks itself against it (DPScaleResult::
+  // focus_check), it never replaces the fitted focus.
+  double recorded_focus_mm = std::numeric_limits<double>::quiet_NaN();
 
   bool Check() const;
   double ApertureDiameterMm() const { return focal_length_mm / f_number; }

@@ -100,6 +100,12 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption("DPScaleEstimator.psf_path",
                             &options->psf_path,
                             "DP PSF profile file for psf_model calibrated");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.psf_library",
+      &options->psf_library,
+      "folder of calibrated profiles (*.dpsf) picked by camera and lens "
+      "with psf_model auto (default: $DPSFM_PROFILE_LIBRARY or "
+      "~/.local/share/dp-sfm/profiles)");
   // The method's parameters (paper names in brackets).
   manager->AddDefaultOption("DPScaleEstimator.patch_size",
                             &core->patch_size,
@@ -140,6 +146,13 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption("DPScaleEstimator.num_threads",
                             &core->num_threads,
                             "threads (-1: all cores)");
+}
+
+// The report with where the DP profile came from.
+nlohmann::json ReportWithSource(nlohmann::json report,
+                                const std::string& psf_source) {
+  report["psf"]["source"] = psf_source;
+  return report;
 }
 
 }  // namespace
@@ -239,9 +252,37 @@ int RunDPScaleEstimator(int argc, char** argv) {
     }
 
     colmap::PrintHeading2("Per-patch DP blur estimation");
+    // The profile: the given one, or (auto) a calibrated one from the
+    // library when every view has the same known camera and lens.
+    std::string psf_model = options.psf_model, psf_path = options.psf_path;
+    std::string psf_source =
+        psf_model == "calibrated" ? "psf_path " + psf_path : psf_model;
+    if (psf_model == "auto" && !sources.empty()) {
+      const std::string& camera = sources[0].lens.camera;
+      const std::string& lens = sources[0].lens.lens_model;
+      bool same = true;
+      for (const ViewSource& source : sources) {
+        same = same && source.lens.camera == camera &&
+               source.lens.lens_model == lens;
+      }
+      const std::string library = options.psf_library.empty()
+                                      ? DefaultProfileLibrary()
+                                      : options.psf_library;
+      const std::string found =
+          same ? FindLibraryProfile(library, camera, lens) : "";
+      if (!found.empty()) {
+        psf_model = "calibrated";
+        psf_path = found;
+        psf_source = "library " + found + " (camera '" + camera + "', lens '" +
+                     lens + "')";
+      } else if (same && !camera.empty() && !lens.empty()) {
+        LOG(INFO) << "DP PSF: no profile for camera '" << camera << "', lens '"
+                  << lens << "' in the library " << library;
+      }
+    }
     const DPPsfField psf_field =
-        MakePsfField(options.psf_model, options.psf_path, &core_options);
-    LOG(INFO) << "DP PSF: " << options.psf_model << " (" << psf_field.Name()
+        MakePsfField(psf_model, psf_path, &core_options);
+    LOG(INFO) << "DP PSF: " << psf_source << " (" << psf_field.Name()
               << (core_options.psf_self_calibration
                       ? ", self-calibrated from the data before the scale"
                       : "")
@@ -290,6 +331,13 @@ int RunDPScaleEstimator(int argc, char** argv) {
       LOG(INFO) << "DP PSF: " << result.psf_status << " ("
                 << FormatSeconds(result.seconds_psf_fit) << ")";
     }
+    if (!result.focus_check.empty()) {
+      if (result.focus_agrees) {
+        LOG(INFO) << "Recorded focus: " << result.focus_check;
+      } else {
+        LOG(WARNING) << "Recorded focus: " << result.focus_check;
+      }
+    }
     for (const DPViewResult& view : result.views) {
       LOG(INFO) << "  " << view.name << ": "
                 << (view.used ? "used" : "not used") << " (" << view.reason
@@ -308,8 +356,10 @@ int RunDPScaleEstimator(int argc, char** argv) {
       }
     }
     if (!options.report_path.empty() && !rescale) {
-      WriteJsonFile(options.report_path,
-                    MakeReport(result, sources, summaries, timings));
+      WriteJsonFile(
+          options.report_path,
+          ReportWithSource(MakeReport(result, sources, summaries, timings),
+                           psf_source));
       LOG(INFO) << "Report: " << options.report_path;
     }
     if (!result.success) {
@@ -358,7 +408,8 @@ int RunDPScaleEstimator(int argc, char** argv) {
     }
     timings.total = total_timer.ElapsedSeconds();
     if (!options.report_path.empty()) {
-      nlohmann::json report = MakeReport(result, sources, summaries, timings);
+      nlohmann::json report = ReportWithSource(
+          MakeReport(result, sources, summaries, timings), psf_source);
       report["rescaled_files"] = rescaled.rescaled_files;
       report["cumulative_scale"] = rescaled.entry.cumulative_scale;
       report["record_path"] = rescaled.record_path;
