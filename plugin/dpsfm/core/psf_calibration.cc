@@ -125,34 +125,24 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   const bool known = num_known > 0;
   fit.self_calibrated = !known;
   const int n = static_cast<int>(patches.size());
-#ifdef _OPENMP
-  const int threads =
-      options.num_threads > 0 ? options.num_threads : omp_get_max_threads();
-#endif
 
+  std::vector<const ProfilePatch*> patch_ptrs;
+  for (const ProfilePatch& p : patches) patch_ptrs.push_back(&p);
   std::map<double, Evaluation> evaluations;  // by log centroid offset
   auto evaluate = [&](double log_kappa) -> const Evaluation& {
     auto it = evaluations.find(log_kappa);
     if (it != evaluations.end()) return it->second;
     const SplitProfilePsf psf(
         SplitProfileParams::ForCentroidOffset(std::exp(log_kappa)));
-    const PatchBlurEstimator estimator(psf, options.blur, size);
+    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
+        psf, options.blur, patch_ptrs, options.num_threads);
     Evaluation e;
     e.radius.assign(n, kNaN);
-    e.residual.assign(n, 1.0);
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
+    e.residual.assign(n, 1.0);  // no estimate: counts as unexplained
     for (int i = 0; i < n; ++i) {
-      try {
-        const PatchBlurEstimate b =
-            estimator.Estimate(patches[i].left, patches[i].right);
-        if (b.valid && !b.at_bound && std::isfinite(b.relative_residual)) {
-          e.radius[i] = b.radius_px;
-          e.residual[i] = b.relative_residual;
-        }
-      } catch (const std::exception&) {
-        // No estimate: counts as unexplained.
+      if (estimates[i].valid && std::isfinite(estimates[i].relative_residual)) {
+        e.radius[i] = estimates[i].radius_px;
+        e.residual[i] = estimates[i].relative_residual;
       }
     }
     return evaluations.emplace(log_kappa, std::move(e)).first->second;
@@ -310,22 +300,14 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   const Evaluation& at_fit = evaluate(best);
   if (!known) {
     // The paper's translating disk against the best split profile.
-    const TranslatingDiskPsf disk;
-    const PatchBlurEstimator estimator(disk, options.blur, size);
+    std::vector<const ProfilePatch*> usable_ptrs;
+    for (int i : usable) usable_ptrs.push_back(&patches[i]);
+    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
+        TranslatingDiskPsf(), options.blur, usable_ptrs, options.num_threads);
     std::vector<double> residual(n, 1.0);
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-    for (int k = 0; k < static_cast<int>(usable.size()); ++k) {
-      const int i = usable[k];
-      try {
-        const PatchBlurEstimate b =
-            estimator.Estimate(patches[i].left, patches[i].right);
-        if (b.valid && !b.at_bound && std::isfinite(b.relative_residual)) {
-          residual[i] = b.relative_residual;
-        }
-      } catch (const std::exception&) {
-        // No estimate: counts as unexplained.
+    for (size_t k = 0; k < usable.size(); ++k) {
+      if (estimates[k].valid && std::isfinite(estimates[k].relative_residual)) {
+        residual[usable[k]] = estimates[k].relative_residual;
       }
     }
     fit.translating_disk_criterion =
@@ -402,6 +384,32 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   }
   fit.reason = s.str();
   return finish();
+}
+
+std::vector<PatchBlurEstimate> EstimateProfilePatches(
+    const DPPsfModel& psf,
+    const BlurEstimationOptions& blur,
+    const std::vector<const ProfilePatch*>& patches,
+    int num_threads) {
+  std::vector<PatchBlurEstimate> estimates(patches.size());
+  if (patches.empty()) return estimates;
+  const PatchBlurEstimator estimator(psf, blur, patches[0]->left.size());
+  const int n = static_cast<int>(patches.size());
+#ifdef _OPENMP
+  const int threads = num_threads > 0 ? num_threads : omp_get_max_threads();
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+  for (int i = 0; i < n; ++i) {
+    try {
+      estimates[i] = estimator.Estimate(patches[i]->left, patches[i]->right);
+      if (estimates[i].at_bound || !std::isfinite(estimates[i].radius_px)) {
+        estimates[i].valid = false;
+      }
+    } catch (const std::exception&) {
+      estimates[i].valid = false;
+    }
+  }
+  return estimates;
 }
 
 std::vector<ProfilePatch> ExtractProfilePatches(const cv::Mat& gray_left,

@@ -133,6 +133,15 @@ struct SplitProfileFit {
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options);
 
+// The blur search of every patch (crops of one size) under one profile, in
+// parallel (num_threads -1 = all). An estimate that failed, lies at the
+// bound or is not finite comes back with valid = false.
+std::vector<PatchBlurEstimate> EstimateProfilePatches(
+    const DPPsfModel& psf,
+    const BlurEstimationOptions& blur,
+    const std::vector<const ProfilePatch*>& patches,
+    int num_threads);
+
 // Calibration from captures of known blur, for the whole frame and for
 // `num_bands` equal-width column bands: real DP profiles change across the
 // frame. The bands are used (banded = true) when every band's fit is

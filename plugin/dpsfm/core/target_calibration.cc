@@ -7,10 +7,6 @@
 #include <random>
 #include <sstream>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "dpsfm/core/check.h"
 #include "dpsfm/core/curve_math.h"
 
@@ -167,26 +163,14 @@ TargetCalibration CalibrateFromTargets(
                                   k / (options.num_nodes - 1)));
   }
   Readings readings(kappas.size(), std::vector<double>(n, kNaN));
-#ifdef _OPENMP
-  const int threads =
-      options.num_threads > 0 ? options.num_threads : omp_get_max_threads();
-#endif
   for (size_t k = 0; k < kappas.size(); ++k) {
-    const SplitProfilePsf psf(SplitProfileParams::ForCentroidOffset(kappas[k]));
-    const PatchBlurEstimator estimator(psf, options.blur, size);
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
+    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
+        SplitProfilePsf(SplitProfileParams::ForCentroidOffset(kappas[k])),
+        options.blur,
+        patches,
+        options.num_threads);
     for (int p = 0; p < n; ++p) {
-      try {
-        const PatchBlurEstimate e =
-            estimator.Estimate(patches[p]->left, patches[p]->right);
-        if (e.valid && !e.at_bound && std::isfinite(e.radius_px)) {
-          readings[k][p] = e.radius_px;
-        }
-      } catch (const std::exception&) {
-        // No reading.
-      }
+      if (estimates[p].valid) readings[k][p] = estimates[p].radius_px;
     }
   }
   // The linear split's node, for the "enough blur" test.
