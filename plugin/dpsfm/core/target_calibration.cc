@@ -232,25 +232,27 @@ TargetCalibration CalibrateFromTargets(
     if (!focus_unknown) {
       focus = 0;  // each capture's own
     } else if (num_blurred >= 2) {
+      // The focus at which the most captures find a centroid offset (a
+      // capture whose blur the family cannot reach at a candidate, e.g.
+      // beyond the search bound, leaves it), and among those the one where
+      // they agree best.
+      const int needed = std::max(2, (num_blurred + 1) / 2);
       double best = std::numeric_limits<double>::infinity();
+      int best_count = 0;
       for (const double candidate : focus_grid) {
         const std::vector<double> k = kappas_at(candidate);
         double sum = 0, sum2 = 0;
         int m = 0;
-        bool complete = true;
         for (int i = 0; i < num_captures; ++i) {
-          if (!blurred[i]) continue;
-          if (!std::isfinite(k[i])) {
-            complete = false;
-            break;
-          }
+          if (!blurred[i] || !std::isfinite(k[i])) continue;
           sum += std::log(k[i]);
           sum2 += std::log(k[i]) * std::log(k[i]);
           ++m;
         }
-        if (!complete || m < 2) continue;
+        if (m < needed) continue;
         const double variance = sum2 / m - (sum / m) * (sum / m);
-        if (variance < best) {
+        if (m > best_count || (m == best_count && variance < best)) {
+          best_count = m;
           best = variance;
           focus = candidate;
         }
@@ -453,6 +455,12 @@ TargetCalibration CalibrateFromTargets(
                           out.centroid_offset_ci_low,
                           out.centroid_offset_ci_high);
   }
+  // The overall strength is what the scale inherits: it must be bounded.
+  const double strength_side =
+      relative(out.strength, out.strength_ci_low, out.strength_ci_high);
+  worst_side = std::isfinite(strength_side)
+                   ? std::max(worst_side, strength_side)
+                   : std::numeric_limits<double>::infinity();
   if (options.num_bootstrap == 0) worst_side = kNaN;
   std::ostringstream s;
   s << std::setprecision(4) << "centroid offset " << out.centroid_offset
