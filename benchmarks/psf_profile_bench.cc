@@ -263,34 +263,9 @@ int main(int argc, char** argv) {
                      double strength,
                      double cut,
                      double rim) {
-    const int half = 10;
-    cv::Mat l = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
-    cv::Mat r = l.clone();
-    const double c = std::cos(rotation_deg * M_PI / 180);
-    const double sn = std::sin(rotation_deg * M_PI / 180);
-    for (int i = -half; i <= half; ++i) {
-      for (int j = -half; j <= half; ++j) {
-        double wl = 0, wr = 0;
-        for (int a = 0; a < 4; ++a) {
-          for (int b = 0; b < 4; ++b) {
-            const double x = j - 0.375 + 0.25 * b, y = i - 0.375 + 0.25 * a;
-            const double rho2 = (x * x + (y / aspect) * (y / aspect)) / 100;
-            if (rho2 > 1) continue;
-            if (cut > 0 && (x - cut * 10) * (x - cut * 10) + y * y > 100) {
-              continue;
-            }
-            const double t = (c * x + sn * y) / 10;
-            const double plus = 1 / (1 + std::exp(-strength * t));
-            const double w = 1 + rim * rho2 * rho2;
-            wl += w * (1 - plus);
-            wr += w * plus;
-          }
-        }
-        l.at<float>(i + half, j + half) = static_cast<float>(wl);
-        r.at<float>(i + half, j + half) = static_cast<float>(wr);
-      }
-    }
-    return std::make_shared<const MeasuredKernelPsf>(l, r, half, true);
+    const test::KernelPair k =
+        test::SoftSplitKernels(10, aspect, rotation_deg, strength, cut, rim);
+    return std::make_shared<const MeasuredKernelPsf>(k.left, k.right, 10, true);
   };
   const std::vector<Sensor> sensors = {
       {"translating disk (the model)",

@@ -216,27 +216,10 @@ TEST(FitSplitProfile, SaysWhenTheDataCannotDetermineIt) {
 // calls consistent must hold the true one, or be unbounded.
 TEST(FitSplitProfile, ConsistentRangeHoldsAProfileOutsideTheFamily) {
   const int half = 12;
-  cv::Mat left = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
-  cv::Mat right = left.clone();
-  for (int i = -half; i <= half; ++i) {
-    for (int j = -half; j <= half; ++j) {
-      // Supersampled inside x^2 + (y / 0.6)^2 <= 12^2.
-      double l = 0, r = 0;
-      for (int a = 0; a < 4; ++a) {
-        for (int b = 0; b < 4; ++b) {
-          const double x = j - 0.375 + 0.25 * b, y = i - 0.375 + 0.25 * a;
-          if (x * x + (y / 0.6) * (y / 0.6) > 144) continue;
-          const double t = (0.96 * x + 0.28 * y) / 12;
-          const double split = 1 / (1 + std::exp(-4 * t));
-          l += 1 - split;  // far side: the left view leans -x
-          r += split;
-        }
-      }
-      left.at<float>(i + half, j + half) = static_cast<float>(l);
-      right.at<float>(i + half, j + half) = static_cast<float>(r);
-    }
-  }
-  const MeasuredKernelPsf psf(left, right, half, true);
+  // Axis (0.96, 0.28): 16.26 degrees; sigmoid strength 4.
+  const test::KernelPair k =
+      test::SoftSplitKernels(half, 0.6, std::atan2(0.28, 0.96) * 180 / M_PI, 4);
+  const MeasuredKernelPsf psf(k.left, k.right, half, true);
   const double truth = CentroidOffsetPerRadius(psf, half);
   const SplitProfileFit fit =
       FitSplitProfile(RenderPatches(psf, 36, 0.005, false, 61), FastOptions());

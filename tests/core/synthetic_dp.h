@@ -225,5 +225,51 @@ inline cv::Mat ToGray(const cv::Mat& image) {
   return gray;
 }
 
+// A DP kernel pair outside every family the estimator fits, as a measured
+// calibration would give it (far side: the left view leans towards -x),
+// each pixel sampled 4 x 4: an ellipse x^2 + (y / aspect)^2 <= half^2,
+// optionally cut by a second disk offset by cut * half along x (a
+// cat-eye), light weighted by 1 + rim rho^4 (a bright rim), divided
+// between the views by a sigmoid of the given strength along an axis
+// rotated by rotation_deg.
+struct KernelPair {
+  cv::Mat left, right;
+};
+inline KernelPair SoftSplitKernels(int half,
+                                   double aspect,
+                                   double rotation_deg,
+                                   double strength,
+                                   double cut = 0,
+                                   double rim = 0) {
+  KernelPair k;
+  k.left = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
+  k.right = k.left.clone();
+  const double c = std::cos(rotation_deg * M_PI / 180);
+  const double sn = std::sin(rotation_deg * M_PI / 180);
+  const double h2 = static_cast<double>(half) * half;
+  for (int i = -half; i <= half; ++i) {
+    for (int j = -half; j <= half; ++j) {
+      double wl = 0, wr = 0;
+      for (int a = 0; a < 4; ++a) {
+        for (int b = 0; b < 4; ++b) {
+          const double x = j - 0.375 + 0.25 * b, y = i - 0.375 + 0.25 * a;
+          const double rho2 = (x * x + (y / aspect) * (y / aspect)) / h2;
+          if (rho2 > 1) continue;
+          const double dx = x - cut * half;
+          if (cut > 0 && dx * dx + y * y > h2) continue;
+          const double t = (c * x + sn * y) / half;
+          const double plus = 1 / (1 + std::exp(-strength * t));
+          const double w = 1 + rim * rho2 * rho2;
+          wl += w * (1 - plus);
+          wr += w * plus;
+        }
+      }
+      k.left.at<float>(i + half, j + half) = static_cast<float>(wl);
+      k.right.at<float>(i + half, j + half) = static_cast<float>(wr);
+    }
+  }
+  return k;
+}
+
 }  // namespace test
 }  // namespace dpsfm

@@ -15,24 +15,9 @@ namespace {
 // an axis rotated by 16 degrees, with a weaker split on the right half of
 // the frame. Kernels given as measured pairs at 10 px (far side).
 cv::Mat EllipseView(double strength, bool left_view) {
-  const int half = 10;
-  cv::Mat k = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
-  for (int i = -half; i <= half; ++i) {
-    for (int j = -half; j <= half; ++j) {
-      double w = 0;
-      for (int a = 0; a < 4; ++a) {
-        for (int b = 0; b < 4; ++b) {
-          const double x = j - 0.375 + 0.25 * b, y = i - 0.375 + 0.25 * a;
-          if (x * x + (y / 0.75) * (y / 0.75) > 100) continue;
-          const double t = (0.96 * x + 0.28 * y) / 10;
-          const double towards_plus = 1 / (1 + std::exp(-strength * t));
-          w += left_view ? 1 - towards_plus : towards_plus;
-        }
-      }
-      k.at<float>(i + half, j + half) = static_cast<float>(w);
-    }
-  }
-  return k;
+  const test::KernelPair k = test::SoftSplitKernels(
+      10, 0.75, std::atan2(0.28, 0.96) * 180 / M_PI, strength);
+  return left_view ? k.left : k.right;
 }
 
 struct Sensor {
