@@ -35,10 +35,7 @@ cp "$build_dir/colmap/src/colmap/exe/colmap" \
 colmap="$out/bin/colmap"
 log "source: $(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$DPSFM_ROOT" status --porcelain 2>/dev/null | grep -q . && echo ' (with uncommitted changes)'); captures: $realdp"
 
-# The frames are the 6000 x 4000 sensor resized by 7.8125: blur of a few
-# to ~10 px, so the geometry is the phone's (patch 51, |r| <= 10).
-geometry=(--DPScaleEstimator.max_radius_px 10 --DPScaleEstimator.patch_size 51 --DPScaleEstimator.stride 25)
-lens="49.57,4,46.875"
+# Every command with its default geometry, as a new user would run it.
 
 start=$SECONDS
 targets="$out/calibration/targets.csv"
@@ -52,8 +49,6 @@ for d in 0600 1500; do
 done
 "$colmap" dp_psf_calibrator --dp_image_path "$out/calibration/dp" \
   --targets_path "$targets" --output_path "$out/calibration/r6m2_rf50_f4.dpsf" \
-  --DPPsfCalibrator.max_radius_px 10 --DPPsfCalibrator.patch_size 51 \
-  --DPPsfCalibrator.stride 25 \
   --DPPsfCalibrator.camera "Canon / Canon EOS R6m2" \
   --DPPsfCalibrator.lens "RF50mm F1.8 STM" >"$out/calibration/log" 2>&1 \
   || { tail -n 3 "$out/calibration/log" >&2; die "calibration failed"; }
@@ -80,7 +75,7 @@ for scene in "${scenes[@]}"; do
     t0=$SECONDS
     "$colmap" dp_scale_estimator --workspace_path "$out/$name/dense" \
       --dp_image_path "$out/$name/dp" --lens_path "$out/$name/lens.csv" \
-      --dry_run 1 --report_path "$report" "${geometry[@]}" "${args[@]}" \
+      --dry_run 1 --report_path "$report" "${args[@]}" \
       >"$out/$name.$mode.log" 2>&1 || true
     python3 - "$report" "$out/$name.$mode.log" "$truth" "$name" "$mode" >>"$results" <<'PY'
 import json, sys

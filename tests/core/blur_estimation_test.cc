@@ -300,6 +300,15 @@ TEST(PatchGeometry, Defaults) {
   EXPECT_EQ(phone.patch_size, 51);
   EXPECT_EQ(phone.stride, 27);
   EXPECT_DOUBLE_EQ(phone.max_radius_px, 10);
+  // The rule on its own reproduces both anchors (a calibrated profile's
+  // bound for small frames uses it).
+  const PatchGeometry ten = PatchGeometryForRadius(10, 1.0);
+  EXPECT_EQ(ten.patch_size, 51);
+  EXPECT_EQ(ten.stride, 27);
+  const PatchGeometry twenty = PatchGeometryForRadius(20, 0.5);
+  EXPECT_EQ(twenty.patch_size, 111);
+  EXPECT_EQ(twenty.stride, 47);
+  EXPECT_DOUBLE_EQ(twenty.resize_factor, 0.5);
   // In between: monotone, odd, and the bound fits the patch.
   const PatchGeometry mid = DefaultPatchGeometry(cv::Size(3000, 2000));
   EXPECT_EQ(mid.resize_factor, 1.0);

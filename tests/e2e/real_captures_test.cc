@@ -1,5 +1,6 @@
 // The real DP captures of ../shared/realdp (Canon EOS R6 Mark II + RF 50 mm
-// at f/4, measured depth), read in place: calibration of the camera's DP
+// at f/4, measured depth), read in place, every command with its default
+// geometry as a new user would run it: calibration of the camera's DP
 // profile from the flat planes with the focus unknown, then the scale of a
 // real scene through the real `colmap` binary, checked against the measured
 // depth (the workspace's depth is it divided by a known factor).
@@ -25,12 +26,6 @@ namespace {
 namespace fs = boost::filesystem;
 
 constexpr double kTrueScale = 0.37;
-const std::vector<std::string> kGeometry = {"--DPScaleEstimator.max_radius_px",
-                                            "10",
-                                            "--DPScaleEstimator.patch_size",
-                                            "51",
-                                            "--DPScaleEstimator.stride",
-                                            "25"};
 
 // The captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the source
 // tree, else /work/shared/realdp.
@@ -91,12 +86,6 @@ class RealCaptures : public ::testing::Test {
                        dir + "/targets.csv",
                        "--output_path",
                        out,
-                       "--DPPsfCalibrator.max_radius_px",
-                       "10",
-                       "--DPPsfCalibrator.patch_size",
-                       "51",
-                       "--DPPsfCalibrator.stride",
-                       "25",
                        "--DPPsfCalibrator.camera",
                        "Canon / Canon EOS R6m2",
                        "--DPPsfCalibrator.lens",
@@ -131,7 +120,6 @@ class RealCaptures : public ::testing::Test {
                                      "1",
                                      "--report_path",
                                      report};
-    args.insert(args.end(), kGeometry.begin(), kGeometry.end());
     args.insert(args.end(), extra.begin(), extra.end());
     return RunEstimator(args);
   }

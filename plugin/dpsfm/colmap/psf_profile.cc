@@ -380,6 +380,13 @@ DPPsfField MakePsfField(const std::string& psf_model,
     core->psf_self_calibration = false;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     core->profile_relative_uncertainty = profile.uncertainty;
+    // The blur the profile was measured at bounds the automatic search
+    // from below (a profile calibrated at 10 px on a camera whose frames
+    // the frame-size rule gives 3.5 px).
+    if (profile.model == "measured_kernels") {
+      core->min_auto_radius_px =
+          std::max(core->min_auto_radius_px, profile.reference_radius_px);
+    }
     return profile.MakeField(psf_path);
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +

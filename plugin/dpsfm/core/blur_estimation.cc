@@ -858,7 +858,13 @@ PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size,
     max_radius = 20.0 * short_side / 2240;
   }
   // Half-pixel steps keep the bound on the blur estimator's kernel grid.
-  max_radius = std::max(3.0, std::round(2 * max_radius) / 2);
+  return PatchGeometryForRadius(std::max(3.0, std::round(2 * max_radius) / 2),
+                                resize_factor);
+}
+
+PatchGeometry PatchGeometryForRadius(double max_radius, double resize_factor) {
+  DPSFM_CHECK(max_radius >= 1 && std::isfinite(max_radius))
+      << "radius bound must be at least 1 px, got " << max_radius;
   PatchGeometry geometry;
   geometry.max_radius_px = max_radius;
   const double patch = std::max(6 * max_radius - 9, 2 * max_radius + 21);

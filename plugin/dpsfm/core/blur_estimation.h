@@ -233,5 +233,8 @@ PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size);
 // The same with an explicit resize factor in (0, 1].
 PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size,
                                    double resize_factor);
+// The patch and stride that go with a radius bound (the rule above).
+PatchGeometry PatchGeometryForRadius(double max_radius_px,
+                                     double resize_factor);
 
 }  // namespace dpsfm

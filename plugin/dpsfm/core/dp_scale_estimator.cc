@@ -99,6 +99,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GE(patch_size, 0);
   DPSFM_CHECK_GE(stride, 0);
   DPSFM_CHECK_GE(max_radius_px, 0);
+  DPSFM_CHECK_GE(min_auto_radius_px, 0);
   DPSFM_CHECK(resize_factor >= 0 && resize_factor <= 1)
       << "resize_factor must be in (0, 1] or 0 (auto), got " << resize_factor;
   DPSFM_CHECK(top_patch_fraction > 0 && top_patch_fraction <= 1);
@@ -198,6 +199,11 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       options_.resize_factor > 0
           ? DefaultPatchGeometry(view.left.size(), options_.resize_factor)
           : DefaultPatchGeometry(view.left.size());
+  if (options_.max_radius_px <= 0 &&
+      geometry.max_radius_px < options_.min_auto_radius_px) {
+    geometry = PatchGeometryForRadius(options_.min_auto_radius_px,
+                                      geometry.resize_factor);
+  }
   if (options_.patch_size > 0) geometry.patch_size = options_.patch_size;
   if (options_.stride > 0) geometry.stride = options_.stride;
   if (options_.max_radius_px > 0)

@@ -54,6 +54,12 @@ struct DPScaleOptions {
   int stride = 0;
   double max_radius_px = 0;
   double resize_factor = 0;
+  // With max_radius_px automatic: the bound is at least this (e.g. the
+  // blur a calibrated profile was measured at: the frame-size rule assumes
+  // full-resolution pixels and reads ~3.5 px for 512 px frames of a
+  // downsampled full-frame sensor whose scenes blur up to ~8 px), with the
+  // patch and stride that go with it. 0 = the frame-size rule alone.
+  double min_auto_radius_px = 0;
 
   // Per-patch blur search (max_radius_px is taken from the geometry).
   BlurEstimationOptions blur;

@@ -164,6 +164,13 @@ int RunDPPsfCalibrator(int argc, char** argv) {
       if (frame_size.area() == 0) {
         frame_size = frames.left.size();
         geometry = DefaultPatchGeometry(frame_size);
+        // Calibration targets are shot with several px of blur, and a weak
+        // split reads it smaller still: the automatic bound is at least
+        // the phone's 10 px (the frame-size rule gives 3.5 px for 512 px
+        // frames of a downsampled full-frame sensor).
+        if (options.max_radius_px <= 0 && geometry.max_radius_px < 10) {
+          geometry = PatchGeometryForRadius(10, geometry.resize_factor);
+        }
         if (options.patch_size > 0) geometry.patch_size = options.patch_size;
         if (options.stride > 0) geometry.stride = options.stride;
         if (options.max_radius_px > 0) {
