@@ -10,7 +10,11 @@
 #
 # Environment: DPSFM_ACCURACY_DIR (default <cache>/accuracy), DPSFM_JOBS
 # (generation jobs, at most 2), DPSFM_ACCURACY_VIEWS (poses per scene, 8),
-# DPSFM_ACCURACY_REUSE=1 (estimate again on the scenes of the last run).
+# DPSFM_ACCURACY_REUSE=1 (estimate again on the scenes of the last run),
+# DPSFM_ACCURACY_PSF_MODEL (--DPScaleEstimator.psf_model of every run; empty
+# = the command's default, auto, which refuses where the blur is too small
+# to show the DP profile; translating_disk = the generator's sensor, what
+# the accuracy tables measure).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
@@ -19,6 +23,10 @@ generator="$build_dir/examples/dpsfm_make_example"
 compare="$build_dir/examples/dpsfm_compare_to_truth"
 out="${DPSFM_ACCURACY_DIR:-$DPSFM_CACHE_DIR/accuracy}"
 views="${DPSFM_ACCURACY_VIEWS:-8}"
+psf_args=()
+if [ -n "${DPSFM_ACCURACY_PSF_MODEL:-}" ]; then
+  psf_args=(--DPScaleEstimator.psf_model "$DPSFM_ACCURACY_PSF_MODEL")
+fi
 jobs="$(jobs_count)"
 [ "$jobs" -gt 2 ] && jobs=2
 
@@ -120,7 +128,8 @@ estimate() {
   local status=0
   "$colmap" dp_scale_estimator --workspace_path "$workspace" \
     --dp_image_path "$scene/dp" --lens_path "$scene/lens.csv" \
-    --dry_run 1 --report_path "$report" 2>"$logfile" || status=$?
+    --dry_run 1 --report_path "$report" "${psf_args[@]}" 2>"$logfile" \
+    || status=$?
   local ratios="-	-	0	no"
   if [ -f "$report" ]; then
     ratios="$("$compare" --ground_truth "$scene/ground_truth.json" \
