@@ -36,18 +36,24 @@ double ParseNumber(const std::string& text, const std::string& where) {
 
 namespace {
 
-// The kernels of a measured profile: (cells, K, K) or (K, K) for one cell.
+// The kernels of a measured profile: (rows*cols, K, K), (rows, cols, K, K)
+// as grid calibrations are often saved, or (K, K) for one cell.
 std::vector<cv::Mat> ReadKernelStack(const std::string& path,
-                                     int cells,
+                                     const DPPsfLayout& layout,
                                      const std::string& where) {
+  const int cells = layout.NumCells();
   const NpyArray array = ReadNpy(path);
   const std::vector<int>& shape = array.shape;
   const bool single = shape.size() == 2 && cells == 1;
-  if (!(single || (shape.size() == 3 && shape[0] == cells))) {
+  const bool stacked = shape.size() == 3 && shape[0] == cells;
+  const bool grid =
+      shape.size() == 4 && shape[0] == layout.rows && shape[1] == layout.cols;
+  if (!(single || stacked || grid)) {
     std::ostringstream s;
     s << where << ": " << path << " has shape (";
     for (size_t i = 0; i < shape.size(); ++i) s << (i ? ", " : "") << shape[i];
-    s << "); the grid needs (" << cells << ", K, K)";
+    s << "); the grid needs (" << cells << ", K, K) or (" << layout.rows << ", "
+      << layout.cols << ", K, K)";
     throw InputError(s.str());
   }
   const int rows = shape[shape.size() - 2], cols = shape.back();
@@ -208,11 +214,10 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
       const fs::path p(name);
       return (p.is_absolute() ? p : dir / p).string();
     };
-    const int cells = profile.layout.NumCells();
     profile.left_kernels =
-        ReadKernelStack(resolve(values["left"]), cells, where("left"));
-    profile.right_kernels =
-        ReadKernelStack(resolve(values["right"]), cells, where("right"));
+        ReadKernelStack(resolve(values["left"]), profile.layout, where("left"));
+    profile.right_kernels = ReadKernelStack(
+        resolve(values["right"]), profile.layout, where("right"));
     if (profile.left_kernels[0].size() != profile.right_kernels[0].size()) {
       throw InputError(path + ": the left and right kernels differ in size");
     }
