@@ -19,7 +19,8 @@
 //   grid 6 8                      rows cols, row-major (default 1 1)
 //   region 0.1667 0.1667 0.8333 0.8333   x0 y0 x1 y1 of the grid, fractions
 //                                 of the frame (default 0 0 1 1)
-//   left kernels_left.npy         float32/float64 (rows*cols, K, K) or
+//   left kernels_left.npy         float32/float64 (rows*cols, K, K),
+//                                 (rows, cols, K, K) or
 //   right kernels_right.npy       (K, K) for one cell; relative to the file
 //
 // (docs/cli-contract.md, "DP profiles": published calibrations import as
