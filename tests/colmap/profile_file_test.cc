@@ -23,8 +23,8 @@ void WriteFortranFloat64(const std::string& path,
                          const std::vector<double>& values) {
   std::string dims;
   for (const int n : shape) dims += std::to_string(n) + ", ";
-  std::string header = "{'descr': '<f8', 'fortran_order': True, 'shape': (" +
-                       dims + "), }";
+  std::string header =
+      "{'descr': '<f8', 'fortran_order': True, 'shape': (" + dims + "), }";
   while ((10 + header.size() + 1) % 64 != 0) header += ' ';
   header += '\n';
   std::ofstream file(path, std::ios::binary);

@@ -1011,7 +1011,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       return result;
     } else if (profile_open) {
       s << "the sensor's DP profile is unknown: "
-        << (result.psf_status.empty() ? "" : result.psf_status + "; ")
+        // The whole frame's fit in short (the report has every band's).
+        << (result.psf_fit.reason.empty()
+                ? ""
+                : "self-calibration: " + result.psf_fit.reason + "; ")
         << "profiles consistent with the data give scales from "
         << linear.scale_ci_low << " to " << linear.scale_ci_high
         << " (estimate " << linear.scale
