@@ -407,9 +407,16 @@ void WriteCalibrationCaptures(const GeneratorOptions& options,
     }
     cv::imwrite((root / "dp/left" / name).string(), To16Bit(left));
     cv::imwrite((root / "dp/right" / name).string(), To16Bit(right));
-    csv << name << "," << std::setprecision(8) << distance_m << "," << focus_m
-        << "," << lens.focal_length_mm << "," << lens.f_number << ","
-        << lens.pixel_pitch_um << "\n";
+    // targets.csv holds distances from the focal-plane mark (the sensor):
+    // the thin lens focused at object distance u_g sits v = f u_g / (u_g -
+    // f) in front of the sensor, the same v for the target.
+    const double focus_sensor_m =
+        dpsfm::SensorDistanceOfFocusMm(1000 * focus_m, lens.focal_length_mm) /
+        1000;
+    const double lens_to_sensor_m = focus_sensor_m - focus_m;
+    csv << name << "," << std::setprecision(8) << distance_m + lens_to_sensor_m
+        << "," << focus_sensor_m << "," << lens.focal_length_mm << ","
+        << lens.f_number << "," << lens.pixel_pitch_um << "\n";
   }
 }
 
