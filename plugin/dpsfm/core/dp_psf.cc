@@ -286,6 +286,13 @@ SplitProfileParams SplitProfileParams::ForCentroidOffset(double kappa) {
   return params;
 }
 
+int MagnifiedHalfSize(int half, double factor) {
+  // The outermost input square ends at (half + 0.5) f; an output pixel j is
+  // needed while j - 0.5 lies inside (1e-9: exact multiples stay outside).
+  return std::max(
+      0, static_cast<int>(std::ceil((half + 0.5) * factor - 0.5 - 1e-9)));
+}
+
 cv::Mat MagnifyKernel(const cv::Mat& kernel, double factor) {
   DPSFM_CHECK(kernel.type() == CV_32FC1 && kernel.rows == kernel.cols &&
               kernel.rows % 2 == 1)
@@ -293,8 +300,7 @@ cv::Mat MagnifyKernel(const cv::Mat& kernel, double factor) {
   DPSFM_CHECK(factor >= 0 && std::isfinite(factor))
       << "magnification must be finite and non-negative, got " << factor;
   const int in_half = kernel.rows / 2;
-  const int out_half = std::max(
-      0, static_cast<int>(std::ceil((in_half + 0.5) * factor - 0.5 - 1e-9)));
+  const int out_half = MagnifiedHalfSize(in_half, factor);
   const int in_side = kernel.rows, out_side = 2 * out_half + 1;
   // overlap(k, j): share of input column k's square [(k - 0.5) f,
   // (k + 0.5) f] lying in output column [j - 0.5, j + 0.5] (rows alike).
@@ -402,10 +408,8 @@ std::string MeasuredKernelPsf::Name() const { return name_; }
 int MeasuredKernelPsf::KernelRadius(double signed_radius_px) const {
   DPSFM_CHECK(std::isfinite(signed_radius_px))
       << "blur radius must be finite, got " << signed_radius_px;
-  const double factor = std::abs(signed_radius_px) / reference_radius_px_;
-  return std::max(0,
-                  static_cast<int>(
-                      std::ceil((left_.rows / 2 + 0.5) * factor - 0.5 - 1e-9)));
+  return MagnifiedHalfSize(left_.rows / 2,
+                           std::abs(signed_radius_px) / reference_radius_px_);
 }
 
 DPKernels MeasuredKernelPsf::Kernels(double signed_radius_px) const {

@@ -198,8 +198,9 @@ class MeasuredKernelPsf : public DPPsfModel {
 // about its centre pixel, keeping its sum: each input pixel becomes a
 // uniform square of side `factor` whose weight is shared among the output
 // pixels it overlaps. factor -> 0 gives a delta. The output has half-size
-// ceil((half + 0.5) * factor - 0.5).
+// MagnifiedHalfSize(half, factor) = ceil((half + 0.5) * factor - 0.5).
 cv::Mat MagnifyKernel(const cv::Mat& kernel, double factor);
+int MagnifiedHalfSize(int half, double factor);
 
 // Where each of several DP PSF profiles applies: a rows x cols grid of
 // equal cells over `region` (x0, y0, x1, y1 as fractions of the frame's
