@@ -6,8 +6,10 @@
 # a known factor (dpsfm_make_realdp_workspace); the camera's DP profile is
 # calibrated from the flat-plane captures (0.6 m and 1.5 m at f/4 and f/20,
 # focus unknown) with `colmap dp_psf_calibrator`; `colmap
-# dp_scale_estimator` then runs per scene with the defaults (auto), with
-# the paper's translating disk, and with the calibrated profile. Prints
+# dp_scale_estimator` then runs per scene with the defaults (auto; lens.csv
+# records the nominal 1 m focus, which the scale is pinned to when the DP
+# profile leaves it open), with the defaults but that pin off, with the
+# paper's translating disk, and with the calibrated profile. Prints
 # r_s = s_est / s_true, its 95 % interval and the focus distance per scene
 # and mode, and per mode the answers, e_s over them and how many intervals
 # hold the truth. Prints tables; gates nothing.
@@ -55,7 +57,7 @@ done
 log "calibration ($((SECONDS - start)) s): $(grep -o 'centroid offset [0-9.]* R (95.*' "$out/calibration/log" | tail -n 1)"
 
 scenes=(casual/orbbec/001 casual/orbbec/002 casual/orbbec/003 box/001 box/002)
-modes=(defaults translating_disk calibrated)
+modes=(defaults no_focus_pin translating_disk calibrated)
 results="$out/results.tsv"
 : >"$results"
 for scene in "${scenes[@]}"; do
@@ -67,6 +69,7 @@ for scene in "${scenes[@]}"; do
   for mode in "${modes[@]}"; do
     args=()
     case "$mode" in
+      no_focus_pin) args=(--DPScaleEstimator.pin_to_recorded_focus 0) ;;
       translating_disk) args=(--DPScaleEstimator.psf_model translating_disk) ;;
       calibrated) args=(--DPScaleEstimator.psf_model calibrated
                         --DPScaleEstimator.psf_path "$out/calibration/r6m2_rf50_f4.dpsf") ;;
@@ -91,10 +94,11 @@ if r.get("success") and r.get("scale"):
     rec = "%.3f" % (fc["scale_from_recorded_focus"] / truth) if fc.get("scale_from_recorded_focus") else ""
     print("\t".join([name, mode, "%.3f" % (r["scale"] / truth), "%.3f" % lo, "%.3f" % hi,
                      "%.2f" % (v.get("focus_distance_m") or float("nan")), "", rec,
-                     "agrees" if fc.get("agrees") else ("DISAGREES" if fc else "")]))
+                     "agrees" if fc.get("agrees") else ("DISAGREES" if fc else ""),
+                     r.get("scale_source", "")]))
 else:
     err = open(log).read().split("ERROR: dp_scale_estimator: no scale: ")[-1]
-    print("\t".join([name, mode, "", "", "", "", err.strip().splitlines()[0][:110] if err.strip() else "failed", "", ""]))
+    print("\t".join([name, mode, "", "", "", "", err.strip().splitlines()[0][:110] if err.strip() else "failed", "", "", ""]))
 PY
   done
 done
@@ -102,16 +106,16 @@ done
 python3 - "$results" <<'PY'
 import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
-print("\n| scene | mode | r_s | 95 % interval | focus (m) | r_s from the recorded 1 m focus | or refused because |")
-print("|---|---|---|---|---|---|---|")
-for name, mode, rs, lo, hi, g, why, rec, agree in rows:
+print("\n| scene | mode | r_s | 95 % interval | from | focus (m) | r_s from the recorded 1 m focus | or refused because |")
+print("|---|---|---|---|---|---|---|---|")
+for name, mode, rs, lo, hi, g, why, rec, agree, source in rows:
     if rs:
-        print("| %s | %s | %s | [%s, %s] | %s | %s %s | |" % (name, mode, rs, lo, hi, g, rec, agree))
+        print("| %s | %s | %s | [%s, %s] | %s | %s | %s %s | |" % (name, mode, rs, lo, hi, source, g, rec, agree))
     else:
-        print("| %s | %s | | | | | %s |" % (name, mode, why))
+        print("| %s | %s | | | | | | %s |" % (name, mode, why))
 print("\n| mode | answered | e_s over answers | intervals holding the truth |")
 print("|---|---|---|---|")
-for mode in ["defaults", "translating_disk", "calibrated"]:
+for mode in ["defaults", "no_focus_pin", "translating_disk", "calibrated"]:
     ans = [r for r in rows if r[1] == mode and r[2]]
     n = len([r for r in rows if r[1] == mode])
     es = sum(abs(1 - float(r[2])) for r in ans) / len(ans) if ans else float("nan")

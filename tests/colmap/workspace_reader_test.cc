@@ -19,68 +19,210 @@ namespace {
 
 namespace fs = boost::filesystem;
 
-void PutU16(std::string* out, uint16_t v) {
-  out->push_back(static_cast<char>(v & 0xff));
-  out->push_back(static_cast<char>(v >> 8));
-}
-void PutU32(std::string* out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) out->push_back(static_cast<char>(v >> (8 * i)));
-}
+// A TIFF block written byte by byte, in either byte order: IFD0, an Exif
+// IFD (pointed to from IFD0) and optionally a maker-note IFD (the value of
+// the Exif IFD's MakerNote entry, offsets from the TIFF header as Canon
+// writes them). Values longer than 4 bytes go into a data area at the end.
+class TiffWriter {
+ public:
+  explicit TiffWriter(bool big_endian) : big_(big_endian) {}
 
-// A JPEG whose EXIF holds FNumber = f_num/f_den and FocalLength =
-// fl_num/fl_den as RATIONALs: an APP1 segment inserted after SOI.
-void WriteJpegWithExif(const std::string& path,
-                       uint32_t f_num,
-                       uint32_t f_den,
-                       uint32_t fl_num,
-                       uint32_t fl_den) {
-  std::string tiff = "II";
-  PutU16(&tiff, 42);
-  PutU32(&tiff, 8);
-  // IFD0: one entry, the Exif IFD pointer.
-  PutU16(&tiff, 1);
-  PutU16(&tiff, 0x8769);
-  PutU16(&tiff, 4);  // LONG
-  PutU32(&tiff, 1);
-  PutU32(&tiff, 26);
-  PutU32(&tiff, 0);
-  // Exif IFD at 26: FNumber and FocalLength, values at 56 and 64.
-  PutU16(&tiff, 2);
-  PutU16(&tiff, 0x829D);
-  PutU16(&tiff, 5);  // RATIONAL
-  PutU32(&tiff, 1);
-  PutU32(&tiff, 56);
-  PutU16(&tiff, 0x920A);
-  PutU16(&tiff, 5);
-  PutU32(&tiff, 1);
-  PutU32(&tiff, 64);
-  PutU32(&tiff, 0);
-  PutU32(&tiff, f_num);
-  PutU32(&tiff, f_den);
-  PutU32(&tiff, fl_num);
-  PutU32(&tiff, fl_den);
+  struct Entry {
+    uint16_t tag, type;
+    uint32_t count;
+    std::string value;  // already in the file's byte order
+  };
+  std::vector<Entry> ifd0, exif, maker_note;
+
+  std::string U16(uint16_t v) const {
+    std::string out(2, '\0');
+    out[big_ ? 0 : 1] = static_cast<char>(v >> 8);
+    out[big_ ? 1 : 0] = static_cast<char>(v & 0xff);
+    return out;
+  }
+  std::string U32(uint32_t v) const {
+    std::string out(4, '\0');
+    for (int i = 0; i < 4; ++i) {
+      out[big_ ? 3 - i : i] = static_cast<char>((v >> (8 * i)) & 0xff);
+    }
+    return out;
+  }
+  Entry Ascii(uint16_t tag, const std::string& text) const {
+    return {tag,
+            2,
+            static_cast<uint32_t>(text.size() + 1),
+            text + std::string(1, '\0')};
+  }
+  Entry Rational(uint16_t tag, uint32_t num, uint32_t den) const {
+    return {tag, 5, 1, U32(num) + U32(den)};
+  }
+  Entry Shorts(uint16_t tag, const std::vector<uint16_t>& values) const {
+    std::string bytes;
+    for (uint16_t v : values) bytes += U16(v);
+    return {tag, 3, static_cast<uint32_t>(values.size()), bytes};
+  }
+
+  std::string Bytes() const {
+    auto ifd_size = [](const std::vector<Entry>& e) {
+      return static_cast<uint32_t>(2 + 12 * e.size() + 4);
+    };
+    std::vector<Entry> ifd0_entries = ifd0;
+    const bool with_exif = !exif.empty() || !maker_note.empty();
+    if (with_exif) ifd0_entries.push_back({0x8769, 4, 1, ""});
+    std::vector<Entry> exif_entries = exif;
+    if (!maker_note.empty()) exif_entries.push_back({0x927C, 7, 0, ""});
+    const uint32_t ifd0_at = 8;
+    const uint32_t exif_at = ifd0_at + ifd_size(ifd0_entries);
+    const uint32_t note_at = exif_at + ifd_size(exif_entries);
+    const uint32_t note_size = ifd_size(maker_note);
+    uint32_t data_at = note_at + (maker_note.empty() ? 0 : note_size);
+    std::string data;
+    auto write_ifd = [&](std::vector<Entry> entries) {
+      std::string out = U16(static_cast<uint16_t>(entries.size()));
+      for (Entry& e : entries) {
+        if (e.tag == 0x8769) e.value = U32(exif_at);
+        out += U16(e.tag) + U16(e.type);
+        if (e.tag == 0x927C && e.type == 7) {
+          out += U32(note_size) + U32(note_at);
+          continue;
+        }
+        out += U32(e.count);
+        if (e.value.size() <= 4) {
+          out += e.value + std::string(4 - e.value.size(), '\0');
+        } else {
+          out += U32(data_at + static_cast<uint32_t>(data.size()));
+          data += e.value;
+        }
+      }
+      return out + U32(0);
+    };
+    std::string out = big_ ? "MM" : "II";
+    out += U16(42) + U32(ifd0_at);
+    out += write_ifd(ifd0_entries);
+    if (with_exif) out += write_ifd(exif_entries);
+    if (!maker_note.empty()) out += write_ifd(maker_note);
+    return out + data;
+  }
+
+ private:
+  bool big_;
+};
+
+// A small JPEG with `tiff` as its APP1 Exif segment (inserted after SOI).
+std::string JpegWithExif(const std::string& tiff) {
   const std::string payload = std::string("Exif\0\0", 6) + tiff;
   std::string app1 = "\xFF\xE1";
   const uint16_t length = static_cast<uint16_t>(payload.size() + 2);
   app1.push_back(static_cast<char>(length >> 8));
   app1.push_back(static_cast<char>(length & 0xff));
   app1 += payload;
-
   std::vector<uchar> jpeg;
   cv::imencode(
       ".jpg", cv::Mat(16, 16, CV_8UC3, cv::Scalar(90, 120, 200)), jpeg);
   const std::string bytes(jpeg.begin(), jpeg.end());
-  WriteTextFile(path, bytes.substr(0, 2) + app1 + bytes.substr(2));
+  return bytes.substr(0, 2) + app1 + bytes.substr(2);
+}
+
+// A small PNG with `tiff` as an eXIf chunk after IHDR (CRC not checked by
+// readers of metadata; written as zeros).
+std::string PngWithExif(const std::string& tiff) {
+  std::vector<uchar> png;
+  cv::imencode(".png", cv::Mat(8, 8, CV_8UC1, cv::Scalar(7)), png);
+  const std::string bytes(png.begin(), png.end());
+  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
+  std::string chunk;
+  const uint32_t n = static_cast<uint32_t>(tiff.size());
+  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
+  chunk += "eXIf" + tiff + std::string(4, '\0');
+  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
 }
 
 TEST(ExifLens, ReadsExactRationals) {
   TempDir dir;
   const std::string path = dir / "IMG_1.JPG";
-  // 23.47 mm would read as 23.5 through FreeImage's string form.
-  WriteJpegWithExif(path, 28, 10, 2347, 100);
+  TiffWriter tiff(false);
+  tiff.exif = {tiff.Rational(0x829D, 28, 10), tiff.Rational(0x920A, 2347, 100)};
+  WriteTextFile(path, JpegWithExif(tiff.Bytes()));
   const ExifLens exif = ReadExifLens(path);
+  // 23.47 mm would read as 23.5 through a library's string form.
   EXPECT_DOUBLE_EQ(exif.f_number, 2.8);
   EXPECT_DOUBLE_EQ(exif.focal_length_mm, 23.47);
+  EXPECT_EQ(exif.focus_distance_mm, 0);
+  EXPECT_TRUE(exif.camera.empty());
+}
+
+// Make / Model / LensModel and the focus distance, in both byte orders and
+// in the three containers: the Canon maker note's window (ShotInfo [19]
+// upper, [20] lower, cm) wins over SubjectDistance.
+TEST(ExifLens, CameraLensAndFocusDistance) {
+  for (const bool big : {false, true}) {
+    TiffWriter tiff(big);
+    tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"),
+                 tiff.Ascii(0x0110, "Canon EOS R6m2")};
+    tiff.exif = {tiff.Rational(0x829D, 4, 1),
+                 tiff.Rational(0x920A, 50, 1),
+                 tiff.Rational(0x9206, 1230, 1000),
+                 tiff.Ascii(0xA434, "RF50mm F1.8 STM")};
+    std::vector<uint16_t> shot(34, 0);
+    shot[0] = 68;
+    shot[19] = 98;  // upper, cm
+    shot[20] = 94;  // lower
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    TempDir dir;
+    for (const std::string& name : {"a.jpg", "a.tif", "a.png"}) {
+      const std::string bytes = name == "a.jpg"   ? JpegWithExif(tiff.Bytes())
+                                : name == "a.png" ? PngWithExif(tiff.Bytes())
+                                                  : tiff.Bytes();
+      WriteTextFile(dir / name, bytes);
+      const ExifLens exif = ReadExifLens(dir / name);
+      SCOPED_TRACE(name + (big ? " MM" : " II"));
+      EXPECT_EQ(exif.camera, "Canon / Canon EOS R6m2");
+      EXPECT_EQ(exif.lens, "RF50mm F1.8 STM");
+      EXPECT_DOUBLE_EQ(exif.f_number, 4);
+      EXPECT_DOUBLE_EQ(exif.focal_length_mm, 50);
+      EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 960);
+      EXPECT_EQ(exif.focus_source, "Canon maker note");
+    }
+    // An open window (infinity as upper) is no distance: SubjectDistance.
+    shot[19] = 65535;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    ExifLens exif = ParseExifLens(tiff.Bytes());
+    EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 1230);
+    EXPECT_EQ(exif.focus_source, "SubjectDistance");
+    // Another make's maker note is not read as Canon's.
+    tiff.ifd0[0] = tiff.Ascii(0x010F, "NIKON");
+    shot[19] = 98;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    exif = ParseExifLens(tiff.Bytes());
+    EXPECT_EQ(exif.focus_source, "SubjectDistance");
+    // SubjectDistance 0 (unknown) and 0xFFFFFFFF (infinity) are no distance.
+    tiff.exif[2] = tiff.Rational(0x9206, 0, 1);
+    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
+    tiff.exif[2] = tiff.Rational(0x9206, 0xFFFFFFFFu, 1);
+    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
+  }
+}
+
+// Cut or corrupted blocks read as "no EXIF" or partial, never crash: every
+// prefix of a valid file, and every single-byte corruption of its TIFF.
+TEST(ExifLens, TruncatedAndCorruptNeverCrash) {
+  TiffWriter tiff(false);
+  tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"), tiff.Ascii(0x0110, "R5")};
+  tiff.exif = {tiff.Rational(0x829D, 4, 1), tiff.Ascii(0xA434, "RF")};
+  tiff.maker_note = {tiff.Shorts(0x0004, std::vector<uint16_t>(34, 100))};
+  const std::string bytes = tiff.Bytes();
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    ParseExifLens(bytes.substr(0, n));
+    ParseExifLens(JpegWithExif(bytes.substr(0, n)));
+  }
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    for (const char c : {'\0', '\xff', '\x7f'}) {
+      std::string corrupt = bytes;
+      corrupt[i] = c;
+      ParseExifLens(corrupt);
+    }
+  }
+  EXPECT_DOUBLE_EQ(ParseExifLens(bytes).focus_distance_mm, 1000);
 }
 
 TEST(ExifLens, NoExifGivesZeros) {
@@ -150,6 +292,18 @@ TEST(ResolveLens, Precedence) {
   lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
   EXPECT_EQ(lens.lens.f_number, 1.8);
   EXPECT_EQ(lens.f_number_source, "EXIF");
+  // The recorded focus: lens.csv, else EXIF, else none (NaN).
+  EXPECT_TRUE(std::isnan(lens.lens.recorded_focus_mm));
+  EXPECT_TRUE(lens.focus_source.empty());
+  exif.focus_distance_mm = 960;
+  exif.focus_source = "Canon maker note";
+  lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
+  EXPECT_EQ(lens.lens.recorded_focus_mm, 960);
+  EXPECT_EQ(lens.focus_source, "EXIF Canon maker note");
+  csv["IMG"].focus_distance_m = 1.25;
+  lens = ResolveLens("IMG", csv, LensFlags(), &exif, 10000.0);
+  EXPECT_EQ(lens.lens.recorded_focus_mm, 1250);
+  EXPECT_EQ(lens.focus_source, "lens.csv");
   // Nothing: the error names the image and the three ways.
   try {
     ResolveLens("OTHER", csv, LensFlags(), nullptr, 10000.0);

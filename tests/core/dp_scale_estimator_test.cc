@@ -327,6 +327,39 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
     EXPECT_FALSE(checked.result.focus_agrees);
   }
 
+  // A profile too uncertain for an answer (+-40 %): refused without a
+  // recorded focus; with one, the scale is pinned to it (the focal planes
+  // are profile-free) with an interval that holds the truth, and the
+  // strength that reconciles the DP data is reported; the pin can be
+  // turned off.
+  DPScaleOptions open = plain;
+  open.profile_relative_uncertainty = 0.4;
+  const RunOutput refused = RunPipeline(views, open);
+  EXPECT_FALSE(refused.result.success);
+  EXPECT_NE(refused.result.failure_reason.find("own uncertainty"),
+            std::string::npos)
+      << refused.result.failure_reason;
+  const RunOutput pinned = RunPipeline(recorded, open);
+  ASSERT_TRUE(pinned.result.success) << pinned.result.failure_reason;
+  Print("sharper split, profile +-40 %, pinned to the focus",
+        pinned.result,
+        scale);
+  std::printf("  %s\n", pinned.result.psf_status.c_str());
+  EXPECT_TRUE(pinned.result.scale_from_recorded_focus);
+  EXPECT_NEAR(pinned.result.scale / scale, 1.0, 0.03);
+  EXPECT_LE(pinned.result.scale_ci_low, scale);
+  EXPECT_GE(pinned.result.scale_ci_high, scale);
+  // The interval carries the recorded focus's 10 %, not more than twice it.
+  EXPECT_GT(pinned.result.scale_ci_high / pinned.result.scale, 1.09);
+  EXPECT_LT(pinned.result.scale_ci_high / pinned.result.scale, 1.2);
+  EXPECT_FALSE(pinned.result.intensity_used);
+  EXPECT_NEAR(pinned.result.pinned_profile_strength,
+              pinned.result.scale / pinned.result.scale_initial,
+              1e-12);
+  DPScaleOptions no_pin = open;
+  no_pin.pin_to_recorded_focus = false;
+  EXPECT_FALSE(RunPipeline(recorded, no_pin).result.success);
+
   const std::vector<DPView> model_views = RenderAll(specs, scale);
   const RunOutput model = RunPipeline(model_views, self);
   ASSERT_TRUE(model.result.success) << model.result.failure_reason;

@@ -6,8 +6,6 @@
 #include <sstream>
 #include <vector>
 
-#include <FreeImage.h>
-
 #include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
 
@@ -32,34 +30,6 @@ double ParseCell(const std::string& cell,
                      " must be a positive number, got '" + cell + "'");
   }
   return value;
-}
-
-// EXIF RATIONAL tag value (num/den), 0 if absent or malformed.
-double RationalTag(FIBITMAP* bitmap, const char* key) {
-  FITAG* tag = nullptr;
-  if (!FreeImage_GetMetadata(FIMD_EXIF_EXIF, bitmap, key, &tag) || !tag) {
-    return 0;
-  }
-  if (FreeImage_GetTagType(tag) != FIDT_RATIONAL &&
-      FreeImage_GetTagType(tag) != FIDT_SRATIONAL) {
-    return 0;
-  }
-  if (FreeImage_GetTagCount(tag) < 1) return 0;
-  const auto* value = static_cast<const uint32_t*>(FreeImage_GetTagValue(tag));
-  if (value == nullptr || value[1] == 0) return 0;
-  return static_cast<double>(value[0]) / static_cast<double>(value[1]);
-}
-
-std::string AsciiTag(FIBITMAP* bitmap,
-                     FREE_IMAGE_MDMODEL model,
-                     const char* key) {
-  FITAG* tag = nullptr;
-  if (!FreeImage_GetMetadata(model, bitmap, key, &tag) || !tag ||
-      FreeImage_GetTagType(tag) != FIDT_ASCII) {
-    return "";
-  }
-  const char* value = static_cast<const char*>(FreeImage_GetTagValue(tag));
-  return value == nullptr ? "" : Trim(std::string(value));
 }
 
 }  // namespace
@@ -133,27 +103,6 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
   return rows;
 }
 
-ExifLens ReadExifLens(const std::string& path) {
-  ExifLens exif;
-  const FREE_IMAGE_FORMAT format = FreeImage_GetFileType(path.c_str(), 0);
-  if (format == FIF_UNKNOWN) {
-    return exif;
-  }
-  // Metadata only: decoding the pixels of a large JPEG would cost far more.
-  FIBITMAP* bitmap = FreeImage_Load(format, path.c_str(), FIF_LOAD_NOPIXELS);
-  if (bitmap == nullptr) {
-    return exif;
-  }
-  exif.focal_length_mm = RationalTag(bitmap, "FocalLength");
-  exif.f_number = RationalTag(bitmap, "FNumber");
-  const std::string make = AsciiTag(bitmap, FIMD_EXIF_MAIN, "Make");
-  const std::string model = AsciiTag(bitmap, FIMD_EXIF_MAIN, "Model");
-  if (!make.empty() || !model.empty()) exif.camera = make + " / " + model;
-  exif.lens = AsciiTag(bitmap, FIMD_EXIF_EXIF, "LensModel");
-  FreeImage_Unload(bitmap);
-  return exif;
-}
-
 ResolvedLens ResolveLens(const std::string& image_name,
                          const std::map<std::string, LensCsvRow>& csv,
                          const LensFlags& flags,
@@ -197,6 +146,10 @@ ResolvedLens ResolveLens(const std::string& image_name,
 
   if (csv_row && csv_row->focus_distance_m > 0) {
     resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
+    resolved.focus_source = "lens.csv";
+  } else if (exif && exif->focus_distance_mm > 0) {
+    resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
+    resolved.focus_source = "EXIF " + exif->focus_source;
   }
   resolved.camera = csv_row && !csv_row->camera.empty()
                         ? csv_row->camera

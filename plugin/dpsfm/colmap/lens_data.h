@@ -1,11 +1,14 @@
 // Per-image lens data (focal length, f-number, pixel pitch) with the
 // contract's precedence: lens.csv row > explicit flag > EXIF of the original
-// image > derived (pitch only, f_mm / f_px of the calibrated camera).
+// image > derived (pitch only, f_mm / f_px of the calibrated camera). The
+// recorded focus distance: lens.csv > EXIF (Canon maker note, then
+// SubjectDistance).
 #pragma once
 
 #include <map>
 #include <string>
 
+#include "dpsfm/colmap/exif.h"
 #include "dpsfm/core/lens_model.h"
 
 namespace dpsfm {
@@ -27,16 +30,6 @@ struct LensCsvRow {
 // line.
 std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
 
-// EXIF FocalLength and FNumber of an image file, read as exact rationals.
-// Zero where a tag is absent or the file has no EXIF.
-struct ExifLens {
-  double focal_length_mm = 0;
-  double f_number = 0;
-  std::string camera;  // "Make / Model", empty if absent
-  std::string lens;    // LensModel
-};
-ExifLens ReadExifLens(const std::string& path);
-
 // Lens data of one image and where each number came from ("lens.csv",
 // "flag", "EXIF", "derived"), for the log and the report.
 struct ResolvedLens {
@@ -44,6 +37,9 @@ struct ResolvedLens {
   std::string focal_length_source;
   std::string f_number_source;
   std::string pixel_pitch_source;
+  // Where DPLensData::recorded_focus_mm came from ("lens.csv", "EXIF
+  // Canon maker note", "EXIF SubjectDistance"), empty if none.
+  std::string focus_source;
   // The DP profile library's keys (lens.csv > EXIF; empty if unknown).
   std::string camera, lens_model;
 };

@@ -121,6 +121,13 @@ nlohmann::json MakeReport(const DPScaleResult& result,
         {"agrees", result.focus_agrees},
         {"status", result.focus_check}};
   }
+  // Where the scale itself came from: the DP data, or (the profile having
+  // left it open) the recorded focus distances.
+  report["scale_source"] =
+      result.scale_from_recorded_focus ? "recorded_focus" : "dual_pixel";
+  if (result.scale_from_recorded_focus) {
+    report["pinned_profile_strength"] = Number(result.pinned_profile_strength);
+  }
   report["lens_geometry_uncertainty"] =
       Number(result.lens_geometry_uncertainty);
   psf["scale_factors_allowed_by_profile"] = Interval(
@@ -165,6 +172,9 @@ nlohmann::json MakeReport(const DPScaleResult& result,
           {"focal_length_mm", s.lens.focal_length_source},
           {"f_number", s.lens.f_number_source},
           {"pixel_pitch_um", s.lens.pixel_pitch_source}};
+      if (!s.lens.focus_source.empty()) {
+        entry["lens"]["sources"]["focus_distance_m"] = s.lens.focus_source;
+      }
       entry["dp_left"] = s.dp.left;
       entry[s.dp.right.empty() ? "dp_sum" : "dp_right"] =
           s.dp.right.empty() ? s.dp.sum : s.dp.right;

@@ -116,6 +116,7 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_GE(relative_residual_factor, 0);
   DPSFM_CHECK_GT(max_intensity_ci_relative_width, 0);
   DPSFM_CHECK_GT(max_scale_ci_relative_width, 0);
+  DPSFM_CHECK_GE(recorded_focus_tolerance, 0);
   DPSFM_CHECK_GE(min_total_patches, 0);
   DPSFM_CHECK_GE(scale_systematic_uncertainty, 0);
   DPSFM_CHECK_GE(lens_geometry_uncertainty, 0);
@@ -1007,8 +1008,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         << " %. Calibrate from more captures of the target (more distances, "
            "finer texture), or allow a wider interval with "
            "--DPScaleEstimator.max_scale_ci_relative_width";
-      result.failure_reason = s.str();
-      return result;
+      if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
+        result.failure_reason = s.str();
+        return result;
+      }
     } else if (profile_open) {
       s << "the sensor's DP profile is unknown: "
         // The whole frame's fit in short (the report has every band's).
@@ -1022,8 +1025,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
            "once with colmap dp_psf_calibrator (a textured plane at two or "
            "more distances) and run with --DPScaleEstimator.psf_model "
            "calibrated --DPScaleEstimator.psf_path FILE";
-      result.failure_reason = s.str();
-      return result;
+      if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
+        result.failure_reason = s.str();
+        return result;
+      }
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
       s << "the data do not determine the scale: its bootstrap interval ["
         << linear.scale_ci_low << ", " << linear.scale_ci_high << "] spans "
@@ -1032,7 +1037,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         << " (limit " << std::setprecision(0)
         << 100 * options_.max_scale_ci_relative_width << " %)";
     }
-    if (!s.str().empty()) {
+    if (!s.str().empty() && !result.scale_from_recorded_focus) {
       s << "; patches over all views: " << patches_tried << " tried, "
         << patches_valid << " usable";
       if (!patch_rejections.empty()) {
@@ -1049,16 +1054,23 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   result.scale_initial_ci_low = linear.scale_ci_low;
   result.scale_initial_ci_high = linear.scale_ci_high;
   result.linear_median_abs_residual_px = linear.median_abs_residual_px;
-  result.scale = linear.scale;
-  result.scale_ci_low = linear.scale_ci_low;
-  result.scale_ci_high = linear.scale_ci_high;
+  if (!result.scale_from_recorded_focus) {
+    result.scale = linear.scale;
+    result.scale_ci_low = linear.scale_ci_low;
+    result.scale_ci_high = linear.scale_ci_high;
+  }
   result.num_views_used = static_cast<int>(linear.selected_views.size());
   result.num_patches = linear.num_rows;
 
   // --- Intensity stage on the selected views and their stored patches. ---
   start = std::chrono::steady_clock::now();
   result.intensity_loss = IntensityLossName(options_.intensity.loss);
-  if (!options_.intensity_refinement) {
+  if (result.scale_from_recorded_focus) {
+    // It compares the frames against blur rendered with the profile, the
+    // very thing that is unknown here.
+    result.intensity_status =
+        "skipped: the scale comes from the recorded focus distances";
+  } else if (!options_.intensity_refinement) {
     result.intensity_status = "disabled; linear estimate kept";
   } else {
     std::vector<IntensityView> iviews;
@@ -1194,6 +1206,97 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   return result;
 }
 
+bool DPScaleEstimator::PinToRecordedFocus(const LinearEstimate& linear,
+                                          double lens_geometry,
+                                          DPScaleResult* result,
+                                          std::ostringstream* refusal) const {
+  if (!options_.pin_to_recorded_focus) return false;
+  // The views that carry the cue: used, with a recorded focus and a fitted
+  // focal plane g' (where the disparity changes sign, whatever the profile).
+  std::vector<int> views;
+  std::vector<double> object_m;
+  for (int i : linear.selected_views) {
+    const DPLensData& lens = views_[i]->lens;
+    if (!std::isfinite(lens.recorded_focus_mm) ||
+        !(linear.views[i].focus_model > 0)) {
+      continue;
+    }
+    try {
+      object_m.push_back(
+          FocusObjectDistanceMm(lens.recorded_focus_mm, lens.focal_length_mm) /
+          1000);
+      views.push_back(i);
+    } catch (const std::invalid_argument&) {
+      // Nearer than the lens can focus: no evidence.
+    }
+  }
+  if (views.empty()) return false;
+  auto scale_of = [&](auto focus_model_of) {
+    std::vector<double> scales;
+    for (size_t k = 0; k < views.size(); ++k) {
+      const double g = focus_model_of(views[k]);
+      if (g > 0) scales.push_back(object_m[k] / g);
+    }
+    return scales.empty() ? kNaN : Percentile(scales, 0.5);
+  };
+  const double scale =
+      scale_of([&](int i) { return linear.views[i].focus_model; });
+  std::vector<double> resampled;
+  const size_t num_resamples =
+      linear.views[views[0]].focus_model_samples.size();
+  for (size_t b = 0; b < num_resamples; ++b) {
+    const double sb = scale_of([&](int i) {
+      const auto& samples = linear.views[i].focus_model_samples;
+      return b < samples.size() ? samples[b] : kNaN;
+    });
+    if (std::isfinite(sb)) resampled.push_back(sb);
+  }
+  std::ostringstream s;
+  s << std::setprecision(4);
+  if (resampled.size() < 10) {
+    *refusal << "; the recorded focus distances cannot stand in for it: "
+                "their scale's interval could not be measured";
+    return false;
+  }
+  const double alpha = 0.5 * (1.0 - options_.linear.confidence_level);
+  double lo = std::min(scale, Percentile(resampled, alpha));
+  double hi = std::max(scale, Percentile(resampled, 1 - alpha));
+  // The recorded distance's own accuracy, the estimator's systematic term
+  // and the lens geometry's, in quadrature with the bootstrap's halves.
+  const double sys =
+      scale * std::sqrt(std::pow(options_.recorded_focus_tolerance, 2) +
+                        std::pow(options_.scale_systematic_uncertainty, 2) +
+                        lens_geometry * lens_geometry);
+  lo = scale - std::hypot(scale - lo, sys);
+  hi = scale + std::hypot(hi - scale, sys);
+  const double width = (hi - lo) / scale;
+  if (!(width <= options_.max_scale_ci_relative_width) || !(lo > 0)) {
+    *refusal << std::setprecision(4) << "; the recorded focus distances of "
+             << views.size() << " view(s) give " << scale << " in [" << lo
+             << ", " << hi << "], also wider than the limit";
+    return false;
+  }
+  // The DP scale goes with the profile's strength (its centroid offset):
+  // the DP data give this scale under a profile stronger by their ratio,
+  // the strength the focus pins.
+  result->scale_from_recorded_focus = true;
+  result->pinned_profile_strength = scale / linear.scale;
+  result->scale = scale;
+  result->scale_ci_low = lo;
+  result->scale_ci_high = hi;
+  s << "the DP profile leaves the scale open (" << linear.scale_ci_low << " to "
+    << linear.scale_ci_high << "), so it is taken from the recorded focus "
+    << "distances of " << views.size()
+    << " used view(s) and the fitted focal planes: " << scale << " in [" << lo
+    << ", " << hi << "] (recorded focus taken as accurate to "
+    << std::setprecision(0) << std::fixed
+    << 100 * options_.recorded_focus_tolerance << " %); it pins the profile's "
+    << "strength at " << std::setprecision(2) << result->pinned_profile_strength
+    << " x the one used";
+  result->psf_status += (result->psf_status.empty() ? "" : "; ") + s.str();
+  return true;
+}
+
 void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
   // The fitted focal plane g' is where the disparity changes sign, whatever
   // the DP profile; a recorded focus distance (converted to the thin lens's
@@ -1221,6 +1324,13 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
   if (scales.empty()) return;
   result->focus_scale = Percentile(scales, 0.5);
   result->focus_scale_ratio = result->scale / result->focus_scale;
+  if (result->scale_from_recorded_focus) {
+    result->focus_agrees = true;
+    result->focus_check =
+        "the scale is the recorded focus distances' (the DP profile left "
+        "it open); nothing independent to check it against";
+    return;
+  }
   const double tol = options_.recorded_focus_tolerance;
   result->focus_agrees =
       result->focus_scale >= result->scale_ci_low * (1 - tol) &&

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -166,6 +167,12 @@ struct DPScaleOptions {
   // accurate to this fraction: cameras record focus coarsely (steps of the
   // focus encoder), users measure it to a few cm.
   double recorded_focus_tolerance = 0.1;
+  // When the DP profile leaves the scale open (unknown, or a calibration
+  // too uncertain for max_scale_ci_relative_width), take the scale from the
+  // used views' recorded focus distances and fitted focal planes instead of
+  // refusing (their bootstrap interval, widened by
+  // recorded_focus_tolerance). Off: such runs refuse.
+  bool pin_to_recorded_focus = true;
 
   // DP PSF self-calibration (the `auto` profile, issue 7): before the
   // linear stage, fit the split profile to the stored patches of all views,
@@ -307,6 +314,12 @@ struct DPScaleResult {
   // and a sentence for people.
   double focus_scale = 0;
   double focus_scale_ratio = 0;
+  // The scale (and interval) came from the recorded focus distances, the
+  // profile having left it open (DPScaleOptions::pin_to_recorded_focus);
+  // the profile strength that reconciles the DP data with it, relative to
+  // the one used.
+  bool scale_from_recorded_focus = false;
+  double pinned_profile_strength = 0;
   bool focus_agrees = true;
   std::string focus_check;
   // The relative systematic term of the lens geometry (see
@@ -349,6 +362,12 @@ class DPScaleEstimator {
                         DPScaleResult* result) const;
   // Fills the focus_* fields of the result (recorded focus as evidence).
   void CheckAgainstRecordedFocus(DPScaleResult* result) const;
+  // See DPScaleOptions::pin_to_recorded_focus: fills the result's scale
+  // and interval and returns true, or appends why not to `refusal`.
+  bool PinToRecordedFocus(const LinearEstimate& linear,
+                          double lens_geometry,
+                          DPScaleResult* result,
+                          std::ostringstream* refusal) const;
   // See DPScaleResult::profile_scale_factor_low.
   void ProfileScaleFactors(const DPPsfField& field,
                            const DPScaleResult& result,

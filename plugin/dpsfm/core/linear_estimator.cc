@@ -634,8 +634,14 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
         for (size_t k = 0; k < rows.size(); ++k) weights[rows[pick(rng)]] += 1;
       }
       const IrlsResult fit = SolveL1Irls(system, irls, &weights);
-      if (fit.success && fit.x[n] > 0) {
+      const bool solved = fit.success && fit.x[n] > 0;
+      if (solved) {
         samples.push_back(ScaleFromSbar(fit.x[n]));
+      }
+      for (int j = 0; j < n; ++j) {
+        estimate.views[selected[j]].focus_model_samples.push_back(
+            solved && fit.x[j] > 0 ? FocusModelFromUnknowns(fit.x[j], fit.x[n])
+                                   : kNaN);
       }
     }
     if (samples.size() >= 10) {

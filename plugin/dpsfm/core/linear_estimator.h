@@ -164,6 +164,9 @@ struct LinearViewResult {
   // g' under the joint scale: from the joint solve for used views, from an L1
   // fit with s fixed for the others (NaN when the view has no samples).
   double focus_model = 0;
+  // g' in each bootstrap resample, aligned across the used views (NaN where
+  // a resample did not solve); empty for views not used.
+  std::vector<double> focus_model_samples;
   double median_abs_residual_px = 0;  // under the joint solution
 };
 

@@ -143,6 +143,14 @@ void AddCommandOptions(colmap::OptionManager* manager,
       &core->max_scale_ci_relative_width,
       "refuse when the scale's 95 % interval (data and DP profile) is "
       "wider than this fraction of it");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.pin_to_recorded_focus",
+      &core->pin_to_recorded_focus,
+      "when the DP profile leaves the scale open, take it from the recorded "
+      "focus distances (lens.csv focus_distance_m, EXIF) instead of refusing");
+  manager->AddDefaultOption("DPScaleEstimator.recorded_focus_tolerance",
+                            &core->recorded_focus_tolerance,
+                            "relative accuracy of recorded focus distances");
   manager->AddDefaultOption("DPScaleEstimator.num_threads",
                             &core->num_threads,
                             "threads (-1: all cores)");
@@ -242,13 +250,18 @@ int RunDPScaleEstimator(int argc, char** argv) {
     for (size_t i = 0; i < reader.NumViews(); ++i) {
       const ViewSource& source = reader.Source(i);
       sources.push_back(source);
-      LOG(INFO) << "  " << source.image_name << ": f "
-                << source.lens.lens.focal_length_mm << " mm ("
-                << source.lens.focal_length_source << "), f/"
-                << source.lens.lens.f_number << " ("
-                << source.lens.f_number_source << "), pitch "
-                << source.lens.lens.pixel_pitch_um << " um ("
-                << source.lens.pixel_pitch_source << ")";
+      std::ostringstream line;
+      line << "  " << source.image_name << ": f "
+           << source.lens.lens.focal_length_mm << " mm ("
+           << source.lens.focal_length_source << "), f/"
+           << source.lens.lens.f_number << " (" << source.lens.f_number_source
+           << "), pitch " << source.lens.lens.pixel_pitch_um << " um ("
+           << source.lens.pixel_pitch_source << ")";
+      if (!source.lens.focus_source.empty()) {
+        line << ", focus " << source.lens.lens.recorded_focus_mm / 1000
+             << " m (" << source.lens.focus_source << ")";
+      }
+      LOG(INFO) << line.str();
     }
 
     colmap::PrintHeading2("Per-patch DP blur estimation");
