@@ -228,6 +228,41 @@ TEST_F(RealCaptures, DefaultsNeverMissTheTruth) {
   }
 }
 
+// Nothing calibrated, but the focus recorded (the nominal "1 m", from the
+// focal-plane mark, as lens.csv's focus_distance_m): where the DP profile
+// leaves the scale open, the scale comes from the focus distance and the
+// fitted focal plane, and its interval holds the truth; with the pin off
+// the same run refuses. (box/002 with the defaults: the profile fit says
+// "unknown".)
+TEST_F(RealCaptures, RecordedFocusPinsTheScaleWhenTheProfileIsUnknown) {
+  const std::string ws = Workspace("box/002");
+  {
+    std::ofstream lens(ws + "/lens.csv");
+    lens << "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+         << "view.png,49.57,4,46.875,1.0\n";
+  }
+  const std::string report = dir_ / "pinned.json";
+  const CommandResult run = Estimate(ws, report, {});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json r = ReadJson(report);
+  std::printf("box/002 defaults, recorded focus: r_s %.3f in [%.3f, %.3f]\n",
+              r.at("scale").get<double>() / kTrueScale,
+              r.at("scale_ci_low").get<double>() / kTrueScale,
+              r.at("scale_ci_high").get<double>() / kTrueScale);
+  EXPECT_EQ(r.at("scale_source").get<std::string>(), "recorded_focus");
+  EXPECT_LE(r.at("scale_ci_low").get<double>(), kTrueScale);
+  EXPECT_GE(r.at("scale_ci_high").get<double>(), kTrueScale);
+  EXPECT_GT(r.at("pinned_profile_strength").get<double>(), 0);
+  EXPECT_NE(run.err.find("taken from the recorded focus"), std::string::npos)
+      << run.err;
+
+  const CommandResult off = Estimate(
+      ws, dir_ / "off.json", {"--DPScaleEstimator.pin_to_recorded_focus", "0"});
+  EXPECT_NE(off.exit_code, 0);
+  EXPECT_NE(off.err.find("DP profile is unknown"), std::string::npos)
+      << off.err;
+}
+
 // One f/4 plane with the focus unknown does not determine the profile: the
 // calibrator says so instead of writing one.
 TEST_F(RealCaptures, OnePlaneWithUnknownFocusIsRefused) {

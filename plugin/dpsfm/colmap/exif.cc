@@ -38,11 +38,25 @@ enum Type : uint16_t {
 
 int TypeSize(uint16_t type) {
   switch (type) {
-    case 1: case 2: case 6: case 7: return 1;   // BYTE ASCII SBYTE UNDEF
-    case 3: case 8: return 2;                   // SHORT SSHORT
-    case 4: case 9: case 11: case 13: return 4;  // LONG SLONG FLOAT IFD
-    case 5: case 10: case 12: return 8;         // RATIONAL SRATIONAL DOUBLE
-    default: return 0;
+    case 1:
+    case 2:
+    case 6:
+    case 7:
+      return 1;  // BYTE ASCII SBYTE UNDEF
+    case 3:
+    case 8:
+      return 2;  // SHORT SSHORT
+    case 4:
+    case 9:
+    case 11:
+    case 13:
+      return 4;  // LONG SLONG FLOAT IFD
+    case 5:
+    case 10:
+    case 12:
+      return 8;  // RATIONAL SRATIONAL DOUBLE
+    default:
+      return 0;
   }
 }
 
@@ -99,8 +113,10 @@ class Tiff {
   }
 
   // A RATIONAL's num/den as given; den 0 gives 0.
-  bool Rational(uint32_t ifd, uint16_t tag, uint32_t* num, uint32_t* den)
-      const {
+  bool Rational(uint32_t ifd,
+                uint16_t tag,
+                uint32_t* num,
+                uint32_t* den) const {
     const Entry e = Find(ifd, tag);
     if (!e.ok || (e.type != kRational && e.type != kSRational)) return false;
     *num = U32(e.value_offset);
