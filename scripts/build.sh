@@ -6,6 +6,7 @@
 # clone through a symlink (<build>/.source), so whichever clone runs the
 # build, CMake sees one source path and only the plugin is recompiled.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+stdout_is_result
 
 stage "install dependencies" "$DPSFM_ROOT/scripts/install_deps.sh"
 
@@ -41,7 +42,6 @@ if [ ! -f "$build_dir/build.ninja" ]; then
 fi
 
 ccache --zero-stats >/dev/null 2>&1 || true
-# Build output goes to stderr: stdout carries only the build directory.
-stage "build" cmake --build "$build_dir" -j "$(jobs_count)" >&2
+stage "build" cmake --build "$build_dir" -j "$(jobs_count)"
 ccache --show-stats 2>/dev/null | grep -E "Hits|Misses|hit rate" | head -n 3 | sed 's/^/[dp-sfm] ccache: /' >&2 || true
-echo "$build_dir"
+result "$build_dir"

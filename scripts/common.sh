@@ -4,7 +4,7 @@
 
 set -euo pipefail
 
-DPSFM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+DPSFM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 DPSFM_CACHE_DIR="${DPSFM_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/dp-sfm}"
 export CCACHE_DIR="${CCACHE_DIR:-$DPSFM_CACHE_DIR/ccache}"
 export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-5G}"
@@ -28,6 +28,22 @@ DPSFM_COLMAP_OPTIONS=(
 )
 
 log() { printf '[dp-sfm] %s\n' "$*" >&2; }
+
+# For scripts whose standard output is a value (a path): everything they
+# and the commands they run print goes to stderr from here on, and only
+# `result VALUE` reaches the caller's stdout. (apt's progress on a fresh
+# machine once landed in `build_dir="$(build.sh)"`.)
+stdout_is_result() { exec 3>&1 1>&2; }
+result() { printf '%s\n' "$1" >&3; }
+
+# The cached build tree (builds what is missing), checked to be one.
+build_tree() {
+  local dir
+  dir="$("$DPSFM_ROOT/scripts/build.sh")"
+  [ -d "$dir" ] && [ -f "$dir/CMakeCache.txt" ] \
+    || die "scripts/build.sh printed '${dir:0:200}', not a build directory"
+  printf '%s\n' "$dir"
+}
 die() { printf '[dp-sfm] error: %s\n' "$*" >&2; exit 1; }
 
 # stage NAME CMD...: runs CMD and prints how long it took.

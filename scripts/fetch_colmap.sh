@@ -8,6 +8,7 @@
 #     into a directory keyed by the patch series, renamed into place only when
 #     complete (an interrupted run leaves nothing half-patched behind).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+stdout_is_result
 
 download_dir="$DPSFM_CACHE_DIR/downloads"
 tarball="$download_dir/$COLMAP_TARBALL"
@@ -88,4 +89,4 @@ if [ ! -f "$source_dir/.dpsfm-complete" ]; then
   mv "$work/colmap-$COLMAP_VERSION" "$source_dir"
   rm -rf "$work"
 fi
-echo "$source_dir"
+result "$source_dir"

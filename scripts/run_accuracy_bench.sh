@@ -17,7 +17,7 @@
 # the accuracy tables measure).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
+build_dir="$(build_tree)"
 colmap="$build_dir/colmap/src/colmap/exe/colmap"
 generator="$build_dir/examples/dpsfm_make_example"
 compare="$build_dir/examples/dpsfm_compare_to_truth"

@@ -18,7 +18,8 @@
 # scene is regenerated under $DPSFM_EXAMPLE_DIR (default <cache>/example).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
+total_start=$SECONDS
+build_dir="$(build_tree)"
 colmap="$build_dir/colmap/src/colmap/exe/colmap"
 examples="$build_dir/examples"
 scene="${DPSFM_EXAMPLE_DIR:-$DPSFM_CACHE_DIR/example}"
@@ -101,3 +102,4 @@ grep -E "Linear estimate|files rescaled" "$logs/pipeline_dense.log" | sed 's/^.*
   --report "$scene/report_pipeline_dense.json" --model_path "$pipeline/dense/sparse"
 echo
 echo "Reports and plots: $scene/report_{dense,sparse,pipeline_dense}*.{json,png}"
+log "total $((SECONDS - total_start)) s"

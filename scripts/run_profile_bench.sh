@@ -14,7 +14,7 @@
 # DPSFM_PROFILE_SEEDS (scenes per profile, default 2).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
+build_dir="$(build_tree)"
 colmap="$build_dir/colmap/src/colmap/exe/colmap"
 generator="$build_dir/examples/dpsfm_make_example"
 out="${DPSFM_PROFILE_DIR:-$DPSFM_CACHE_DIR/profiles}"

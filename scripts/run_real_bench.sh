@@ -27,7 +27,7 @@ find_realdp() {
   die "no real DP captures found (set DPSFM_REALDP_DIR to the folder holding canon_r6m2_rf50/)"
 }
 realdp="$(find_realdp)/canon_r6m2_rf50"
-build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
+build_dir="$(build_tree)"
 out="${DPSFM_REAL_DIR:-$DPSFM_CACHE_DIR/real}"
 truth="${DPSFM_REAL_SCALE:-0.37}"
 rm -rf "$out"

@@ -5,7 +5,7 @@
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 total_start=$SECONDS
-build_dir="$("$DPSFM_ROOT/scripts/build.sh")"
+build_dir="$(build_tree)"
 
 start=$SECONDS
 log "stage 'test' ..."

@@ -1,5 +1,6 @@
 // The COLMAP build cache: its key follows the patch series and the pinned
 // source tarball is verified.
+#include <cstdlib>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -97,6 +98,42 @@ TEST(BuildCache, TarballWithWrongChecksumIsRefused) {
   EXPECT_NE(result.err.find("sha256 mismatch"), std::string::npos)
       << result.err;
   EXPECT_FALSE(boost::filesystem::exists(cache / "src"));
+}
+
+// build.sh's standard output is the build directory and nothing else, also
+// when packages are missing and apt prints its progress (on a fresh machine
+// that output once became the build directory's "name"). apt-get and
+// dpkg-query are stand-ins here that report every package missing and
+// print like apt does; the build itself is the suite's own, up to date.
+TEST(BuildScripts, StdoutIsOnlyTheBuildDirectory) {
+  TempDir dir;
+  const std::string bin = dir / "bin";
+  boost::filesystem::create_directories(bin);
+  WriteTextFile(bin + "/dpkg-query", "#!/bin/sh\nexit 1\n");
+  WriteTextFile(bin + "/apt-get",
+                "#!/bin/sh\necho 'Reading package lists... Done'\n"
+                "echo 'Setting up libfoo (1.0) ...'\nexit 0\n");
+  for (const char* tool : {"/dpkg-query", "/apt-get"}) {
+    boost::filesystem::permissions(bin + tool,
+                                   boost::filesystem::owner_all |
+                                       boost::filesystem::group_read |
+                                       boost::filesystem::others_read);
+  }
+  const char* path = std::getenv("PATH");
+  const CommandResult result =
+      RunCommand({"env",
+                  "PATH=" + bin + ":" + (path ? path : "/usr/bin:/bin"),
+                  "bash",
+                  kRoot + "/scripts/build.sh"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  // Proof that the stand-ins ran and printed.
+  EXPECT_NE(result.err.find("Setting up libfoo"), std::string::npos)
+      << result.err;
+  ASSERT_FALSE(result.out.empty());
+  EXPECT_EQ(result.out.find('\n'), result.out.size() - 1) << result.out;
+  const std::string build_dir = result.out.substr(0, result.out.size() - 1);
+  EXPECT_TRUE(boost::filesystem::exists(build_dir + "/CMakeCache.txt"))
+      << build_dir;
 }
 
 }  // namespace
