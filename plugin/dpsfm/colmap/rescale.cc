@@ -178,7 +178,7 @@ bool IsSkippedLine(const std::string& text, const Line& line) {
   return i == line.end || text[i] == '#';
 }
 
-enum class TextModel { kImages, kPoints3D };
+enum class TextModel { kImages, kPoints3D, kRigs, kFrames };
 
 std::string TokenText(const std::string& text, const Token& token) {
   return text.substr(token.begin, token.end - token.begin);
@@ -208,70 +208,51 @@ void CheckFields(const std::string& path,
   }
 }
 
-// images.txt: "IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME" followed by a
-// POINTS2D line "X Y POINT3D_ID ..."; TX TY TZ are scaled.
-// points3D.txt: "POINT3D_ID X Y Z R G B ERROR TRACK[]"; X Y Z are scaled.
-// Only the scaled tokens are replaced in the text; everything else is copied.
-void RescaleTextModel(double scale,
-                      const std::string& path,
-                      TextModel model,
-                      std::string* contents) {
-  const bool images = model == TextModel::kImages;
-  const size_t min_fields = images ? 10 : 8;
-  const size_t first_scaled = images ? 5 : 1;
-  const char* what = images ? "image translation" : "point coordinate";
-  const std::string& text = *contents;
-  const std::vector<Line> lines = SplitLines(text);
-  std::string out;
-  out.reserve(text.size() + text.size() / 8);
-  size_t copied = 0;  // text[0, copied) already in `out`
-  for (size_t l = 0; l < lines.size(); ++l) {
-    const Line& line = lines[l];
-    if (IsSkippedLine(text, line)) continue;
-    const std::vector<Token> tokens = Tokenize(text, line.begin, line.end);
-    const std::string where = "line " + std::to_string(line.number);
-    if (tokens.size() < min_fields) {
-      Corrupt(path,
-              where + " has " + std::to_string(tokens.size()) +
-                  " fields, expected at least " + std::to_string(min_fields));
-    }
-    CheckFields(path, where, text, tokens, 0, 1, /*integer=*/true);
-    if (images) {
+void NeedFields(const std::string& path,
+                const std::string& where,
+                size_t have,
+                size_t need) {
+  if (have < need) {
+    Corrupt(path,
+            where + " has " + std::to_string(have) +
+                " fields, expected at least " + std::to_string(need));
+  }
+}
+
+// The scaled fields of one data line, after checking the line's structure:
+//  images.txt   "IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME" (TX TY TZ),
+//               then a POINTS2D line "X Y POINT3D_ID ..." (checked here);
+//  points3D.txt "POINT3D_ID X Y Z R G B ERROR TRACK[]" (X Y Z);
+//  frames.txt   "FRAME_ID RIG_ID QW QX QY QZ TX TY TZ NUM_DATA_IDS
+//               (SENSOR_TYPE SENSOR_ID DATA_ID)..." (TX TY TZ of
+//               rig_from_world);
+//  rigs.txt     "RIG_ID NUM_SENSORS [REF_SENSOR_TYPE REF_SENSOR_ID]
+//               (SENSOR_TYPE SENSOR_ID HAS_POSE [QW QX QY QZ TX TY TZ])..."
+//               (TX TY TZ of each sensor_from_rig given).
+// Returns the first field of each scaled triple; `next_line` is advanced
+// past lines the record owns (images' POINTS2D line).
+std::vector<size_t> ScaledTextFields(const std::string& path,
+                                     TextModel model,
+                                     const std::string& text,
+                                     const std::vector<Line>& lines,
+                                     size_t* next_line,
+                                     const std::vector<Token>& tokens,
+                                     const std::string& where) {
+  const size_t n = tokens.size();
+  CheckFields(path, where, text, tokens, 0, 1, /*integer=*/true);
+  switch (model) {
+    case TextModel::kImages: {
+      NeedFields(path, where, n, 10);
       CheckFields(path, where, text, tokens, 1, 8, false);
       CheckFields(path, where, text, tokens, 8, 9, true);
-    } else {
-      CheckFields(path, where, text, tokens, 1, 4, false);
-      CheckFields(path, where, text, tokens, 4, 7, true);
-      CheckFields(path, where, text, tokens, 7, 8, false);
-      CheckFields(path, where, text, tokens, 8, tokens.size(), true);
-      if ((tokens.size() - 8) % 2 != 0) {
-        Corrupt(path,
-                where +
-                    " has an incomplete track (odd number of "
-                    "IMAGE_ID POINT2D_IDX fields)");
-      }
-    }
-    for (size_t field = first_scaled; field < first_scaled + 3; ++field) {
-      const Token& token = tokens[field];
-      double value = 0.0;
-      ParseDouble(TokenText(text, token), &value);
-      const double scaled_value =
-          ScaleDouble(value, scale, path, (where + " " + what).c_str());
-      out.append(text, copied, token.begin - copied);
-      out += FormatDouble(scaled_value);
-      copied = token.end;
-    }
-    if (images) {
       // COLMAP reads the next line as this image's 2D points whatever it
       // holds (it may be blank); without one it silently drops the image.
-      if (l + 1 >= lines.size()) {
+      if (*next_line >= lines.size()) {
         Corrupt(path, where + " has no POINTS2D line after it (truncated)");
       }
-      ++l;
-      const std::vector<Token> points =
-          Tokenize(text, lines[l].begin, lines[l].end);
-      const std::string points_where =
-          "line " + std::to_string(lines[l].number);
+      const Line& line = lines[(*next_line)++];
+      const std::vector<Token> points = Tokenize(text, line.begin, line.end);
+      const std::string points_where = "line " + std::to_string(line.number);
       if (points.size() % 3 != 0) {
         Corrupt(path, points_where + " is not a list of X Y POINT3D_ID");
       }
@@ -279,7 +260,132 @@ void RescaleTextModel(double scale,
         CheckFields(path, points_where, text, points, i, i + 2, false);
         CheckFields(path, points_where, text, points, i + 2, i + 3, true);
       }
+      return {5};
     }
+    case TextModel::kPoints3D:
+      NeedFields(path, where, n, 8);
+      CheckFields(path, where, text, tokens, 1, 4, false);
+      CheckFields(path, where, text, tokens, 4, 7, true);
+      CheckFields(path, where, text, tokens, 7, 8, false);
+      CheckFields(path, where, text, tokens, 8, n, true);
+      if ((n - 8) % 2 != 0) {
+        Corrupt(path,
+                where +
+                    " has an incomplete track (odd number of "
+                    "IMAGE_ID POINT2D_IDX fields)");
+      }
+      return {1};
+    case TextModel::kFrames: {
+      NeedFields(path, where, n, 10);
+      CheckFields(path, where, text, tokens, 1, 2, true);
+      CheckFields(path, where, text, tokens, 2, 9, false);
+      CheckFields(path, where, text, tokens, 9, 10, true);
+      long long num_data = 0;
+      ParseInteger(TokenText(text, tokens[9]), &num_data);
+      if (num_data < 0 || static_cast<size_t>(num_data) != (n - 10) / 3 ||
+          (n - 10) % 3 != 0) {
+        Corrupt(path,
+                where + " lists " + std::to_string(n - 10) +
+                    " data fields for NUM_DATA_IDS " +
+                    TokenText(text, tokens[9]) +
+                    " (SENSOR_TYPE SENSOR_ID DATA_ID each)");
+      }
+      for (size_t i = 10; i < n; i += 3) {
+        CheckFields(path, where, text, tokens, i + 1, i + 3, true);
+      }
+      return {6};
+    }
+    case TextModel::kRigs: {
+      NeedFields(path, where, n, 2);
+      CheckFields(path, where, text, tokens, 1, 2, true);
+      long long num_sensors = 0;
+      ParseInteger(TokenText(text, tokens[1]), &num_sensors);
+      if (num_sensors < 0) Corrupt(path, where + " has NUM_SENSORS < 0");
+      std::vector<size_t> scaled;
+      size_t i = 2;
+      if (num_sensors > 0) {
+        NeedFields(path, where, n, i + 2);
+        CheckFields(path, where, text, tokens, i + 1, i + 2, true);
+        i += 2;
+      }
+      for (long long k = 1; k < num_sensors; ++k) {
+        NeedFields(path, where, n, i + 3);
+        CheckFields(path, where, text, tokens, i + 1, i + 3, true);
+        const std::string has_pose = TokenText(text, tokens[i + 2]);
+        if (has_pose != "0" && has_pose != "1") {
+          Corrupt(path,
+                  where + " field " + std::to_string(i + 3) +
+                      " (HAS_POSE) is \"" + has_pose + "\", not 0 or 1");
+        }
+        i += 3;
+        if (has_pose == "1") {
+          NeedFields(path, where, n, i + 7);
+          CheckFields(path, where, text, tokens, i, i + 7, false);
+          scaled.push_back(i + 4);
+          i += 7;
+        }
+      }
+      if (i != n) {
+        Corrupt(path,
+                where + " has " + std::to_string(n - i) + " fields after its " +
+                    std::to_string(num_sensors) + " sensors");
+      }
+      return scaled;
+    }
+  }
+  return {};
+}
+
+const char* TextModelWhat(TextModel model) {
+  switch (model) {
+    case TextModel::kImages:
+      return "image translation";
+    case TextModel::kPoints3D:
+      return "point coordinate";
+    case TextModel::kRigs:
+      return "sensor_from_rig translation";
+    case TextModel::kFrames:
+      return "rig_from_world translation";
+  }
+  return "value";
+}
+
+// Only the scaled tokens are replaced in the text; everything else is copied.
+void RescaleTextModel(double scale,
+                      const std::string& path,
+                      TextModel model,
+                      std::string* contents) {
+  const std::string& text = *contents;
+  const std::vector<Line> lines = SplitLines(text);
+  std::string out;
+  out.reserve(text.size() + text.size() / 8);
+  size_t copied = 0;  // text[0, copied) already in `out`
+  // Checked first, replaced after: a bad line leaves `contents` unchanged.
+  std::vector<std::pair<Token, double>> replacements;
+  for (size_t l = 0; l < lines.size();) {
+    const Line& line = lines[l++];
+    if (IsSkippedLine(text, line)) continue;
+    const std::vector<Token> tokens = Tokenize(text, line.begin, line.end);
+    const std::string where = "line " + std::to_string(line.number);
+    for (const size_t first :
+         ScaledTextFields(path, model, text, lines, &l, tokens, where)) {
+      for (size_t field = first; field < first + 3; ++field) {
+        double value = 0.0;
+        ParseDouble(TokenText(text, tokens[field]), &value);
+        replacements.emplace_back(
+            tokens[field],
+            ScaleDouble(value,
+                        scale,
+                        path,
+                        (where + " " + TextModelWhat(model)).c_str()));
+      }
+    }
+  }
+  for (const auto& replacement : replacements) {
+    const Token& token = replacement.first;
+    out.append(text, copied, token.begin - copied);
+    out += FormatDouble(replacement.second);
+    copied = token.end;
   }
   out.append(text, copied, std::string::npos);
   contents->swap(out);
@@ -634,17 +740,26 @@ void RescaleAsciiPly(double scale,
 
 // ---- listing -----------------------------------------------------------
 
-const char* const kModelFiles[] = {
-    "images.bin", "points3D.bin", "images.txt", "points3D.txt"};
-const ArtefactType kModelTypes[] = {ArtefactType::kImagesBinary,
-                                    ArtefactType::kPoints3DBinary,
-                                    ArtefactType::kImagesText,
-                                    ArtefactType::kPoints3DText};
+// The files of a model folder that hold model-unit quantities, in the
+// order they are listed (COLMAP 3.12+ adds rigs and frames).
+const struct {
+  const char* name;
+  ArtefactType type;
+} kModelFiles[] = {
+    {"images.bin", ArtefactType::kImagesBinary},
+    {"points3D.bin", ArtefactType::kPoints3DBinary},
+    {"rigs.bin", ArtefactType::kRigsBinary},
+    {"frames.bin", ArtefactType::kFramesBinary},
+    {"images.txt", ArtefactType::kImagesText},
+    {"points3D.txt", ArtefactType::kPoints3DText},
+    {"rigs.txt", ArtefactType::kRigsText},
+    {"frames.txt", ArtefactType::kFramesText},
+};
 
 bool HasModelFiles(const fs::path& dir) {
   if (!fs::is_directory(dir)) return false;
-  for (const char* name : kModelFiles) {
-    if (fs::is_regular_file(dir / name)) return true;
+  for (const auto& file : kModelFiles) {
+    if (fs::is_regular_file(dir / file.name)) return true;
   }
   return false;
 }
@@ -652,6 +767,45 @@ bool HasModelFiles(const fs::path& dir) {
 bool EndsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() &&
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// A model folder may hold only files whose treatment is known: the model
+// files above and PLY exports (rescaled), and files that hold no model-unit
+// quantity: cameras, project.ini, dp-sfm's own records and staging files,
+// reports, logs, images and databases. Anything else (a newer COLMAP's
+// model file, an NVM / Bundler / VRML export) might hold coordinates that
+// would be left unscaled: the folder is refused before anything is
+// written, naming the file.
+void CheckModelFolderFiles(const fs::path& dir) {
+  static const char* const kNotMetricNames[] = {
+      "cameras.bin", "cameras.txt", "project.ini"};
+  static const char* const kNotMetricExtensions[] = {
+      ".ini", ".json", ".log", ".png", ".jpg", ".jpeg", ".db", ".md"};
+  std::vector<std::string> unknown;
+  for (fs::directory_iterator it(dir), end; it != end; ++it) {
+    if (!fs::is_regular_file(it->path())) continue;
+    const std::string name = it->path().filename().string();
+    const std::string extension = it->path().extension().string();
+    bool known = name[0] == '.' || name.find(".dpsfm-") != std::string::npos ||
+                 extension == ".ply";
+    for (const auto& file : kModelFiles) known = known || name == file.name;
+    for (const char* n : kNotMetricNames) known = known || name == n;
+    for (const char* e : kNotMetricExtensions) {
+      known = known || extension == e;
+    }
+    if (!known) unknown.push_back(name);
+  }
+  if (unknown.empty()) return;
+  std::sort(unknown.begin(), unknown.end());
+  std::string names;
+  for (const std::string& name : unknown) {
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  throw InputError("the model folder " + dir.string() + " holds " + names +
+                   ", which the rescaler does not know how to treat (it may "
+                   "hold model-unit coordinates that would stay unscaled); "
+                   "nothing was rescaled. Move it out of the folder, or run "
+                   "with --dry_run 1 to estimate without rescaling");
 }
 
 }  // namespace
@@ -666,6 +820,14 @@ const char* ArtefactTypeName(ArtefactType type) {
       return "images.txt";
     case ArtefactType::kPoints3DText:
       return "points3D.txt";
+    case ArtefactType::kRigsBinary:
+      return "rigs.bin";
+    case ArtefactType::kFramesBinary:
+      return "frames.bin";
+    case ArtefactType::kRigsText:
+      return "rigs.txt";
+    case ArtefactType::kFramesText:
+      return "frames.txt";
     case ArtefactType::kDepthMap:
       return "depth map";
     case ArtefactType::kPly:
@@ -785,6 +947,108 @@ void RescalePoints3DBinary(double scale,
   ScaleTriples(offsets, scale, path, "point coordinate", contents);
 }
 
+void RescaleRigsBinary(double scale,
+                       const std::string& path,
+                       std::string* contents) {
+  CheckScale(scale);
+  const std::string& bytes = *contents;
+  Need(bytes, 0, 8, path, "rig count");
+  const uint64_t num_rigs = Load<uint64_t>(bytes, 0);
+  std::vector<size_t> offsets;
+  size_t pos = 8;
+  for (uint64_t i = 0; i < num_rigs; ++i) {
+    // rig_id, num_sensors, [ref sensor type, id].
+    Need(bytes, pos, 8, path, Nth("rig", i, num_rigs).c_str());
+    const uint32_t num_sensors = Load<uint32_t>(bytes, pos + 4);
+    pos += 8;
+    if (num_sensors > 0) {
+      Need(bytes, pos, 8, path, Nth("rig", i, num_rigs).c_str());
+      pos += 8;
+    }
+    for (uint32_t k = 1; k < num_sensors; ++k) {
+      // type, id, has_pose, [qw qx qy qz tx ty tz].
+      Need(bytes,
+           pos,
+           9,
+           path,
+           ("sensors of " + Nth("rig", i, num_rigs)).c_str());
+      const uint8_t has_pose = Load<uint8_t>(bytes, pos + 8);
+      pos += 9;
+      if (has_pose > 1) {
+        Corrupt(path,
+                "sensor " + std::to_string(k + 1) + " of " +
+                    Nth("rig", i, num_rigs) + " has a has_pose byte of " +
+                    std::to_string(has_pose));
+      }
+      if (has_pose == 1) {
+        Need(bytes,
+             pos,
+             7 * 8,
+             path,
+             ("sensor poses of " + Nth("rig", i, num_rigs)).c_str());
+        offsets.push_back(pos + 4 * 8);
+        pos += 7 * 8;
+      }
+    }
+  }
+  if (pos != bytes.size()) {
+    Corrupt(path,
+            std::to_string(bytes.size() - pos) +
+                " unexpected bytes after the last rig");
+  }
+  ScaleTriples(offsets, scale, path, "sensor_from_rig translation", contents);
+}
+
+void RescaleFramesBinary(double scale,
+                         const std::string& path,
+                         std::string* contents) {
+  CheckScale(scale);
+  const std::string& bytes = *contents;
+  Need(bytes, 0, 8, path, "frame count");
+  const uint64_t num_frames = Load<uint64_t>(bytes, 0);
+  std::vector<size_t> offsets;
+  size_t pos = 8;
+  for (uint64_t i = 0; i < num_frames; ++i) {
+    // frame_id, rig_id, qw qx qy qz, tx ty tz, num_data_ids.
+    Need(bytes,
+         pos,
+         4 + 4 + 7 * 8 + 4,
+         path,
+         Nth("frame", i, num_frames).c_str());
+    offsets.push_back(pos + 8 + 4 * 8);
+    pos += 8 + 7 * 8;
+    const uint32_t num_data = Load<uint32_t>(bytes, pos);
+    pos += 4;
+    // (sensor type, sensor id, data id) per entry.
+    if (num_data > (bytes.size() - pos) / 16) {
+      Corrupt(path,
+              "file is truncated (data ids of " + Nth("frame", i, num_frames) +
+                  ")");
+    }
+    pos += uint64_t{num_data} * 16;
+  }
+  if (pos != bytes.size()) {
+    Corrupt(path,
+            std::to_string(bytes.size() - pos) +
+                " unexpected bytes after the last frame");
+  }
+  ScaleTriples(offsets, scale, path, "rig_from_world translation", contents);
+}
+
+void RescaleRigsText(double scale,
+                     const std::string& path,
+                     std::string* contents) {
+  CheckScale(scale);
+  RescaleTextModel(scale, path, TextModel::kRigs, contents);
+}
+
+void RescaleFramesText(double scale,
+                       const std::string& path,
+                       std::string* contents) {
+  CheckScale(scale);
+  RescaleTextModel(scale, path, TextModel::kFrames, contents);
+}
+
 void RescaleImagesText(double scale,
                        const std::string& path,
                        std::string* contents) {
@@ -898,6 +1162,14 @@ void RescaleContents(ArtefactType type,
       return RescaleImagesText(scale, path, contents);
     case ArtefactType::kPoints3DText:
       return RescalePoints3DText(scale, path, contents);
+    case ArtefactType::kRigsBinary:
+      return RescaleRigsBinary(scale, path, contents);
+    case ArtefactType::kFramesBinary:
+      return RescaleFramesBinary(scale, path, contents);
+    case ArtefactType::kRigsText:
+      return RescaleRigsText(scale, path, contents);
+    case ArtefactType::kFramesText:
+      return RescaleFramesText(scale, path, contents);
     case ArtefactType::kDepthMap:
       return RescaleDepthMap(scale, path, contents);
     case ArtefactType::kPly:
@@ -946,11 +1218,23 @@ std::vector<Artefact> ListArtefactsToRescale(
   std::set<std::string> seen;  // canonical model dirs
   for (const fs::path& dir : model_dirs) {
     if (!seen.insert(fs::canonical(dir).string()).second) continue;
-    for (size_t i = 0; i < 4; ++i) {
-      const fs::path file = dir / kModelFiles[i];
-      if (fs::is_regular_file(file)) {
-        artefacts.push_back({kModelTypes[i], file.string()});
+    CheckModelFolderFiles(dir);
+    for (const auto& file : kModelFiles) {
+      const fs::path path = dir / file.name;
+      if (fs::is_regular_file(path)) {
+        artefacts.push_back({file.type, path.string()});
       }
+    }
+    // Exports next to the model (model_converter --output_type PLY).
+    std::vector<std::string> plys;
+    for (fs::directory_iterator it(dir), end; it != end; ++it) {
+      if (fs::is_regular_file(it->path()) && it->path().extension() == ".ply") {
+        plys.push_back(it->path().string());
+      }
+    }
+    std::sort(plys.begin(), plys.end());
+    for (const std::string& ply : plys) {
+      artefacts.push_back({ArtefactType::kPly, ply});
     }
   }
 
@@ -989,6 +1273,14 @@ std::vector<Artefact> ListArtefactsToRescale(
   for (const std::string& file : plys) {
     artefacts.push_back({ArtefactType::kPly, file});
   }
+  // A model at the root lists its PLY files once, not again as fused.ply.
+  std::set<std::string> listed;
+  artefacts.erase(std::remove_if(artefacts.begin(),
+                                 artefacts.end(),
+                                 [&](const Artefact& a) {
+                                   return !listed.insert(a.path).second;
+                                 }),
+                  artefacts.end());
   return artefacts;
 }
 

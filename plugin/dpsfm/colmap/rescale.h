@@ -25,8 +25,15 @@ enum class ArtefactType {
   kPoints3DBinary,  // points3D.bin: xyz
   kImagesText,      // images.txt: TX TY TZ of each image line
   kPoints3DText,    // points3D.txt: X Y Z of each point line
-  kDepthMap,        // stereo/depth_maps/*.{geometric,photometric}.bin
-  kPly,             // fused.ply, meshed-*.ply: vertex x y z
+  // COLMAP 3.12+ (rigs and frames; an image's pose is then
+  // sensor_from_rig * rig_from_world of its frame, and readers ignore the
+  // composed pose in images.*, which writers still fill in):
+  kRigsBinary,    // rigs.bin: each non-reference sensor_from_rig's t
+  kFramesBinary,  // frames.bin: each frame's rig_from_world t
+  kRigsText,      // rigs.txt: TX TY TZ of each sensor pose given
+  kFramesText,    // frames.txt: TX TY TZ of each frame line
+  kDepthMap,      // stereo/depth_maps/*.{geometric,photometric}.bin
+  kPly,           // fused.ply, meshed-*.ply: vertex x y z
 };
 
 // "images.bin", "depth map", ... for messages.
@@ -38,11 +45,14 @@ struct Artefact {
 };
 
 // Every file that must be rescaled, in a deterministic (sorted) order:
-//  - model files (images.{bin,txt}, points3D.{bin,txt}; cameras are not
-//    metric) of `workspace_root` itself if it holds a model (a sparse model
-//    given alone), of `workspace_root`/sparse and of its direct
-//    sub-folders (sparse/0, ...), and of every folder in `extra_model_dirs`;
-//    each model's .bin and .txt files both when both exist;
+//  - model files (images, points3D, rigs and frames, .bin and .txt; cameras
+//    are not metric) and PLY exports of `workspace_root` itself if it holds
+//    a model (a sparse model given alone), of `workspace_root`/sparse and
+//    of its direct sub-folders (sparse/0, ...), and of every folder in
+//    `extra_model_dirs`; each model's .bin and .txt files both when both
+//    exist. A model folder holding a file whose treatment is not known (it
+//    might hold coordinates: a newer format, an NVM export) is refused with
+//    an InputError naming it;
 //  - stereo/depth_maps/**/*.geometric.bin and *.photometric.bin;
 //  - fused.ply and meshed-*.ply at the workspace root.
 // Not listed because they are not metric: cameras.*, normal maps,
@@ -81,6 +91,21 @@ void RescaleImagesText(double scale,
 void RescalePoints3DText(double scale,
                          const std::string& path,
                          std::string* contents);
+// rigs.* / frames.* (COLMAP 3.12+): the translation of every non-reference
+// sensor_from_rig given / of every frame's rig_from_world. The text forms'
+// sensor types are words ("CAMERA") and are copied as they are.
+void RescaleRigsBinary(double scale,
+                       const std::string& path,
+                       std::string* contents);
+void RescaleFramesBinary(double scale,
+                         const std::string& path,
+                         std::string* contents);
+void RescaleRigsText(double scale,
+                     const std::string& path,
+                     std::string* contents);
+void RescaleFramesText(double scale,
+                       const std::string& path,
+                       std::string* contents);
 // COLMAP depth map ("W&H&C&" + W*H*C float32 LE): values > 0 are multiplied
 // (as float(double(d) * s)); values <= 0 mean "invalid" and stay, as does
 // the header.
