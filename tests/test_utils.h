@@ -119,5 +119,30 @@ inline void WriteTextFile(const std::string& path, const std::string& text) {
   file << text;
 }
 
+// The Python with pycolmap 4.2.1 (COLMAP 4's reader, the oracle of the
+// rescaling tests on current-format models) that scripts/install_deps.sh
+// puts into $DPSFM_CACHE_DIR/venv/pycolmap-4.2.1; DPSFM_PYCOLMAP_PYTHON
+// overrides.
+inline std::string PycolmapPython() {
+  if (const char* python = std::getenv("DPSFM_PYCOLMAP_PYTHON")) {
+    return python;
+  }
+  std::string cache;
+  if (const char* dir = std::getenv("DPSFM_CACHE_DIR")) {
+    cache = dir;
+  } else if (const char* xdg = std::getenv("XDG_CACHE_HOME")) {
+    cache = std::string(xdg) + "/dp-sfm";
+  } else {
+    const char* home = std::getenv("HOME");
+    cache = std::string(home ? home : "") + "/.cache/dp-sfm";
+  }
+  return cache + "/venv/pycolmap-4.2.1/bin/python";
+}
+
+// tests/colmap/colmap4_oracle.py (make, convert, check; see there).
+inline std::string Colmap4Oracle() {
+  return std::string(DPSFM_SOURCE_DIR) + "/tests/colmap/colmap4_oracle.py";
+}
+
 }  // namespace test
 }  // namespace dpsfm

@@ -29,25 +29,6 @@ namespace {
 
 namespace fs = boost::filesystem;
 
-const std::string kOracle =
-    std::string(DPSFM_SOURCE_DIR) + "/tests/colmap/colmap4_oracle.py";
-
-std::string PycolmapPython() {
-  if (const char* python = std::getenv("DPSFM_PYCOLMAP_PYTHON")) {
-    return python;
-  }
-  std::string cache;
-  if (const char* dir = std::getenv("DPSFM_CACHE_DIR")) {
-    cache = dir;
-  } else if (const char* xdg = std::getenv("XDG_CACHE_HOME")) {
-    cache = std::string(xdg) + "/dp-sfm";
-  } else {
-    cache = std::string(std::getenv("HOME") ? std::getenv("HOME") : "") +
-            "/.cache/dp-sfm";
-  }
-  return cache + "/venv/pycolmap-4.2.1/bin/python";
-}
-
 class Colmap4Model : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -58,7 +39,7 @@ class Colmap4Model : public ::testing::Test {
   }
 
   CommandResult Oracle(std::vector<std::string> args) {
-    args.insert(args.begin(), {python_, kOracle});
+    args.insert(args.begin(), {python_, Colmap4Oracle()});
     return RunCommand(args);
   }
 
@@ -122,8 +103,8 @@ void ExpectScaledByThisBuild(const std::string& original_dir,
   ASSERT_EQ(original.NumImages(), rescaled.NumImages());
   const auto e0 = ImageErrors(original), e1 = ImageErrors(rescaled);
   for (const auto& entry : e0) {
-    EXPECT_NEAR(e1.at(entry.first), entry.second,
-                1e-9 * std::max(entry.second, 1e-3))
+    EXPECT_NEAR(
+        e1.at(entry.first), entry.second, 1e-9 * std::max(entry.second, 1e-3))
         << entry.first;
   }
   std::vector<Eigen::Vector3d> c0, c1;
@@ -139,7 +120,8 @@ void ExpectScaledByThisBuild(const std::string& original_dir,
   }
   for (const auto& entry : original.Points3D()) {
     const Eigen::Vector3d want = scale * entry.second.xyz;
-    EXPECT_NEAR((rescaled.Point3D(entry.first).xyz - want).norm(), 0,
+    EXPECT_NEAR((rescaled.Point3D(entry.first).xyz - want).norm(),
+                0,
                 1e-9 * want.norm());
   }
 }
@@ -153,8 +135,9 @@ TEST_F(Colmap4Model, RigsAndFramesAreRescaledWithTheRest) {
     SCOPED_TRACE(text ? "text" : "binary");
     const std::string original = dir_ / (text ? "t_original" : "b_original");
     const std::string ws = dir_ / (text ? "t_ws" : "b_ws");
-    Make(original, text ? std::vector<std::string>{"--text", "--seed", "2"}
-                        : std::vector<std::string>{});
+    Make(original,
+         text ? std::vector<std::string>{"--text", "--seed", "2"}
+              : std::vector<std::string>{});
     CopyFolder(original, ws);
     const std::vector<Artefact> artefacts = ListArtefactsToRescale(ws);
     std::vector<std::string> names;
@@ -162,10 +145,12 @@ TEST_F(Colmap4Model, RigsAndFramesAreRescaledWithTheRest) {
       names.push_back(fs::path(a.path).filename().string());
     }
     const std::vector<std::string> expected =
-        text ? std::vector<std::string>{"images.txt", "points3D.txt",
-                                        "rigs.txt", "frames.txt"}
-             : std::vector<std::string>{"images.bin", "points3D.bin",
-                                        "rigs.bin", "frames.bin"};
+        text ? std::vector<std::string>{"images.txt",
+                                        "points3D.txt",
+                                        "rigs.txt",
+                                        "frames.txt"}
+             : std::vector<std::string>{
+                   "images.bin", "points3D.bin", "rigs.bin", "frames.bin"};
     EXPECT_EQ(names, expected);
     RescaleWorkspaceInPlace(ws, scale, RescaleWorkspaceOptions());
     const CommandResult verdict = Check(original, ws, scale);
@@ -188,7 +173,9 @@ TEST_F(Colmap4Model, OracleCatchesUnscaledFrames) {
     RescaleContents(std::string(name) == "images.bin"
                         ? ArtefactType::kImagesBinary
                         : ArtefactType::kPoints3DBinary,
-                    0.558, path, &bytes);
+                    0.558,
+                    path,
+                    &bytes);
     internal::WriteFileDurably(path, bytes);
   }
   const CommandResult verdict = Check(original, ws, 0.558);
@@ -213,9 +200,11 @@ TEST_F(Colmap4Model, TrivialRigsAndBothFormats) {
   // COLMAP 4 reads .bin first; check the text files on their own too.
   const std::string text_only = dir_ / "text_only";
   fs::create_directories(text_only);
-  for (const char* name :
-       {"cameras.txt", "images.txt", "points3D.txt", "rigs.txt",
-        "frames.txt"}) {
+  for (const char* name : {"cameras.txt",
+                           "images.txt",
+                           "points3D.txt",
+                           "rigs.txt",
+                           "frames.txt"}) {
     fs::copy_file(ws + "/" + name, text_only + "/" + name);
   }
   for (const std::string& rescaled : {ws, text_only}) {

@@ -391,6 +391,62 @@ TEST(LoadDPFrames, EightBitColour) {
   EXPECT_NEAR(frames.right.at<cv::Vec3f>(2, 2)[1], 1.0, 1e-6);
 }
 
+// Sparse mode with DP frames of half the model's size: a triangulated
+// point observed at the centre of DP pixel (i, j), model pixel coordinates
+// (2 i + 1, 2 j + 1) with COLMAP's top-left centre at 0.5, lands at exactly
+// (i, j) in the frame (the inverse of the dense path's (x + 0.5) k; it was
+// (xy - 0.5) / k, a quarter pixel off), at its depth along the optical axis.
+TEST(WorkspaceReader, SparseDepthPointsInHalfSizeFrames) {
+  TempDir dir;
+  const std::string model = dir / "sparse";
+  boost::filesystem::create_directories(model);
+  colmap::Reconstruction reconstruction;
+  reconstruction.AddCamera(
+      colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
+  const std::vector<std::pair<int, int>> dp_pixels = {{3, 4}, {10, 7}, {0, 0}};
+  std::vector<Eigen::Vector2d> points2D;
+  for (const auto& ij : dp_pixels) {
+    points2D.emplace_back(2 * ij.first + 1, 2 * ij.second + 1);
+  }
+  colmap::Image image;
+  image.SetImageId(1);
+  image.SetName("v.png");
+  image.SetCameraId(1);
+  image.CamFromWorld() = colmap::Rigid3d();
+  image.SetPoints2D(points2D);
+  reconstruction.AddImage(image);
+  reconstruction.RegisterImage(1);
+  const double z = 2.5;
+  for (size_t i = 0; i < points2D.size(); ++i) {
+    colmap::Track track;
+    track.AddElement(1, static_cast<colmap::point2D_t>(i));
+    const Eigen::Vector3d xyz(
+        (points2D[i].x() - 20) / 40 * z, (points2D[i].y() - 15) / 40 * z, z);
+    reconstruction.AddPoint3D(xyz, track, Eigen::Vector3ub(0, 0, 0));
+  }
+  reconstruction.WriteBinary(model);
+  for (const char* side : {"left", "right"}) {
+    boost::filesystem::create_directories(dir / (std::string("dp/") + side));
+    cv::imwrite(dir / (std::string("dp/") + side + "/v.png"),
+                cv::Mat(15, 20, CV_8UC1, cv::Scalar(100)));
+  }
+  DPScaleEstimatorOptions options;
+  options.input_path = model;
+  options.dp_image_path = dir / "dp";
+  options.focal_length_mm = 50;
+  options.f_number = 2;
+  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+  const WorkspaceReader reader(options, layout);
+  const DPView view = reader.LoadView(0);
+  ASSERT_EQ(view.left.cols, 20);
+  ASSERT_EQ(view.depth_points.size(), dp_pixels.size());
+  for (size_t i = 0; i < dp_pixels.size(); ++i) {
+    EXPECT_DOUBLE_EQ(view.depth_points[i].x, dp_pixels[i].first) << i;
+    EXPECT_DOUBLE_EQ(view.depth_points[i].y, dp_pixels[i].second) << i;
+    EXPECT_NEAR(view.depth_points[i].depth, z, 1e-12) << i;
+  }
+}
+
 TEST(DPFrameDownsampling, IntegerFractionsOnly) {
   EXPECT_EQ(DPFrameDownsampling(cv::Size(6720, 4480), 6720, 4480, "a"), 1);
   EXPECT_EQ(DPFrameDownsampling(cv::Size(2016, 1512), 4032, 3024, "a"), 2);

@@ -580,6 +580,36 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
 
 // ---- rescaling a workspace -------------------------------------------------
 
+void CheckRescaleIsPossible(const std::string& workspace_root,
+                            const std::vector<std::string>& extra_model_dirs,
+                            const std::string& output_path) {
+  const std::vector<Artefact> artefacts =
+      ListArtefactsToRescale(workspace_root, extra_model_dirs);
+  std::set<std::string> dirs;
+  if (output_path.empty()) {
+    dirs.insert(fs::path(workspace_root).string());
+    for (const Artefact& artefact : artefacts) {
+      dirs.insert(fs::path(artefact.path).parent_path().string());
+    }
+  } else {
+    fs::path parent = fs::absolute(output_path).parent_path();
+    dirs.insert(parent.string());
+  }
+  for (const std::string& dir : dirs) {
+    if (::access(dir.c_str(), W_OK) != 0) {
+      const std::string why = std::strerror(errno);
+      throw InputError(
+          (output_path.empty() ? "cannot rescale in place: "
+                               : "cannot write the rescaled copy: ") +
+          dir + " is not writable (" + why + "); nothing was changed. " +
+          (output_path.empty()
+               ? "Make it writable, write a rescaled copy with "
+                 "--output_path DIR, or estimate only with --dry_run 1"
+               : "Choose an --output_path in a writable folder"));
+    }
+  }
+}
+
 RescaleWorkspaceResult RescaleWorkspaceInPlace(
     const std::string& workspace_root,
     double scale,

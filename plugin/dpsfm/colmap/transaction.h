@@ -178,6 +178,16 @@ struct RescaleWorkspaceResult {
   std::string record_path;
 };
 
+// Before the estimation: refuses (InputError, one line) what the rescale
+// at its end would refuse, so a long run does not end in "cannot create
+// ...": a model folder holding a file of unknown treatment (see
+// ListArtefactsToRescale), and, in place (`output_path` empty), a workspace
+// folder that is not writable (a read-only mount, missing permissions); for
+// a copy, an output whose parent is not writable.
+void CheckRescaleIsPossible(const std::string& workspace_root,
+                            const std::vector<std::string>& extra_model_dirs,
+                            const std::string& output_path);
+
 // Rescales every artefact of the workspace by `scale`, in place, in one
 // CommitTransaction, together with the new record entry. Refuses
 // (InputError, nothing written) if the record says it was rescaled already

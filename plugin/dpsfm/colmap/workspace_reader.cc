@@ -68,15 +68,93 @@ cv::Mat ReadColmapDepthMap(const std::string& path) {
   return depth;
 }
 
+namespace {
+
+// cameras.bin's structure: count, then per camera id, model, width,
+// height and the model's number of parameters.
+void CheckCamerasBinary(const std::string& path) {
+  const std::string bytes = internal::ReadFileBytes(path);
+  auto truncated = [&](const std::string& what) {
+    throw InputError("cannot read the model: " + path +
+                     " is truncated or "
+                     "corrupt (" +
+                     what + ")");
+  };
+  if (bytes.size() < 8) truncated("camera count");
+  uint64_t count = 0;
+  std::memcpy(&count, bytes.data(), 8);
+  size_t pos = 8;
+  for (uint64_t i = 0; i < count; ++i) {
+    if (bytes.size() - pos < 24) truncated("camera " + std::to_string(i + 1));
+    int model = 0;
+    std::memcpy(&model, bytes.data() + pos + 4, 4);
+    if (!colmap::ExistsCameraModelWithId(
+            static_cast<colmap::CameraModelId>(model))) {
+      truncated("camera " + std::to_string(i + 1) + " has unknown model id " +
+                std::to_string(model));
+    }
+    const size_t params =
+        colmap::CameraModelNumParams(static_cast<colmap::CameraModelId>(model));
+    pos += 24;
+    if ((bytes.size() - pos) / 8 < params) {
+      truncated("parameters of camera " + std::to_string(i + 1));
+    }
+    pos += 8 * params;
+  }
+  if (pos != bytes.size()) {
+    truncated(std::to_string(bytes.size() - pos) +
+              " unexpected bytes after the last camera");
+  }
+}
+
+// Reads a model with COLMAP after checking the structure of the files it
+// will read (the ones the rescaler parses, and cameras.bin): COLMAP's own
+// readers turn a truncated file into "std::bad_alloc" or worse.
+void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
+  const boost::filesystem::path root(dir);
+  const bool binary =
+      boost::filesystem::is_regular_file(root / "cameras.bin") &&
+      boost::filesystem::is_regular_file(root / "images.bin") &&
+      boost::filesystem::is_regular_file(root / "points3D.bin");
+  if (binary) CheckCamerasBinary((root / "cameras.bin").string());
+  const std::vector<std::pair<const char*, ArtefactType>> files =
+      binary ? std::vector<
+                   std::pair<const char*,
+                             ArtefactType>>{{"images.bin",
+                                             ArtefactType::kImagesBinary},
+                                            {"points3D.bin",
+                                             ArtefactType::kPoints3DBinary}}
+             : std::vector<std::pair<const char*, ArtefactType>>{
+                   {"images.txt", ArtefactType::kImagesText},
+                   {"points3D.txt", ArtefactType::kPoints3DText}};
+  for (const auto& file : files) {
+    const std::string path = (root / file.first).string();
+    if (!boost::filesystem::is_regular_file(path)) continue;
+    std::string bytes = internal::ReadFileBytes(path);
+    try {
+      RescaleContents(file.second, 1.0, path, &bytes);  // parses, all checked
+    } catch (const InputError& error) {
+      std::string what = error.what();
+      const std::string prefix = "cannot rescale ";
+      if (what.compare(0, prefix.size(), prefix) == 0) {
+        what = what.substr(prefix.size());
+      }
+      throw InputError("cannot read the model: " + what);
+    }
+  }
+  try {
+    model->Read(dir);
+  } catch (const std::exception& error) {
+    throw InputError("cannot read the model in " + dir + ": " + error.what());
+  }
+}
+
+}  // namespace
+
 WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
                                  const WorkspaceLayout& layout)
     : options_(options), layout_(layout) {
-  try {
-    reconstruction_.Read(layout_.model_path);
-  } catch (const std::exception& error) {
-    throw InputError("cannot read the model in " + layout_.model_path + ": " +
-                     error.what());
-  }
+  ReadModel(layout_.model_path, &reconstruction_);
   std::vector<colmap::image_t> image_ids = reconstruction_.RegImageIds();
   if (image_ids.empty()) {
     throw InputError("the model has no registered images: " +
@@ -96,12 +174,7 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
   }
   if (!options_.original_model_path.empty()) {
     colmap::Reconstruction original;
-    try {
-      original.Read(options_.original_model_path);
-    } catch (const std::exception& error) {
-      throw InputError("cannot read the model in " +
-                       options_.original_model_path + ": " + error.what());
-    }
+    ReadModel(options_.original_model_path, &original);
     for (const auto& entry : original.Images()) {
       original_model_cameras_[entry.second.Name()] =
           original.Camera(entry.second.CameraId());
@@ -300,9 +373,11 @@ DPView WorkspaceReader::LoadView(size_t index) const {
       if (!(depth > 0) || !std::isfinite(depth)) continue;
       DepthPoint sample;
       // COLMAP's 2D points put the top-left pixel centre at (0.5, 0.5); the
-      // core puts it at (0, 0), in DP-frame pixels.
-      sample.x = (point2D.xy.x() - 0.5) / k;
-      sample.y = (point2D.xy.y() - 0.5) / k;
+      // core puts it at (0, 0), in DP-frame pixels: a DP pixel covers k x k
+      // model pixels, so model u is u / k in the frame's continuous
+      // coordinates (the inverse of the dense path's (x + 0.5) k).
+      sample.x = point2D.xy.x() / k - 0.5;
+      sample.y = point2D.xy.y() / k - 0.5;
       sample.depth = depth;
       view.depth_points.push_back(sample);
     }

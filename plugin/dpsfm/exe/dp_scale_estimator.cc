@@ -230,6 +230,13 @@ int RunDPScaleEstimator(int argc, char** argv) {
       LOG(WARNING) << note.str();
     }
 
+    if (!options.dry_run) {
+      // What the rescale at the end would refuse, refused now.
+      CheckRescaleIsPossible(
+          root,
+          colmap::CSVToVector<std::string>(options.extra_model_paths),
+          options.output_path);
+    }
     const WorkspaceReader reader(options, layout);
     if (!options.database_path.empty()) {
       const DatabaseCheck& check = reader.database_check();

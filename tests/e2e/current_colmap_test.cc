@@ -1,0 +1,140 @@
+// The command on what current COLMAP (4.x) and real file systems hand it:
+// a dense workspace whose model COLMAP 4.2.1 wrote (rigs.bin, frames.bin),
+// rescaled in place and read back by COLMAP 4.2.1 (pycolmap); a model
+// folder with a file of unknown treatment; a read-only workspace; a
+// truncated images.bin. Refusals come before the estimation, in one line,
+// with the workspace unchanged.
+#include <sys/mount.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/e2e/e2e_helpers.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+namespace fs = boost::filesystem;
+
+CommandResult Oracle(std::vector<std::string> args) {
+  args.insert(args.begin(), {PycolmapPython(), Colmap4Oracle()});
+  return RunCommand(args);
+}
+
+// The generated dense workspace with its model written again by COLMAP
+// 4.2.1 (one trivial rig per camera, one frame per image), as image
+// undistorters of COLMAP 4 leave it; the 3.x model is kept aside as the
+// original.
+TEST(CurrentColmap, DenseWorkspaceFromColmap4IsRescaledWhole) {
+  ASSERT_TRUE(fs::exists(PycolmapPython()))
+      << "no pycolmap 4.2.1 at " << PycolmapPython()
+      << ": run scripts/install_deps.sh";
+  SceneCopy scene("dslr");
+  const std::string sparse = scene / "dense/sparse";
+  const std::string original = scene.temp() / "original_model";
+  const CommandResult converted = Oracle({"convert", sparse, original});
+  ASSERT_EQ(converted.exit_code, 0) << converted.err;
+  fs::remove_all(sparse);
+  fs::create_directories(sparse);
+  for (fs::directory_iterator it(original), end; it != end; ++it) {
+    fs::copy_file(it->path(), fs::path(sparse) / it->path().filename());
+  }
+  ASSERT_TRUE(fs::exists(sparse + "/frames.bin"));
+  ASSERT_TRUE(fs::exists(sparse + "/rigs.bin"));
+
+  const std::string report = scene.temp() / "report.json";
+  const CommandResult run =
+      RunEstimator(With(DenseArgs(scene), {"--report_path", report}));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const double scale = ReadJson(report).at("scale").get<double>();
+  char s[64];
+  std::snprintf(s, sizeof(s), "%.17g", scale);
+  const CommandResult verdict = Oracle({"check", original, sparse, s});
+  EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
+  std::printf("%s", verdict.out.c_str());
+}
+
+TEST(CurrentColmap, UnknownFileInTheModelFolderIsRefusedBeforeEstimating) {
+  SceneCopy scene("dslr");
+  WriteTextFile(scene / "dense/sparse/cameras.nvm", "NVM_V3\n");
+  const auto before = SnapshotTree(scene.root());
+  const CommandResult run = RunEstimator(DenseArgs(scene));
+  ExpectRefusal(run, "cameras.nvm", before, scene.root());
+  // Refused before any view was read.
+  EXPECT_EQ(run.err.find("Per-patch DP blur estimation"), std::string::npos)
+      << run.err;
+  // A dry run rescales nothing, so it does not care.
+  const CommandResult dry =
+      RunEstimator(With(DenseArgs(scene), {"--dry_run", "1"}));
+  EXPECT_EQ(dry.exit_code, 0) << dry.err;
+}
+
+TEST(CurrentColmap, TruncatedImagesBinIsNamed) {
+  SceneCopy scene("dslr");
+  const std::string path = scene / "dense/sparse/images.bin";
+  const std::string bytes = ReadTextFile(path);
+  WriteTextFile(path, bytes.substr(0, bytes.size() - 100));
+  const auto before = SnapshotTree(scene.root());
+  const CommandResult run = RunEstimator(DenseArgs(scene));
+  ExpectRefusal(run, path + ": file is truncated", before, scene.root());
+  EXPECT_EQ(run.err.find("bad_alloc"), std::string::npos) << run.err;
+}
+
+// A read-only bind mount of the workspace (root ignores permission bits,
+// not a read-only mount).
+class ReadOnlyMount {
+ public:
+  explicit ReadOnlyMount(const std::string& dir) : dir_(dir) {
+    if (::mount(dir.c_str(), dir.c_str(), nullptr, MS_BIND, nullptr) != 0) {
+      error_ = std::strerror(errno);
+      return;
+    }
+    if (::mount(nullptr, dir.c_str(), nullptr,
+                MS_BIND | MS_REMOUNT | MS_RDONLY, nullptr) != 0) {
+      error_ = std::strerror(errno);
+      ::umount(dir.c_str());
+      return;
+    }
+    mounted_ = true;
+  }
+  ~ReadOnlyMount() {
+    if (mounted_) ::umount(dir_.c_str());
+  }
+  bool mounted() const { return mounted_; }
+  const std::string& error() const { return error_; }
+
+ private:
+  std::string dir_, error_;
+  bool mounted_ = false;
+};
+
+TEST(CurrentColmap, ReadOnlyWorkspaceIsRefusedBeforeEstimating) {
+  SceneCopy scene("dslr");
+  const std::string dense = scene / "dense";
+  const auto before = SnapshotTree(scene.root());
+  CommandResult run, dry;
+  {
+    ReadOnlyMount read_only(dense);
+    if (!read_only.mounted() && ::geteuid() != 0) {
+      GTEST_SKIP() << "needs root for a read-only mount: "
+                   << read_only.error();
+    }
+    ASSERT_TRUE(read_only.mounted()) << read_only.error();
+    run = RunEstimator(DenseArgs(scene));
+    dry = RunEstimator(With(DenseArgs(scene), {"--dry_run", "1"}));
+  }
+  ExpectRefusal(run, "is not writable", before, scene.root());
+  EXPECT_NE(run.err.find("--output_path"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("Per-patch DP blur estimation"), std::string::npos)
+      << run.err;
+  EXPECT_EQ(dry.exit_code, 0) << dry.err;
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
