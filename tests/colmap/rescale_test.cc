@@ -305,6 +305,88 @@ TEST(RescaleBinaryModel, TruncatedOrCorruptIsRefused) {
   EXPECT_THROW(RescaleImagesBinary(kScale, "images.bin", &images), InputError);
 }
 
+// rigs.bin / frames.bin as COLMAP 3.12+ writes them, byte by byte: a rig
+// of three sensors (the reference, one with a sensor_from_rig pose, one
+// without), a rig of one sensor, and two frames. Only the translations
+// change, by exactly s; every other byte stays; truncations are refused.
+template <typename T>
+void Put(std::string* out, T value) {
+  out->append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+TEST(RescaleRigsAndFrames, BinaryTranslationsOnly) {
+  std::string rigs;
+  Put<uint64_t>(&rigs, 2);
+  Put<uint32_t>(&rigs, 1);  // rig 1
+  Put<uint32_t>(&rigs, 3);  // sensors
+  Put<int32_t>(&rigs, 1);   // ref: CAMERA 1
+  Put<uint32_t>(&rigs, 1);
+  Put<int32_t>(&rigs, 1);  // CAMERA 2, posed
+  Put<uint32_t>(&rigs, 2);
+  Put<uint8_t>(&rigs, 1);
+  const double pose[7] = {0.9, 0.1, 0.2, 0.3, 0.25, -0.5, 1.75};
+  for (const double v : pose) Put<double>(&rigs, v);
+  Put<int32_t>(&rigs, 1);  // CAMERA 3, no pose
+  Put<uint32_t>(&rigs, 3);
+  Put<uint8_t>(&rigs, 0);
+  Put<uint32_t>(&rigs, 2);  // rig 2: one sensor
+  Put<uint32_t>(&rigs, 1);
+  Put<int32_t>(&rigs, 1);
+  Put<uint32_t>(&rigs, 4);
+
+  std::string frames;
+  Put<uint64_t>(&frames, 2);
+  for (uint32_t f = 1; f <= 2; ++f) {
+    Put<uint32_t>(&frames, f);
+    Put<uint32_t>(&frames, f);  // rig
+    const double rig_from_world[7] = {1, 0, 0, 0, 3.0 * f, -2.0, 0.5};
+    for (const double v : rig_from_world) Put<double>(&frames, v);
+    const uint32_t num_data = f == 1 ? 3 : 1;
+    Put<uint32_t>(&frames, num_data);
+    for (uint32_t d = 0; d < num_data; ++d) {
+      Put<int32_t>(&frames, 1);
+      Put<uint32_t>(&frames, d + 1);
+      Put<uint64_t>(&frames, 10 * f + d);
+    }
+  }
+
+  // Offsets of the translations in the layout above.
+  const size_t rig_t = 8 + 8 + 8 + 8 + 1 + 4 * 8;
+  const std::vector<size_t> frame_t = {8 + 8 + 4 * 8,
+                                       8 + 8 + 7 * 8 + 4 + 3 * 16 + 8 + 4 * 8};
+  for (const bool is_rigs : {true, false}) {
+    const std::string before = is_rigs ? rigs : frames;
+    std::string after = before;
+    RescaleContents(
+        is_rigs ? ArtefactType::kRigsBinary : ArtefactType::kFramesBinary,
+        kScale,
+        "x",
+        &after);
+    ASSERT_EQ(before.size(), after.size());
+    std::vector<bool> scaled(before.size(), false);
+    for (const size_t at : is_rigs ? std::vector<size_t>{rig_t} : frame_t) {
+      for (size_t b = at; b < at + 24; ++b) scaled[b] = true;
+      for (int k = 0; k < 3; ++k) {
+        double v0 = 0, v1 = 0;
+        std::memcpy(&v0, before.data() + at + 8 * k, 8);
+        std::memcpy(&v1, after.data() + at + 8 * k, 8);
+        EXPECT_EQ(v1, v0 * kScale);
+      }
+    }
+    for (size_t b = 0; b < before.size(); ++b) {
+      if (!scaled[b]) EXPECT_EQ(before[b], after[b]) << b;
+    }
+    ExpectEveryTruncationRefused(
+        is_rigs ? ArtefactType::kRigsBinary : ArtefactType::kFramesBinary,
+        before,
+        1);
+  }
+  // A has_pose byte other than 0 / 1 is corruption, not a pose.
+  std::string bad = rigs;
+  bad[8 + 8 + 8 + 8] = 7;
+  EXPECT_THROW(RescaleRigsBinary(kScale, "rigs.bin", &bad), InputError);
+}
+
 // ---- text models -----------------------------------------------------------
 
 std::vector<std::string> Fields(const std::string& line) {
@@ -448,6 +530,37 @@ std::string MakeDepthMap(int width,
                       "&" + std::to_string(channels) + "&";
   for (const float v : values) AppendRaw(&bytes, v);
   return bytes;
+}
+
+TEST(RescaleRigsAndFrames, TextTranslationsOnly) {
+  const std::string rigs =
+      "# Rig calib list with one line of data per calib:\n"
+      "1 3 CAMERA 1 CAMERA 2 1 0.9 0.1 0.2 0.3 0.25 -0.5 1.75 CAMERA 3 0\n"
+      "2 1 CAMERA 4\n";
+  std::string scaled = rigs;
+  RescaleRigsText(kScale, "rigs.txt", &scaled);
+  ExpectTextScaled(rigs, scaled, {11, 12, 13}, false);
+  const std::string frames =
+      "# Frame list\n"
+      "1 1 1 0 0 0 3 -2 0.5 2 CAMERA 1 10 CAMERA 2 11\n"
+      "2 2 1 0 0 0 6 -2 0.5 1 CAMERA 4 20\n";
+  scaled = frames;
+  RescaleFramesText(kScale, "frames.txt", &scaled);
+  ExpectTextScaled(frames, scaled, {6, 7, 8}, false);
+  for (const std::string& bad :
+       {std::string("1 3 CAMERA 1 CAMERA 2 2 0.9\n"),          // HAS_POSE 2
+        std::string("1 2 CAMERA 1 CAMERA 2 1 0.9 0.1 0.2\n"),  // cut pose
+        std::string("1 2 CAMERA 1 CAMERA 2 0 extra\n")}) {     // trailing
+    std::string text = bad;
+    EXPECT_THROW(RescaleRigsText(kScale, "rigs.txt", &text), InputError) << bad;
+  }
+  for (const std::string& bad :
+       {std::string("1 1 1 0 0 0 3 -2 0.5 2 CAMERA 1 10\n"),  // 2 ids, 1 given
+        std::string("1 1 1 0 0 0 3 -2\n")}) {
+    std::string text = bad;
+    EXPECT_THROW(RescaleFramesText(kScale, "frames.txt", &text), InputError)
+        << bad;
+  }
 }
 
 TEST(RescaleDepthMap, ScalesOnlyValidDepths) {

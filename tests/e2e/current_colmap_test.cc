@@ -1,6 +1,8 @@
 // The command on what current COLMAP (4.x) and real file systems hand it:
-// a dense workspace whose model COLMAP 4.2.1 wrote (rigs.bin, frames.bin),
-// rescaled in place and read back by COLMAP 4.2.1 (pycolmap); a model
+// a dense workspace whose model COLMAP 4.2.1 wrote (rigs.bin, frames.bin;
+// trivial rigs, or a two-camera rig), a model from COLMAP 4.2.1's
+// global_mapper, each rescaled in place and read back by COLMAP 4.2.1
+// (pycolmap); a model
 // folder with a file of unknown treatment; a read-only workspace; a
 // truncated images.bin. Refusals come before the estimation, in one line,
 // with the workspace unchanged.
@@ -27,17 +29,21 @@ CommandResult Oracle(std::vector<std::string> args) {
 }
 
 // The generated dense workspace with its model written again by COLMAP
-// 4.2.1 (one trivial rig per camera, one frame per image), as image
-// undistorters of COLMAP 4 leave it; the 3.x model is kept aside as the
-// original.
-TEST(CurrentColmap, DenseWorkspaceFromColmap4IsRescaledWhole) {
+// 4.2.1, as image undistorters of COLMAP 4 leave it: one trivial rig per
+// camera and a frame per image, or the images split over the two cameras
+// of one rig (lens data per image in lens.csv, DP frames per image). The
+// 3.x model is kept aside as the original; COLMAP 4.2.1 reads the
+// rescaled one back.
+void RescaleColmap4Workspace(bool two_camera_rig) {
   ASSERT_TRUE(fs::exists(PycolmapPython()))
       << "no pycolmap 4.2.1 at " << PycolmapPython()
       << ": run scripts/install_deps.sh";
   SceneCopy scene("dslr");
   const std::string sparse = scene / "dense/sparse";
   const std::string original = scene.temp() / "original_model";
-  const CommandResult converted = Oracle({"convert", sparse, original});
+  std::vector<std::string> convert = {"convert", sparse, original};
+  if (two_camera_rig) convert.push_back("--two_camera_rig");
+  const CommandResult converted = Oracle(convert);
   ASSERT_EQ(converted.exit_code, 0) << converted.err;
   fs::remove_all(sparse);
   fs::create_directories(sparse);
@@ -51,10 +57,59 @@ TEST(CurrentColmap, DenseWorkspaceFromColmap4IsRescaledWhole) {
   const CommandResult run =
       RunEstimator(With(DenseArgs(scene), {"--report_path", report}));
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  const double scale = ReadJson(report).at("scale").get<double>();
+  const nlohmann::json r = ReadJson(report);
+  EXPECT_EQ(r.at("views").size(), 8u);
+  const double scale = r.at("scale").get<double>();
   char s[64];
   std::snprintf(s, sizeof(s), "%.17g", scale);
   const CommandResult verdict = Oracle({"check", original, sparse, s});
+  EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
+  std::printf("%s", verdict.out.c_str());
+}
+
+TEST(CurrentColmap, DenseWorkspaceFromColmap4IsRescaledWhole) {
+  RescaleColmap4Workspace(false);
+}
+
+TEST(CurrentColmap, TwoCameraRigIsEstimatedAndRescaledWhole) {
+  RescaleColmap4Workspace(true);
+}
+
+// A model made by COLMAP 4.2.1's global_mapper (GLOMAP) from the generated
+// images (CPU SIFT, exhaustive matching), scaled in sparse mode from its
+// triangulated points and rescaled in place: COLMAP 4.2.1 reads it back
+// scaled whole, and its camera distances are metric (the generator's true
+// camera centres, within 5 %).
+TEST(CurrentColmap, GlobalMapperModelIsScaledToMetres) {
+  ASSERT_TRUE(fs::exists(PycolmapPython()))
+      << "no pycolmap 4.2.1 at " << PycolmapPython()
+      << ": run scripts/install_deps.sh";
+  SceneCopy scene("dslr");
+  const std::string model = scene / "global";
+  const CommandResult mapped =
+      Oracle({"map", scene / "images", model, "--mapper", "global"});
+  ASSERT_EQ(mapped.exit_code, 0) << mapped.out << mapped.err;
+  std::printf("%s", mapped.out.c_str());
+  const std::string original = scene.temp() / "global_original";
+  fs::create_directories(original);
+  for (fs::directory_iterator it(model), end; it != end; ++it) {
+    fs::copy_file(it->path(), fs::path(original) / it->path().filename());
+  }
+  const std::string report = scene.temp() / "report.json";
+  const CommandResult run = RunEstimator({"--input_path",
+                                          model,
+                                          "--dp_image_path",
+                                          scene / "dp",
+                                          "--lens_path",
+                                          scene / "lens.csv",
+                                          "--report_path",
+                                          report});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const double scale = ReadJson(report).at("scale").get<double>();
+  char s[64];
+  std::snprintf(s, sizeof(s), "%.17g", scale);
+  const CommandResult verdict = Oracle(
+      {"check", original, model, s, "--truth", scene / "ground_truth.json"});
   EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
   std::printf("%s", verdict.out.c_str());
 }
@@ -94,8 +149,11 @@ class ReadOnlyMount {
       error_ = std::strerror(errno);
       return;
     }
-    if (::mount(nullptr, dir.c_str(), nullptr,
-                MS_BIND | MS_REMOUNT | MS_RDONLY, nullptr) != 0) {
+    if (::mount(nullptr,
+                dir.c_str(),
+                nullptr,
+                MS_BIND | MS_REMOUNT | MS_RDONLY,
+                nullptr) != 0) {
       error_ = std::strerror(errno);
       ::umount(dir.c_str());
       return;
@@ -121,8 +179,7 @@ TEST(CurrentColmap, ReadOnlyWorkspaceIsRefusedBeforeEstimating) {
   {
     ReadOnlyMount read_only(dense);
     if (!read_only.mounted() && ::geteuid() != 0) {
-      GTEST_SKIP() << "needs root for a read-only mount: "
-                   << read_only.error();
+      GTEST_SKIP() << "needs root for a read-only mount: " << read_only.error();
     }
     ASSERT_TRUE(read_only.mounted()) << read_only.error();
     run = RunEstimator(DenseArgs(scene));
