@@ -314,6 +314,8 @@ int RunDPScaleEstimator(int argc, char** argv) {
     // memory bounded): the first, middle and last view.
     std::vector<std::pair<int, cv::Mat>> overlay_images;
     const int num_views = static_cast<int>(reader.NumViews());
+    colmap::Timer views_timer;
+    views_timer.Start();
     for (size_t i = 0; i < reader.NumViews(); ++i) {
       colmap::Timer read_timer;
       read_timer.Start();
@@ -339,7 +341,16 @@ int RunDPScaleEstimator(int argc, char** argv) {
                 << ": " << summary.patches_valid << " of "
                 << summary.patches_tried << " patches with a blur estimate, "
                 << summary.patches_kept << " kept ("
-                << FormatSeconds(summary.seconds) << ")";
+                << FormatSeconds(summary.seconds) << "; "
+                << FormatSeconds(views_timer.ElapsedSeconds()) << " so far"
+                << (i + 1 < reader.NumViews()
+                        ? ", about " +
+                              FormatSeconds(views_timer.ElapsedSeconds() /
+                                            (i + 1) *
+                                            (reader.NumViews() - i - 1)) +
+                              " to go"
+                        : std::string())
+                << ")";
       summaries.push_back(summary);
     }
 
