@@ -852,6 +852,18 @@ std::string Nth(const char* kind, uint64_t i, uint64_t n) {
          std::to_string(n);
 }
 
+// The record loop must end exactly at the end of the file.
+void CheckNothingAfter(const std::string& bytes,
+                       size_t pos,
+                       const std::string& path,
+                       const char* record) {
+  if (pos != bytes.size()) {
+    Corrupt(path,
+            std::to_string(bytes.size() - pos) +
+                " unexpected bytes after the last " + record);
+  }
+}
+
 // Multiplies the xyz triples at `offsets`, after checking all of them, so a
 // bad value leaves the bytes unchanged.
 void ScaleTriples(const std::vector<size_t>& offsets,
@@ -906,11 +918,7 @@ void RescaleImagesBinary(double scale,
     }
     pos += num_points2D * 24;
   }
-  if (pos != bytes.size()) {
-    Corrupt(path,
-            std::to_string(bytes.size() - pos) +
-                " unexpected bytes after the last image");
-  }
+  CheckNothingAfter(bytes, pos, path, "image");
   ScaleTriples(offsets, scale, path, "image translation", contents);
 }
 
@@ -939,11 +947,7 @@ void RescalePoints3DBinary(double scale,
     }
     pos += track_length * 8;
   }
-  if (pos != bytes.size()) {
-    Corrupt(path,
-            std::to_string(bytes.size() - pos) +
-                " unexpected bytes after the last point");
-  }
+  CheckNothingAfter(bytes, pos, path, "point");
   ScaleTriples(offsets, scale, path, "point coordinate", contents);
 }
 
@@ -991,11 +995,7 @@ void RescaleRigsBinary(double scale,
       }
     }
   }
-  if (pos != bytes.size()) {
-    Corrupt(path,
-            std::to_string(bytes.size() - pos) +
-                " unexpected bytes after the last rig");
-  }
+  CheckNothingAfter(bytes, pos, path, "rig");
   ScaleTriples(offsets, scale, path, "sensor_from_rig translation", contents);
 }
 
@@ -1027,11 +1027,7 @@ void RescaleFramesBinary(double scale,
     }
     pos += uint64_t{num_data} * 16;
   }
-  if (pos != bytes.size()) {
-    Corrupt(path,
-            std::to_string(bytes.size() - pos) +
-                " unexpected bytes after the last frame");
-  }
+  CheckNothingAfter(bytes, pos, path, "frame");
   ScaleTriples(offsets, scale, path, "rig_from_world translation", contents);
 }
 
