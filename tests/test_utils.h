@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -139,9 +140,38 @@ inline std::string PycolmapPython() {
   return cache + "/venv/pycolmap-4.2.1/bin/python";
 }
 
-// tests/colmap/colmap4_oracle.py (make, convert, check; see there).
-inline std::string Colmap4Oracle() {
-  return std::string(DPSFM_SOURCE_DIR) + "/tests/colmap/colmap4_oracle.py";
+// Runs tests/colmap/colmap4_oracle.py (make, convert, map, check; see
+// there) with PycolmapPython().
+inline CommandResult RunColmap4Oracle(std::vector<std::string> args) {
+  args.insert(
+      args.begin(),
+      {PycolmapPython(),
+       std::string(DPSFM_SOURCE_DIR) + "/tests/colmap/colmap4_oracle.py"});
+  return RunCommand(args);
+}
+
+// The oracle's `check` of `rescaled` against `original` and the scale
+// (printed with round-trip precision), plus any further options.
+inline CommandResult CheckWithColmap4(const std::string& original,
+                                      const std::string& rescaled,
+                                      double scale,
+                                      std::vector<std::string> extra = {}) {
+  char s[64];
+  std::snprintf(s, sizeof(s), "%.17g", scale);
+  std::vector<std::string> args = {"check", original, rescaled, s};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return RunColmap4Oracle(args);
+}
+
+// Copies the regular files of `from` (not sub-folders) into `to`.
+inline void CopyFolderFiles(const std::string& from, const std::string& to) {
+  boost::filesystem::create_directories(to);
+  for (boost::filesystem::directory_iterator it(from), end; it != end; ++it) {
+    if (boost::filesystem::is_regular_file(it->path())) {
+      boost::filesystem::copy_file(
+          it->path(), boost::filesystem::path(to) / it->path().filename());
+    }
+  }
 }
 
 }  // namespace test

@@ -38,39 +38,18 @@ class Colmap4Model : public ::testing::Test {
         << ": run scripts/install_deps.sh (or set DPSFM_PYCOLMAP_PYTHON)";
   }
 
-  CommandResult Oracle(std::vector<std::string> args) {
-    args.insert(args.begin(), {python_, Colmap4Oracle()});
-    return RunCommand(args);
-  }
-
   // A model by COLMAP 4.2.1 in `dir`.
   void Make(const std::string& dir, std::vector<std::string> options) {
     options.insert(options.begin(), {"make", dir});
-    const CommandResult made = Oracle(options);
+    const CommandResult made = RunColmap4Oracle(options);
     ASSERT_EQ(made.exit_code, 0) << made.err;
     ASSERT_TRUE(fs::exists(dir + "/frames.bin") ||
                 fs::exists(dir + "/frames.txt"));
   }
 
-  // COLMAP 4.2.1's verdict on `rescaled` against `original` and s.
-  CommandResult Check(const std::string& original,
-                      const std::string& rescaled,
-                      double scale) {
-    char s[64];
-    std::snprintf(s, sizeof(s), "%.17g", scale);
-    return Oracle({"check", original, rescaled, s});
-  }
-
   std::string python_;
   TempDir dir_;
 };
-
-void CopyFolder(const fs::path& from, const fs::path& to) {
-  fs::create_directories(to);
-  for (fs::directory_iterator it(from), end; it != end; ++it) {
-    fs::copy_file(it->path(), to / it->path().filename());
-  }
-}
 
 // Mean reprojection error per image under this build's COLMAP reader.
 std::map<std::string, double> ImageErrors(const colmap::Reconstruction& r) {
@@ -138,7 +117,7 @@ TEST_F(Colmap4Model, RigsAndFramesAreRescaledWithTheRest) {
     Make(original,
          text ? std::vector<std::string>{"--text", "--seed", "2"}
               : std::vector<std::string>{});
-    CopyFolder(original, ws);
+    CopyFolderFiles(original, ws);
     const std::vector<Artefact> artefacts = ListArtefactsToRescale(ws);
     std::vector<std::string> names;
     for (const Artefact& a : artefacts) {
@@ -153,7 +132,7 @@ TEST_F(Colmap4Model, RigsAndFramesAreRescaledWithTheRest) {
                    "images.bin", "points3D.bin", "rigs.bin", "frames.bin"};
     EXPECT_EQ(names, expected);
     RescaleWorkspaceInPlace(ws, scale, RescaleWorkspaceOptions());
-    const CommandResult verdict = Check(original, ws, scale);
+    const CommandResult verdict = CheckWithColmap4(original, ws, scale);
     EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
     std::printf("%s", verdict.out.c_str());
     ExpectScaledByThisBuild(original, ws, scale);
@@ -166,7 +145,7 @@ TEST_F(Colmap4Model, OracleCatchesUnscaledFrames) {
   const std::string original = dir_ / "original";
   const std::string ws = dir_ / "old";
   Make(original, {});
-  CopyFolder(original, ws);
+  CopyFolderFiles(original, ws);
   for (const char* name : {"images.bin", "points3D.bin"}) {
     const std::string path = ws + "/" + name;
     std::string bytes = internal::ReadFileBytes(path);
@@ -178,7 +157,7 @@ TEST_F(Colmap4Model, OracleCatchesUnscaledFrames) {
                     &bytes);
     internal::WriteFileDurably(path, bytes);
   }
-  const CommandResult verdict = Check(original, ws, 0.558);
+  const CommandResult verdict = CheckWithColmap4(original, ws, 0.558);
   EXPECT_NE(verdict.exit_code, 0) << verdict.out;
   EXPECT_NE(verdict.out.find("camera-centre distances are not"),
             std::string::npos)
@@ -191,8 +170,9 @@ TEST_F(Colmap4Model, TrivialRigsAndBothFormats) {
   const std::string original = dir_ / "original";
   Make(original, {"--rigs", "3", "--cameras_per_rig", "1", "--frames", "3"});
   const std::string ws = dir_ / "ws";
-  CopyFolder(original, ws);
-  const CommandResult text = Oracle({"convert", original, ws, "--text"});
+  CopyFolderFiles(original, ws);
+  const CommandResult text =
+      RunColmap4Oracle({"convert", original, ws, "--text"});
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_EQ(ListArtefactsToRescale(ws).size(), 8u);
   const double scale = 3.25;
@@ -208,7 +188,7 @@ TEST_F(Colmap4Model, TrivialRigsAndBothFormats) {
     fs::copy_file(ws + "/" + name, text_only + "/" + name);
   }
   for (const std::string& rescaled : {ws, text_only}) {
-    const CommandResult verdict = Check(original, rescaled, scale);
+    const CommandResult verdict = CheckWithColmap4(original, rescaled, scale);
     EXPECT_EQ(verdict.exit_code, 0) << rescaled << verdict.out << verdict.err;
   }
 }

@@ -23,11 +23,6 @@ namespace {
 
 namespace fs = boost::filesystem;
 
-CommandResult Oracle(std::vector<std::string> args) {
-  args.insert(args.begin(), {PycolmapPython(), Colmap4Oracle()});
-  return RunCommand(args);
-}
-
 // The generated dense workspace with its model written again by COLMAP
 // 4.2.1, as image undistorters of COLMAP 4 leave it: one trivial rig per
 // camera and a frame per image, or the images split over the two cameras
@@ -43,13 +38,10 @@ void RescaleColmap4Workspace(bool two_camera_rig) {
   const std::string original = scene.temp() / "original_model";
   std::vector<std::string> convert = {"convert", sparse, original};
   if (two_camera_rig) convert.push_back("--two_camera_rig");
-  const CommandResult converted = Oracle(convert);
+  const CommandResult converted = RunColmap4Oracle(convert);
   ASSERT_EQ(converted.exit_code, 0) << converted.err;
   fs::remove_all(sparse);
-  fs::create_directories(sparse);
-  for (fs::directory_iterator it(original), end; it != end; ++it) {
-    fs::copy_file(it->path(), fs::path(sparse) / it->path().filename());
-  }
+  CopyFolderFiles(original, sparse);
   ASSERT_TRUE(fs::exists(sparse + "/frames.bin"));
   ASSERT_TRUE(fs::exists(sparse + "/rigs.bin"));
 
@@ -60,9 +52,7 @@ void RescaleColmap4Workspace(bool two_camera_rig) {
   const nlohmann::json r = ReadJson(report);
   EXPECT_EQ(r.at("views").size(), 8u);
   const double scale = r.at("scale").get<double>();
-  char s[64];
-  std::snprintf(s, sizeof(s), "%.17g", scale);
-  const CommandResult verdict = Oracle({"check", original, sparse, s});
+  const CommandResult verdict = CheckWithColmap4(original, sparse, scale);
   EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
   std::printf("%s", verdict.out.c_str());
 }
@@ -87,14 +77,11 @@ TEST(CurrentColmap, GlobalMapperModelIsScaledToMetres) {
   SceneCopy scene("dslr");
   const std::string model = scene / "global";
   const CommandResult mapped =
-      Oracle({"map", scene / "images", model, "--mapper", "global"});
+      RunColmap4Oracle({"map", scene / "images", model, "--mapper", "global"});
   ASSERT_EQ(mapped.exit_code, 0) << mapped.out << mapped.err;
   std::printf("%s", mapped.out.c_str());
   const std::string original = scene.temp() / "global_original";
-  fs::create_directories(original);
-  for (fs::directory_iterator it(model), end; it != end; ++it) {
-    fs::copy_file(it->path(), fs::path(original) / it->path().filename());
-  }
+  CopyFolderFiles(model, original);
   const std::string report = scene.temp() / "report.json";
   const CommandResult run = RunEstimator({"--input_path",
                                           model,
@@ -106,10 +93,8 @@ TEST(CurrentColmap, GlobalMapperModelIsScaledToMetres) {
                                           report});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const double scale = ReadJson(report).at("scale").get<double>();
-  char s[64];
-  std::snprintf(s, sizeof(s), "%.17g", scale);
-  const CommandResult verdict = Oracle(
-      {"check", original, model, s, "--truth", scene / "ground_truth.json"});
+  const CommandResult verdict = CheckWithColmap4(
+      original, model, scale, {"--truth", scene / "ground_truth.json"});
   EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
   std::printf("%s", verdict.out.c_str());
 }
