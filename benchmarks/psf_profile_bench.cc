@@ -24,6 +24,7 @@
 #include "../tests/core/synthetic_dp.h"
 #include "dpsfm/core/dp_scale_estimator.h"
 #include "dpsfm/core/psf_calibration.h"
+#include "dpsfm/core/shape_calibration.h"
 #include "dpsfm/core/target_calibration.h"
 
 namespace {
@@ -134,15 +135,21 @@ DPScaleOptions Options() {
 // six distances from the focal-plane mark, calibrated with
 // CalibrateFromTargets in three column bands; the field of the fitted
 // profiles.
-DPPsfField Calibrate(const Sensor& sensor,
-                     double noise,
-                     std::string* note,
-                     double* uncertainty) {
+struct Calibrated {
+  DPPsfField family, shape;  // empty = refused
+  double family_uncertainty = 0, shape_uncertainty = 0;
+  std::string note;
+};
+
+Calibrated Calibrate(const Sensor& sensor, double noise) {
   const DPScaleOptions options = Options();
   const int border = 11;  // KernelRadius(10) of the split family
   DPLensData lens = Lens(50, 8);
   const double focus_mm = 1000;
   std::vector<CalibrationCapture> captures;
+  // For the shape: each capture's grey views and a stopped-down (f/32)
+  // capture of the same target.
+  std::vector<ShapeCapture> shape_captures;
   int k = 0;
   for (const double d : {700.0, 800.0, 880.0, 1250.0, 1600.0, 2400.0}) {
     CalibrationCapture capture;
@@ -177,25 +184,62 @@ DPPsfField Calibrate(const Sensor& sensor,
                                             std::nan(""),
                                             1.5);
     captures.push_back(std::move(capture));
+    test::RenderOptions sharp_render = render;
+    sharp_render.noise_seed += 50;
+    const test::DPPair stopped =
+        Render(sharp,
+               sensor,
+               cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r * 8 / 32)),
+               sharp_render);
+    ShapeCapture shape;
+    shape.name = captures.back().name;
+    shape.left = test::ToGray(pair.left);
+    shape.right = test::ToGray(pair.right);
+    shape.sharp = test::ToGray(stopped.left) + test::ToGray(stopped.right);
+    shape_captures.push_back(std::move(shape));
   }
   TargetCalibrationOptions fit;
   fit.blur.max_radius_px = options.max_radius_px;
   fit.grid_rows = 1;
   fit.grid_cols = 3;
   const TargetCalibration c = CalibrateFromTargets(captures, fit);
-  *note = c.reason;
-  DPPsfField field;
-  if (!c.determined) return field;
+  Calibrated out;
+  out.note = c.reason;
+  if (!c.determined) return out;
   // As dp_psf_calibrator writes it into the profile file.
-  *uncertainty = std::max(c.strength - c.strength_ci_low,
-                          c.strength_ci_high - c.strength) /
-                 c.strength;
-  field.layout = c.layout;
+  out.family_uncertainty = std::max(c.strength - c.strength_ci_low,
+                                    c.strength_ci_high - c.strength) /
+                           c.strength;
+  out.family.layout = c.layout;
   for (const double kappa : c.cell_centroid_offsets) {
-    field.cells.push_back(std::make_shared<const SplitProfilePsf>(
+    out.family.cells.push_back(std::make_shared<const SplitProfilePsf>(
         SplitProfileParams::ForCentroidOffset(kappa)));
   }
-  return field;
+  // The shape, at the radii the fitted focus gives.
+  for (size_t i = 0; i < shape_captures.size(); ++i) {
+    shape_captures[i].signed_radius_px = c.capture_radius_px[i];
+  }
+  ShapeCalibrationOptions shape_options;
+  shape_options.layout = c.layout;
+  const ShapeCalibration shape = CalibrateShapes(shape_captures, shape_options);
+  out.note += "; shape: " + shape.reason;
+  if (!shape.determined) return out;
+  double log_sum = 0, weight = 0;
+  out.shape.layout = c.layout;
+  for (size_t cell = 0; cell < shape.cell_kernels.size(); ++cell) {
+    out.shape.cells.push_back(std::make_shared<const MeasuredKernelPsf>(
+        shape.cell_kernels[cell].left,
+        shape.cell_kernels[cell].right,
+        shape.reference_radius_px,
+        true));
+    const double w = std::max(1, c.cell_patches[cell]);
+    log_sum += w * std::log(shape.cell_centroid_offsets[cell]);
+    weight += w;
+  }
+  out.shape_uncertainty =
+      std::max(out.family_uncertainty,
+               std::abs(std::exp(log_sum / weight) / c.strength - 1));
+  return out;
 }
 
 struct Run {
@@ -298,21 +342,20 @@ int main(int argc, char** argv) {
       noise);
   std::printf(
       "| true profile | translating_disk r_s | auto r_s | calibrated r_s | "
-      "e_s translating_disk | e_s auto | e_s calibrated |\n|---|---|---|---|"
-      "---|---|---|\n");
+      "calibrated shape r_s | e_s translating_disk | e_s auto | e_s "
+      "calibrated | e_s calibrated shape |\n|---|---|---|---|---|---|---|---|"
+      "---|\n");
   double time_disk = 0, time_auto = 0;
   std::vector<std::string> notes;
-  int held[3] = {0, 0, 0}, answered[3] = {0, 0, 0};
+  constexpr int kModes = 4;
+  int held[kModes] = {0, 0, 0, 0}, answered[kModes] = {0, 0, 0, 0};
   std::vector<std::string> calibration_notes;
   for (const Sensor& sensor : sensors) {
-    std::string calibration_note;
-    double uncertainty = 0;
-    const DPPsfField calibrated =
-        Calibrate(sensor, noise, &calibration_note, &uncertainty);
-    calibration_notes.push_back(sensor.name + ": " + calibration_note);
-    std::string cells[3];
-    double errors[3] = {0, 0, 0};
-    int counts[3] = {0, 0, 0};
+    const Calibrated calibrated = Calibrate(sensor, noise);
+    calibration_notes.push_back(sensor.name + ": " + calibrated.note);
+    std::string cells[kModes];
+    double errors[kModes] = {0, 0, 0, 0};
+    int counts[kModes] = {0, 0, 0, 0};
     for (int scene = 0; scene < num_scenes; ++scene) {
       const double scale = 0.05 + 0.03 * scene;
       std::vector<DPView> views;
@@ -321,15 +364,25 @@ int main(int argc, char** argv) {
       }
       const DPPsfField disk =
           DPPsfField::Uniform(std::make_shared<const TranslatingDiskPsf>());
-      const Run runs[3] = {
-          Estimate(views, disk, false, scale),
-          Estimate(views, disk, true, scale),
-          calibrated.cells.empty()
-              ? Run()
-              : Estimate(views, calibrated, false, scale, uncertainty)};
+      const Run runs[kModes] = {Estimate(views, disk, false, scale),
+                                Estimate(views, disk, true, scale),
+                                calibrated.family.cells.empty()
+                                    ? Run()
+                                    : Estimate(views,
+                                               calibrated.family,
+                                               false,
+                                               scale,
+                                               calibrated.family_uncertainty),
+                                calibrated.shape.cells.empty()
+                                    ? Run()
+                                    : Estimate(views,
+                                               calibrated.shape,
+                                               false,
+                                               scale,
+                                               calibrated.shape_uncertainty)};
       time_disk += runs[0].seconds;
       time_auto += runs[1].seconds;
-      for (int m = 0; m < 3; ++m) {
+      for (int m = 0; m < kModes; ++m) {
         char cell[32];
         if (runs[m].success) {
           std::snprintf(cell,
@@ -348,13 +401,15 @@ int main(int argc, char** argv) {
       }
       if (scene == 0) notes.push_back(sensor.name + ": " + runs[1].note);
     }
-    if (calibrated.cells.empty()) cells[2] = "calibration refused";
-    std::printf("| %s | %s | %s | %s |",
+    if (calibrated.family.cells.empty()) cells[2] = "calibration refused";
+    if (calibrated.shape.cells.empty()) cells[3] = "shape not measured";
+    std::printf("| %s | %s | %s | %s | %s |",
                 sensor.name.c_str(),
                 cells[0].c_str(),
                 cells[1].c_str(),
-                cells[2].c_str());
-    for (int m = 0; m < 3; ++m) {
+                cells[2].c_str(),
+                cells[3].c_str());
+    for (int m = 0; m < kModes; ++m) {
       if (counts[m] > 0) {
         std::printf(" %.3f |", errors[m] / counts[m]);
       } else {
@@ -371,13 +426,15 @@ int main(int argc, char** argv) {
       time_auto / time_disk);
   std::printf(
       "\nintervals holding the truth: translating_disk %d of %d, auto %d of "
-      "%d, calibrated %d of %d answers\n",
+      "%d, calibrated %d of %d, calibrated shape %d of %d answers\n",
       held[0],
       answered[0],
       held[1],
       answered[1],
       held[2],
-      answered[2]);
+      answered[2],
+      held[3],
+      answered[3]);
   std::printf("\nauto, first scene of each profile:\n");
   for (const std::string& note : notes) std::printf("- %s\n", note.c_str());
   std::printf("\ncalibration (focus fitted):\n");

@@ -55,9 +55,17 @@ done
   --DPPsfCalibrator.lens "RF50mm F1.8 STM" >"$out/calibration/log" 2>&1 \
   || { tail -n 3 "$out/calibration/log" >&2; die "calibration failed"; }
 log "calibration ($((SECONDS - start)) s): $(grep -o 'centroid offset [0-9.]* R (95.*' "$out/calibration/log" | tail -n 1)"
+log "measured shape: $(grep -o 'kernel shapes measured.*' "$out/calibration/log" | tail -n 1)"
+# The same calibration with the split family's shape at the fitted strength
+# instead of the deconvolved kernels, for comparison.
+"$colmap" dp_psf_calibrator --dp_image_path "$out/calibration/dp" \
+  --targets_path "$targets" --output_path "$out/calibration/family.dpsf" \
+  --DPPsfCalibrator.measure_shape 0 >"$out/calibration/family.log" 2>&1 \
+  || { tail -n 3 "$out/calibration/family.log" >&2; die "calibration failed"; }
 
 scenes=(casual/orbbec/001 casual/orbbec/002 casual/orbbec/003 box/001 box/002)
-modes=(defaults no_focus_pin translating_disk calibrated)
+modes=(defaults no_focus_pin translating_disk calibrated calibrated_no_pin
+       family family_no_pin)
 results="$out/results.tsv"
 : >"$results"
 for scene in "${scenes[@]}"; do
@@ -73,6 +81,14 @@ for scene in "${scenes[@]}"; do
       translating_disk) args=(--DPScaleEstimator.psf_model translating_disk) ;;
       calibrated) args=(--DPScaleEstimator.psf_model calibrated
                         --DPScaleEstimator.psf_path "$out/calibration/r6m2_rf50_f4.dpsf") ;;
+      calibrated_no_pin) args=(--DPScaleEstimator.psf_model calibrated
+                        --DPScaleEstimator.psf_path "$out/calibration/r6m2_rf50_f4.dpsf"
+                        --DPScaleEstimator.pin_to_recorded_focus 0) ;;
+      family) args=(--DPScaleEstimator.psf_model calibrated
+                    --DPScaleEstimator.psf_path "$out/calibration/family.dpsf") ;;
+      family_no_pin) args=(--DPScaleEstimator.psf_model calibrated
+                    --DPScaleEstimator.psf_path "$out/calibration/family.dpsf"
+                    --DPScaleEstimator.pin_to_recorded_focus 0) ;;
     esac
     report="$out/$name.$mode.json"
     t0=$SECONDS
@@ -115,7 +131,8 @@ for name, mode, rs, lo, hi, g, why, rec, agree, source in rows:
         print("| %s | %s | | | | | | %s |" % (name, mode, why))
 print("\n| mode | answered | e_s over answers | intervals holding the truth |")
 print("|---|---|---|---|")
-for mode in ["defaults", "no_focus_pin", "translating_disk", "calibrated"]:
+for mode in ["defaults", "no_focus_pin", "translating_disk", "calibrated",
+             "calibrated_no_pin", "family", "family_no_pin"]:
     ans = [r for r in rows if r[1] == mode and r[2]]
     n = len([r for r in rows if r[1] == mode])
     es = sum(abs(1 - float(r[2])) for r in ans) / len(ans) if ans else float("nan")

@@ -271,5 +271,16 @@ inline KernelPair SoftSplitKernels(int half,
   return k;
 }
 
+// True convolution through OpenCV's correlation (the kernel rotated by 180
+// degrees), sharing nothing with the code under test: the oracle of the
+// kernel-measurement tests.
+inline cv::Mat ConvolveWithOpenCV(const cv::Mat& image, const cv::Mat& psf) {
+  cv::Mat flipped, out;
+  cv::flip(psf, flipped, -1);
+  cv::filter2D(
+      image, out, CV_32F, flipped, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  return out;
+}
+
 }  // namespace test
 }  // namespace dpsfm

@@ -233,9 +233,13 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 
   BlurEstimationOptions blur = options_.blur;
   blur.max_radius_px = geometry.max_radius_px;
+  // The border the blur search's kernel grid needs (its bound is the
+  // search bound rounded up to a grid step).
+  const double grid_bound =
+      DPKernelGrid::BoundFor(blur.grid_step_px, geometry.max_radius_px);
   int border = 0;
   for (const auto& psf : field_.cells) {
-    border = std::max(border, psf->KernelRadius(geometry.max_radius_px));
+    border = std::max(border, psf->KernelRadius(grid_bound));
   }
   auto band_of = [&](const cv::Rect& interior) {
     return field_.layout.CellAt(

@@ -28,6 +28,12 @@ cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
   return wrapped;
 }
 
+double DPKernelGrid::BoundFor(double step_px, double max_radius_px) {
+  return step_px *
+         std::max(1,
+                  static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9)));
+}
+
 DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
                            double step_px,
                            double max_radius_px,

@@ -31,6 +31,9 @@ class DPKernelGrid {
                double max_radius_px,
                const cv::Size& dft_size);
 
+  // The grid's bound for a step and a search bound, without building it.
+  static double BoundFor(double step_px, double max_radius_px);
+
   int NumNodes() const { return num_nodes_; }
   int HalfNodes() const { return half_nodes_; }
   double Step() const { return step_; }

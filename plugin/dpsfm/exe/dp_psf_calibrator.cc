@@ -21,6 +21,7 @@
 #include "dpsfm/core/kernel_grid.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/psf_calibration.h"
+#include "dpsfm/core/shape_calibration.h"
 #include "dpsfm/core/target_calibration.h"
 
 namespace fs = boost::filesystem;
@@ -55,6 +56,10 @@ struct CalibratorOptions {
   // lens (EXIF LensModel) the profile belongs to.
   std::string camera;
   std::string lens;
+  // Measure the kernels' shape by deconvolution where a stopped-down
+  // capture of the same target is given (else the family's shape at the
+  // fitted strength is written).
+  bool measure_shape = true;
   int num_threads = -1;
 };
 
@@ -67,6 +72,82 @@ std::vector<ProfilePatch> Spread(const std::vector<ProfilePatch>& found,
     spread.push_back(found[k * found.size() / count]);
   }
   return spread;
+}
+
+// The stopped-down capture of the same target for each capture with blur:
+// the same target distance (to 0.5 %) and a blur at most a third of its
+// own. Then the shapes, on the strength fit's layout.
+ShapeCalibration MeasureShapes(const std::vector<CalibrationTarget>& targets,
+                               const TargetCalibration& calibration,
+                               const std::vector<cv::Mat>& left,
+                               const std::vector<cv::Mat>& right) {
+  colmap::PrintHeading2("Measuring the kernels' shape");
+  std::vector<ShapeCapture> captures;
+  for (size_t i = 0; i < targets.size(); ++i) {
+    const double r = calibration.capture_radius_px[i];
+    int best = -1;
+    for (size_t j = 0; j < targets.size(); ++j) {
+      const double rj = calibration.capture_radius_px[j];
+      if (j == i ||
+          std::abs(targets[j].target_distance_m / targets[i].target_distance_m -
+                   1) > 0.005 ||
+          !(std::abs(rj) <= std::abs(r) / 3)) {
+        continue;
+      }
+      if (best < 0 ||
+          std::abs(rj) < std::abs(calibration.capture_radius_px[best])) {
+        best = static_cast<int>(j);
+      }
+    }
+    if (best < 0) continue;
+    ShapeCapture capture;
+    capture.name = targets[i].name;
+    capture.left = left[i];
+    capture.right = right[i];
+    capture.sharp = left[best] + right[best];
+    capture.signed_radius_px = r;
+    LOG(INFO) << "  " << capture.name << " against " << targets[best].name
+              << " (blur " << std::fixed << std::setprecision(2) << r
+              << " px against " << calibration.capture_radius_px[best]
+              << " px)";
+    captures.push_back(std::move(capture));
+  }
+  ShapeCalibration shape;
+  if (captures.empty()) {
+    shape.reason =
+        "no stopped-down capture of the same target to measure the shape "
+        "against: add one at f/16 or more for each distance";
+    LOG(INFO) << "  " << shape.reason;
+    return shape;
+  }
+  ShapeCalibrationOptions options;
+  options.layout = calibration.layout;
+  shape = CalibrateShapes(captures, options);
+  for (size_t i = 0; i < shape.capture_names.size(); ++i) {
+    std::ostringstream line;
+    line << "  " << shape.capture_names[i] << ": centroid offset per radius";
+    for (const double o : shape.capture_cell_offsets[i]) {
+      line << " " << std::setprecision(4) << o;
+    }
+    if (!shape.capture_notes[i].empty())
+      line << " (" << shape.capture_notes[i] << ")";
+    LOG(INFO) << line.str();
+  }
+  LOG(INFO) << "  " << shape.reason;
+  return shape;
+}
+
+// The measured shape's overall strength, weighted as the strength fit
+// weights its cells (by their patches).
+double ShapeStrength(const ShapeCalibration& shape,
+                     const TargetCalibration& calibration) {
+  double log_sum = 0, weight = 0;
+  for (size_t c = 0; c < shape.cell_centroid_offsets.size(); ++c) {
+    const double w = std::max(1, calibration.cell_patches[c]);
+    log_sum += w * std::log(shape.cell_centroid_offsets[c]);
+    weight += w;
+  }
+  return std::exp(log_sum / weight);
 }
 
 }  // namespace
@@ -117,6 +198,10 @@ int RunDPPsfCalibrator(int argc, char** argv) {
   manager.AddDefaultOption("DPPsfCalibrator.lens",
                            &options.lens,
                            "lens for the profile library (EXIF LensModel)");
+  manager.AddDefaultOption("DPPsfCalibrator.measure_shape",
+                           &options.measure_shape,
+                           "measure the kernels' shape against stopped-down "
+                           "captures of the same targets");
   manager.AddDefaultOption("DPPsfCalibrator.num_threads",
                            &options.num_threads,
                            "threads (-1: all cores)");
@@ -155,6 +240,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     const DPImageIndex index(layout);
 
     std::vector<CalibrationCapture> captures;
+    // The grey working frames, for the shape measurement.
+    std::vector<cv::Mat> grey_left, grey_right;
     cv::Size frame_size;
     PatchGeometry geometry{};
     int border = 0;
@@ -220,6 +307,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
                 << target.lens.f_number << "; " << found.size()
                 << " textured patches, " << capture.patches.size() << " used";
       captures.push_back(std::move(capture));
+      grey_left.push_back(left);
+      grey_right.push_back(right_view);
     }
 
     TargetCalibrationOptions fit_options;
@@ -253,6 +342,11 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     LOG(INFO) << "Fitted in " << std::fixed << std::setprecision(1)
               << calibration.seconds << " s";
 
+    const ShapeCalibration shape =
+        options.measure_shape
+            ? MeasureShapes(targets, calibration, grey_left, grey_right)
+            : ShapeCalibration();
+
     // The profile file: each cell's fitted profile as a measured kernel pair
     // at the search bound (far side); the estimator magnifies it for every
     // other radius.
@@ -263,19 +357,35 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     profile.layout = calibration.layout;
     profile.camera = options.camera;
     profile.lens = options.lens;
-    for (int c = 0; c < calibration.layout.NumCells(); ++c) {
-      const DPKernels k =
-          SplitProfilePsf(SplitProfileParams::ForCentroidOffset(
-                              calibration.cell_centroid_offsets[c]))
-              .Kernels(profile.reference_radius_px);
-      profile.left_kernels.push_back(k.left);
-      profile.right_kernels.push_back(k.right);
-    }
-    // What the scale inherits: the overall strength's interval.
-    const double uncertainty =
+    // What the scale inherits: the overall strength's interval, and where
+    // the shape was measured, the two measurements' disagreement (the
+    // blur readings' strength and the deconvolved kernels' own).
+    double uncertainty =
         std::max(calibration.strength - calibration.strength_ci_low,
                  calibration.strength_ci_high - calibration.strength) /
         calibration.strength;
+    if (shape.determined) {
+      profile.reference_radius_px = shape.reference_radius_px;
+      for (const DPKernels& k : shape.cell_kernels) {
+        profile.left_kernels.push_back(k.left);
+        profile.right_kernels.push_back(k.right);
+      }
+      const double shape_strength = ShapeStrength(shape, calibration);
+      uncertainty = std::max(
+          uncertainty, std::abs(shape_strength / calibration.strength - 1));
+      LOG(INFO) << "Measured shape: strength " << std::setprecision(4)
+                << shape_strength << " R against " << calibration.strength
+                << " R from the blur readings";
+    } else {
+      for (int c = 0; c < calibration.layout.NumCells(); ++c) {
+        const DPKernels k =
+            SplitProfilePsf(SplitProfileParams::ForCentroidOffset(
+                                calibration.cell_centroid_offsets[c]))
+                .Kernels(profile.reference_radius_px);
+        profile.left_kernels.push_back(k.left);
+        profile.right_kernels.push_back(k.right);
+      }
+    }
     profile.uncertainty = uncertainty;
     auto add = [&](const std::string& key, const std::string& value) {
       profile.fit_info.emplace_back("fit_" + key, value);
@@ -300,6 +410,12 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     v << calibration.centroid_offset << " (translating disk "
       << TranslatingDiskPsf::CentroidOffsetPerRadius() << ")";
     add("centroid_offset_per_radius", v.str());
+    add("shape",
+        shape.determined
+            ? "measured by deconvolution: " + shape.reason
+            : "the split family's at the fitted strength" +
+                  (shape.reason.empty() ? std::string()
+                                        : " (" + shape.reason + ")"));
     add("frame_size",
         std::to_string(frame_size.width) + "x" +
             std::to_string(frame_size.height));
