@@ -250,12 +250,17 @@ TEST(SplitProfilePsf, CentroidOffsetsFollowTheParameters) {
 // kernels' numerically integrated centroid, and the path is monotone and
 // reaches both ends.
 TEST(SplitProfilePsf, PathByCentroidOffset) {
+  // The sharpest split with the brightest rim: p = 0.05, b = 4.
   EXPECT_NEAR(
-      SplitProfileParams::MaxCentroidOffset(), 8 / (3 * M_PI * 2.05), 1e-12);
+      SplitProfileParams::MaxCentroidOffset(),
+      (2 / 2.05 * (4.0 / 3 + 16.0 / 15) + 128 / (15 * 4.05)) / (3 * M_PI),
+      1e-12);
+  EXPECT_GT(SplitProfileParams::MaxCentroidOffset(), 0.46);
   EXPECT_NEAR(
       SplitProfileParams::MinCentroidOffset(), 8 / (9 * M_PI) * 0.1, 1e-12);
   EXPECT_LT(SplitProfileParams::MinCentroidOffset(), 0.05);
-  for (const double kappa : {0.03, 0.05, 0.09, 0.2, 0.283, 0.3, 0.36, 0.41}) {
+  for (const double kappa :
+       {0.03, 0.05, 0.09, 0.2, 0.283, 0.3, 0.36, 0.41, 0.43, 0.45, 0.47}) {
     const SplitProfileParams params =
         SplitProfileParams::ForCentroidOffset(kappa);
     ASSERT_TRUE(params.Check()) << kappa;
@@ -267,8 +272,44 @@ TEST(SplitProfilePsf, PathByCentroidOffset) {
   }
   EXPECT_THROW(SplitProfileParams::ForCentroidOffset(0.02),
                std::invalid_argument);
-  EXPECT_THROW(SplitProfileParams::ForCentroidOffset(0.43),
+  EXPECT_THROW(SplitProfileParams::ForCentroidOffset(0.48),
                std::invalid_argument);
+}
+
+// The bright rim's closed form against a direct numerical integration of
+// the continuous profile over the unit disk (midpoint rule on a fine grid,
+// written here): weight 1 + b rho^2, the +x view's share (1 + g(x / a)) / 2.
+TEST(SplitProfilePsf, BrightRimClosedForm) {
+  for (const double p : {0.05, 0.6, 1.0, 3.0}) {
+    for (const double b : {0.0, 1.0, 4.0}) {
+      const int n = 1500;
+      double weight = 0, moment = 0;
+      for (int iy = 0; iy < n; ++iy) {
+        const double y = -1 + (iy + 0.5) * 2.0 / n;
+        const double a = std::sqrt(std::max(0.0, 1 - y * y));
+        for (int ix = 0; ix < n; ++ix) {
+          const double x = -1 + (ix + 0.5) * 2.0 / n;
+          if (x * x + y * y >= 1) continue;
+          const double t = x / a;
+          const double g = (t < 0 ? -1 : 1) * std::pow(std::abs(t), p);
+          const double w = 1 + b * (x * x + y * y);
+          weight += w * 0.5 * (1 + g);
+          moment += x * w * 0.5 * (1 + g);
+        }
+      }
+      SplitProfileParams params;
+      params.split_exponent = p;
+      params.rim_brightness = b;
+      EXPECT_NEAR(params.CentroidOffset(), moment / weight, 2e-3)
+          << "p " << p << " b " << b;
+      // And the pixel-integrated kernels (the code's own integration).
+      EXPECT_NEAR(CentroidOffsetPerRadius(SplitProfilePsf(params), 16) /
+                      params.CentroidOffset(),
+                  1.0,
+                  0.02)
+          << "p " << p << " b " << b;
+    }
+  }
 }
 
 // Magnification about the centre pixel against closed forms.

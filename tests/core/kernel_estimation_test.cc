@@ -11,7 +11,6 @@
 namespace dpsfm {
 namespace {
 
-
 cv::Mat Normalised(const cv::Mat& k) { return k / cv::sum(k)[0]; }
 
 // Sum of |a - b| of two kernels normalised to one, centre-aligned (the
@@ -53,10 +52,10 @@ TEST(EstimateKernel, RecoversAnOutOfFamilyKernelWithoutNoise) {
   KernelEstimationOptions options;
   options.half_size = 6;
   options.smoothness = 1e-4;
-  const EstimatedKernel left =
-      EstimateKernel(sharp, test::ConvolveWithOpenCV(sharp, truth.left), options);
-  const EstimatedKernel right =
-      EstimateKernel(sharp, test::ConvolveWithOpenCV(sharp, truth.right), options);
+  const EstimatedKernel left = EstimateKernel(
+      sharp, test::ConvolveWithOpenCV(sharp, truth.left), options);
+  const EstimatedKernel right = EstimateKernel(
+      sharp, test::ConvolveWithOpenCV(sharp, truth.right), options);
   const double dl = L1Distance(left.kernel, truth.left);
   const double dr = L1Distance(right.kernel, truth.right);
   std::printf("L1 %.4f %.4f, residual %.2e, %d iterations\n",
@@ -75,16 +74,19 @@ TEST(EstimateKernel, RecoversAnOutOfFamilyKernelWithoutNoise) {
 // pair's shape and its left/right separation survive; the stopped-down
 // capture misregistered by (2, -1) px is re-centred away.
 TEST(EstimateDPKernels, NoisyMisregisteredCaptureKeepsShapeAndDisparity) {
-  const test::KernelPair truth = test::SoftSplitKernels(4, 0.8, -20, 2.0, 0, 1.5);
+  const test::KernelPair truth =
+      test::SoftSplitKernels(4, 0.8, -20, 2.0, 0, 1.5);
   const cv::Mat scene = test::MakeTexture(cv::Size(240, 200), 7);
-  const cv::Mat left = AddNoise(test::ConvolveWithOpenCV(scene, truth.left), 0.003, 1);
-  const cv::Mat right = AddNoise(test::ConvolveWithOpenCV(scene, truth.right), 0.003, 2);
+  const cv::Mat left =
+      AddNoise(test::ConvolveWithOpenCV(scene, truth.left), 0.003, 1);
+  const cv::Mat right =
+      AddNoise(test::ConvolveWithOpenCV(scene, truth.right), 0.003, 2);
   // The sharp capture: the scene 2 px to the right and 1 px up, darker
   // (a stopped-down exposure), with its own noise.
   cv::Mat moved;
   const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 2, 0, 1, -1);
-  cv::warpAffine(scene, moved, shift, scene.size(), cv::INTER_NEAREST,
-                 cv::BORDER_REFLECT);
+  cv::warpAffine(
+      scene, moved, shift, scene.size(), cv::INTER_NEAREST, cv::BORDER_REFLECT);
   const cv::Mat sharp = AddNoise(0.4 * moved, 0.003, 3);
   KernelEstimationOptions options;
   options.half_size = 8;
@@ -94,10 +96,16 @@ TEST(EstimateDPKernels, NoisyMisregisteredCaptureKeepsShapeAndDisparity) {
   t.right = Normalised(truth.right) * 0.5;
   const double dl = L1Distance(k.kernels.left, t.left);
   const double dr = L1Distance(k.kernels.right, t.right);
-  std::printf("L1 %.3f %.3f, separation %.3f (truth %.3f), moved by (%.2f, "
-              "%.2f), left share %.3f\n",
-              dl, dr, SeparationX(k.kernels), SeparationX(t),
-              k.recentred_by.x, k.recentred_by.y, k.left_share);
+  std::printf(
+      "L1 %.3f %.3f, separation %.3f (truth %.3f), moved by (%.2f, "
+      "%.2f), left share %.3f\n",
+      dl,
+      dr,
+      SeparationX(k.kernels),
+      SeparationX(t),
+      k.recentred_by.x,
+      k.recentred_by.y,
+      k.left_share);
   EXPECT_LT(dl, 0.18);
   EXPECT_LT(dr, 0.18);
   EXPECT_NEAR(SeparationX(k.kernels) / SeparationX(t), 1.0, 0.06);

@@ -11,7 +11,6 @@
 namespace dpsfm {
 namespace {
 
-
 cv::Mat Noisy(const cv::Mat& image, int seed) {
   cv::Mat noise(image.size(), CV_32FC1);
   cv::RNG(seed).fill(noise, cv::RNG::NORMAL, 0, 0.003);
@@ -47,8 +46,13 @@ test::KernelPair Centred(const test::KernelPair& k) {
                          std::make_pair(&k.right, &out.right)}) {
     cv::Mat padded;
     cv::copyMakeBorder(*io.first, padded, p, p, p, p, cv::BORDER_CONSTANT, 0);
-    cv::warpAffine(padded, *io.second, shift, padded.size(), cv::INTER_LINEAR,
-                   cv::BORDER_CONSTANT, 0);
+    cv::warpAffine(padded,
+                   *io.second,
+                   shift,
+                   padded.size(),
+                   cv::INTER_LINEAR,
+                   cv::BORDER_CONSTANT,
+                   0);
   }
   return out;
 }
@@ -79,8 +83,12 @@ ShapeCapture Capture(int signed_radius, int seed, bool swap = false) {
   c.signed_radius_px = signed_radius;
   c.left = test::ConvolveWithOpenCV(scene, a.left);
   c.right = test::ConvolveWithOpenCV(scene, a.right);
-  test::ConvolveWithOpenCV(scene, b.left).colRange(160, 320).copyTo(c.left.colRange(160, 320));
-  test::ConvolveWithOpenCV(scene, b.right).colRange(160, 320).copyTo(c.right.colRange(160, 320));
+  test::ConvolveWithOpenCV(scene, b.left)
+      .colRange(160, 320)
+      .copyTo(c.left.colRange(160, 320));
+  test::ConvolveWithOpenCV(scene, b.right)
+      .colRange(160, 320)
+      .copyTo(c.right.colRange(160, 320));
   c.left = Noisy(c.left, seed + 1);
   c.right = Noisy(c.right, seed + 2);
   if (swap) std::swap(c.left, c.right);
@@ -133,8 +141,8 @@ TEST(CalibrateShapes, OutOfFamilyKernelsPerCell) {
     auto pad = [&](const cv::Mat& m) {
       cv::Mat out;
       const int p = half - m.rows / 2;
-      cv::copyMakeBorder(m / cv::sum(m)[0], out, p, p, p, p,
-                         cv::BORDER_CONSTANT, 0);
+      cv::copyMakeBorder(
+          m / cv::sum(m)[0], out, p, p, p, p, cv::BORDER_CONSTANT, 0);
       return out;
     };
     const double dl = cv::norm(pad(k.left), pad(t.left), cv::NORM_L1);

@@ -100,6 +100,7 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                                        "split_exponent",
                                        "crosstalk",
                                        "rim_softness",
+                                       "rim_brightness",
                                        "band_split_exponents",
                                        "reference_radius_px",
                                        "side",
@@ -167,6 +168,7 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     refuse_keys({"split_exponent",
                  "crosstalk",
                  "rim_softness",
+                 "rim_brightness",
                  "band_split_exponents"});
     for (const char* key : {"reference_radius_px", "side", "left", "right"}) {
       if (values.count(key) == 0) {
@@ -244,6 +246,10 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     profile.params.rim_softness =
         ParseNumber(values["rim_softness"], where("rim_softness"));
   }
+  if (values.count("rim_brightness")) {
+    profile.params.rim_brightness =
+        ParseNumber(values["rim_brightness"], where("rim_brightness"));
+  }
   if (values.count("band_split_exponents")) {
     for (const double p : ParseNumbers(values["band_split_exponents"],
                                        where("band_split_exponents"))) {
@@ -264,7 +270,8 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     throw InputError(path + ": profile out of range (" +
                      profile.params.ToString() +
                      "; split_exponent in [0.05, 8], crosstalk in [0, "
-                     "0.45], rim_softness in [0, 0.5])");
+                     "0.45], rim_softness in [0, 0.5], rim_brightness in "
+                     "[0, 4])");
   }
   return profile;
 }
@@ -350,6 +357,9 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
     file << "split_exponent " << profile.params.split_exponent << "\n"
          << "crosstalk " << profile.params.crosstalk << "\n"
          << "rim_softness " << profile.params.rim_softness << "\n";
+    if (profile.params.rim_brightness > 0) {
+      file << "rim_brightness " << profile.params.rim_brightness << "\n";
+    }
     if (!profile.band_split_exponents.empty()) {
       file << "band_split_exponents";
       for (const double p : profile.band_split_exponents) file << " " << p;

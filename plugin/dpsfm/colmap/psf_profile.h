@@ -8,6 +8,7 @@
 //   split_exponent 0.62
 //   crosstalk 0
 //   rim_softness 0
+//   rim_brightness 0      (optional: light weighted by 1 + b (rho / R)^2)
 //   band_split_exponents 0.45 0.62 0.80   (optional: the split exponent of
 //                          each equal-width column band, left to right, for
 //                          a profile that changes across the frame)

@@ -153,13 +153,16 @@ bool SplitProfileParams::Check() const {
   return std::isfinite(split_exponent) && split_exponent >= 0.05 &&
          split_exponent <= 8 && std::isfinite(crosstalk) && crosstalk >= 0 &&
          crosstalk <= 0.45 && std::isfinite(rim_softness) &&
-         rim_softness >= 0 && rim_softness <= 0.5;
+         rim_softness >= 0 && rim_softness <= 0.5 &&
+         std::isfinite(rim_brightness) && rim_brightness >= 0 &&
+         rim_brightness <= 4;
 }
 
 std::string SplitProfileParams::ToString() const {
   std::ostringstream s;
   s << std::setprecision(4) << "split_exponent=" << split_exponent
     << ", crosstalk=" << crosstalk << ", rim_softness=" << rim_softness;
+  if (rim_brightness > 0) s << ", rim_brightness=" << rim_brightness;
   return s.str();
 }
 
@@ -175,8 +178,9 @@ SplitProfilePsf::SplitProfilePsf(const SplitProfileParams& params,
 std::string SplitProfilePsf::Name() const {
   std::ostringstream name;
   name << std::setprecision(6) << "split_profile(p=" << params_.split_exponent
-       << ",c=" << params_.crosstalk << ",e=" << params_.rim_softness
-       << ",subsamples=" << subsamples_per_pixel_ << ")";
+       << ",c=" << params_.crosstalk << ",e=" << params_.rim_softness;
+  if (params_.rim_brightness > 0) name << ",b=" << params_.rim_brightness;
+  name << ",subsamples=" << subsamples_per_pixel_ << ")";
   return name.str();
 }
 
@@ -199,23 +203,37 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
   auto g_integral = [p](double t) {
     return std::pow(std::abs(t), p + 1) / (p + 1);
   };
+  // Antiderivative of t^2 g(t), for the bright rim's x^2 term.
+  auto g3_integral = [p](double t) {
+    return std::pow(std::abs(t), p + 3) / (p + 3);
+  };
+  const double b = params_.rim_brightness;
+  const double inv_r2 = radius > 0 ? 1 / (radius * radius) : 0;
   // Weight towards +x; the view leaning -x is its mirror image.
   std::vector<double> plus(side * side, 0.0), minus(side * side, 0.0);
   const double dy = 1.0 / subsamples_per_pixel_;
-  ForEachChordPiece(radius,
-                    half,
-                    subsamples_per_pixel_,
-                    -half,
-                    [&](int i, int j, double lo, double hi, double a) {
-                      // Exact along x: (hi - lo) / 2 +- (a / 2) (G(hi / a) -
-                      // G(lo / a)).
-                      const double base = 0.5 * (hi - lo) * dy;
-                      const double split =
-                          0.5 * a * (g_integral(hi / a) - g_integral(lo / a)) *
-                          dy;
-                      plus[(i + half) * side + j + half] += base + split;
-                      minus[(i + half) * side + j + half] += base - split;
-                    });
+  ForEachChordPiece(
+      radius,
+      half,
+      subsamples_per_pixel_,
+      -half,
+      [&](int i, int j, double lo, double hi, double a) {
+        // Exact along x, with the weight 1 + b (x^2 + y^2) /
+        // R^2 (y^2 = R^2 - a^2): (1 / 2) integral of w (1 +-
+        // g(x / a)) dx.
+        const double w0 = 1 + b * (radius * radius - a * a) * inv_r2;
+        const double w2 = b * inv_r2;
+        const double base =
+            0.5 * (w0 * (hi - lo) + w2 * (hi * hi * hi - lo * lo * lo) / 3) *
+            dy;
+        const double split =
+            0.5 *
+            (w0 * a * (g_integral(hi / a) - g_integral(lo / a)) +
+             w2 * a * a * a * (g3_integral(hi / a) - g3_integral(lo / a))) *
+            dy;
+        plus[(i + half) * side + j + half] += base + split;
+        minus[(i + half) * side + j + half] += base - split;
+      });
   cv::Mat towards_plus_x(side, side, CV_32FC1);
   cv::Mat towards_minus_x(side, side, CV_32FC1);
   double total = 0;
@@ -256,7 +274,10 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
 }
 
 double SplitProfileParams::CentroidOffset() const {
-  return 8.0 / (3.0 * M_PI * (split_exponent + 2.0)) * (1.0 - 2.0 * crosstalk);
+  const double p = split_exponent, b = rim_brightness;
+  const double numerator = 2.0 / (p + 2.0) * (4.0 / 3.0 + 4.0 * b / 15.0) +
+                           32.0 * b / (15.0 * (p + 4.0));
+  return numerator / (M_PI * (1.0 + 0.5 * b)) * (1.0 - 2.0 * crosstalk);
 }
 
 double SplitProfileParams::MinCentroidOffset() {
@@ -268,6 +289,7 @@ double SplitProfileParams::MinCentroidOffset() {
 double SplitProfileParams::MaxCentroidOffset() {
   SplitProfileParams params;
   params.split_exponent = 0.05;
+  params.rim_brightness = 4;
   return params.CentroidOffset();
 }
 
@@ -278,7 +300,17 @@ SplitProfileParams SplitProfileParams::ForCentroidOffset(double kappa) {
       << MinCentroidOffset() << ", " << MaxCentroidOffset() << "]";
   SplitProfileParams params;
   const double linear = SplitProfileParams().CentroidOffset();
-  if (kappa >= linear) {
+  SplitProfileParams sharpest;
+  sharpest.split_exponent = 0.05;
+  if (kappa > sharpest.CentroidOffset()) {
+    // kappa pi (1 + b / 2) = A + B b, linear in b (CentroidOffset).
+    const double p = sharpest.split_exponent;
+    const double a = 8.0 / (3.0 * (p + 2.0));
+    const double bb = 8.0 / (15.0 * (p + 2.0)) + 32.0 / (15.0 * (p + 4.0));
+    params.split_exponent = p;
+    params.rim_brightness = std::min(
+        4.0, std::max(0.0, (a - kappa * M_PI) / (0.5 * kappa * M_PI - bb)));
+  } else if (kappa >= linear) {
     params.split_exponent = std::max(0.05, 8.0 / (3.0 * M_PI * kappa) - 2.0);
   } else {
     params.crosstalk = std::min(0.45, 0.5 * (1.0 - kappa / linear));

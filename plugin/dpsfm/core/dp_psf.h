@@ -110,24 +110,35 @@ class TranslatingDiskPsf : public DPPsfModel {
 //   (centroid offset x (1 - 2 c)).
 // - rim_softness e: the disk's rim is blurred by a Gaussian of sigma e |r|
 //   (apodisation, residual aberrations).
+// - rim_brightness b: the disk's light is weighted by 1 + b (rho / R)^2, a
+//   bright rim (the Pixel 4's published kernels have one), which moves
+//   each view's light outwards.
 struct SplitProfileParams {
   double split_exponent = 1;
   double crosstalk = 0;
   double rim_softness = 0;
+  double rim_brightness = 0;
 
   // Ranges in which the kernels stay meaningful: p in [0.05, 8], c in
-  // [0, 0.45], e in [0, 0.5].
+  // [0, 0.45], e in [0, 0.5], b in [0, 4].
   bool Check() const;
   std::string ToString() const;
 
   // Each view's centroid offset from the origin in units of R, in closed
-  // form: 8 / (3 pi (p + 2)) (1 - 2 c) (the rim's Gaussian keeps it).
+  // form (the rim's Gaussian keeps it): along a chord of half length a,
+  // integral x g(x / a) dx = 2 a^2 / (p + 2) and, with the rim's x^2,
+  // 2 a^4 / (p + 4); over the disk
+  //   kappa = (1 - 2 c) [2 / (p + 2) (4/3 + 4 b / 15) + 32 b / (15 (p + 4))]
+  //           / (pi (1 + b / 2)),
+  // which is 8 / (3 pi (p + 2)) (1 - 2 c) without a bright rim.
   double CentroidOffset() const;
   // The one-parameter path through the family that self-calibration and
   // calibration search, by centroid offset kappa: kappa >= 8 / (9 pi)
   // (0.283) sharpens the split (p = 8 / (3 pi kappa) - 2, no crosstalk, up
-  // to 0.414 at p = 0.05), smaller kappa keeps the linear split and adds
-  // crosstalk (down to 0.028 at c = 0.45), the way weak real splits behave.
+  // to 0.414 at p = 0.05), beyond that the sharp split's rim brightens (up
+  // to 0.472 at b = 4; a sharply split ring would be 2 / pi = 0.637),
+  // smaller kappa keeps the linear split and adds crosstalk (down to 0.028
+  // at c = 0.45), the way weak real splits behave.
   static SplitProfileParams ForCentroidOffset(double kappa);
   static double MinCentroidOffset();
   static double MaxCentroidOffset();

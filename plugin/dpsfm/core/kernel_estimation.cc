@@ -22,8 +22,7 @@ std::vector<cv::Mat> Derivatives(const cv::Mat& image) {
   image.convertTo(f, CV_64FC1);
   const cv::Mat kx = (cv::Mat_<double>(1, 2) << -1, 1);
   cv::filter2D(f, dx, CV_64F, kx, cv::Point(0, 0), 0, cv::BORDER_REPLICATE);
-  cv::filter2D(f, dy, CV_64F, kx.t(), cv::Point(0, 0), 0,
-               cv::BORDER_REPLICATE);
+  cv::filter2D(f, dy, CV_64F, kx.t(), cv::Point(0, 0), 0, cv::BORDER_REPLICATE);
   return {dx, dy};
 }
 
@@ -49,8 +48,14 @@ void AddNormalEquations(const cv::Mat& s,
   // in four look-ups. S is zero-padded by 2h so that P_v exists over the
   // whole frame; the look-ups of valid pairs never touch the padding.
   cv::Mat padded;
-  cv::copyMakeBorder(s, padded, 2 * h, 2 * h, 2 * h, 2 * h,
-                     cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::copyMakeBorder(s,
+                     padded,
+                     2 * h,
+                     2 * h,
+                     2 * h,
+                     2 * h,
+                     cv::BORDER_CONSTANT,
+                     cv::Scalar(0));
   const cv::Rect frame(2 * h, 2 * h, s.cols, s.rows);
   cv::Mat product, integral;
   for (int vy = -2 * h; vy <= 2 * h; ++vy) {
@@ -183,8 +188,7 @@ bool KernelEstimationOptions::Check() const {
       << half_size;
   DPSFM_CHECK(smoothness >= 0 && std::isfinite(smoothness))
       << "KernelEstimationOptions.smoothness must be >= 0, got " << smoothness;
-  DPSFM_CHECK_GE(max_iterations, 1)
-      << "KernelEstimationOptions.max_iterations";
+  DPSFM_CHECK_GE(max_iterations, 1) << "KernelEstimationOptions.max_iterations";
   return true;
 }
 
@@ -211,8 +215,7 @@ EstimatedKernel EstimateKernel(const cv::Mat& sharp,
   // ||B - k * S||^2 = ||B||^2 - 2 c^T k + k^T G k.
   const double residual =
       std::max(0.0, eq.energy - 2 * eq.rhs.dot(x) + x.dot(eq.gram * x));
-  out.relative_residual =
-      eq.energy > 0 ? std::sqrt(residual / eq.energy) : 1;
+  out.relative_residual = eq.energy > 0 ? std::sqrt(residual / eq.energy) : 1;
   out.kernel.create(k, k, CV_32FC1);
   for (int i = 0; i < k * k; ++i) {
     out.kernel.at<float>(i / k, i % k) = static_cast<float>(x(i));
@@ -259,8 +262,8 @@ EstimatedDPKernels EstimateDPKernels(const cv::Mat& sharp,
   const EstimatedKernel er = EstimateKernel(s, r, options);
   const double wl = cv::sum(el.kernel)[0], wr = cv::sum(er.kernel)[0];
   DPSFM_CHECK(wl > 0 && wr > 0)
-      << "no kernel explains the blurred views (left " << wl << ", right "
-      << wr << "): is the sharp capture of the same scene?";
+      << "no kernel explains the blurred views (left " << wl << ", right " << wr
+      << "): is the sharp capture of the same scene?";
   EstimatedDPKernels out;
   out.left_share = wl / (wl + wr);
   out.light_ratio = wl + wr;

@@ -48,7 +48,8 @@ struct EstimatedKernel {
 // kernel's centre pixel at the origin) over the region both images cover.
 // `sharp`, `blurred`: CV_32FC1 or CV_64FC1, equal size, each side larger
 // than 4 half_size + 8. The kernel's sum carries the ratio of the blurred
-// image's contrast to the sharp one's: scale `sharp` to the blurred exposure first if that matters.
+// image's contrast to the sharp one's: scale `sharp` to the blurred exposure
+// first if that matters.
 EstimatedKernel EstimateKernel(const cv::Mat& sharp,
                                const cv::Mat& blurred,
                                const KernelEstimationOptions& options);

@@ -58,9 +58,10 @@ struct SplitProfileFitOptions {
   // (SplitProfileParams::ForCentroidOffset): a log-spaced grid, then a
   // finer grid between the neighbours of the best node, then a parabola in
   // log kappa. The default spans what real DP sensors show (weak splits of
-  // ~0.09 R to the sharp half disk's 0.42 R).
+  // ~0.06 R to the Pixel 4's ~0.46 R, beyond the sharp half disk's 0.414 R
+  // through a bright rim).
   double min_centroid_offset = 0.03;
-  double max_centroid_offset = 0.414;
+  double max_centroid_offset = 0.47;
   int num_grid = 11;
   int num_refine = 4;
   // Self-calibration: profiles whose criterion lies within this fraction

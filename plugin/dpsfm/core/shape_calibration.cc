@@ -18,10 +18,12 @@ cv::Rect CellRect(const DPPsfLayout& layout, int cell, const cv::Size& size) {
   const int row = cell / layout.cols, col = cell % layout.cols;
   const double w = (layout.x1 - layout.x0) / layout.cols;
   const double h = (layout.y1 - layout.y0) / layout.rows;
-  const int x0 = static_cast<int>(std::round((layout.x0 + col * w) * size.width));
+  const int x0 =
+      static_cast<int>(std::round((layout.x0 + col * w) * size.width));
   const int x1 =
       static_cast<int>(std::round((layout.x0 + (col + 1) * w) * size.width));
-  const int y0 = static_cast<int>(std::round((layout.y0 + row * h) * size.height));
+  const int y0 =
+      static_cast<int>(std::round((layout.y0 + row * h) * size.height));
   const int y1 =
       static_cast<int>(std::round((layout.y0 + (row + 1) * h) * size.height));
   return cv::Rect(x0, y0, x1 - x0, y1 - y0) & cv::Rect(cv::Point(), size);
@@ -131,8 +133,8 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
     std::ostringstream note;
     if (!used) {
       note << std::setprecision(3) << "blur radius "
-           << std::abs(c.signed_radius_px) << " px < "
-           << options.min_radius_px << " px shows no shape";
+           << std::abs(c.signed_radius_px) << " px < " << options.min_radius_px
+           << " px shows no shape";
     }
     out.capture_notes.push_back(note.str());
     if (used) largest = std::max(largest, std::abs(c.signed_radius_px));
@@ -165,10 +167,10 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
       const double r = std::abs(c.signed_radius_px);
       const cv::Rect rect = CellRect(options.layout, cell, c.left.size());
       KernelEstimationOptions ko;
-      ko.half_size = std::min(
-          24,
-          static_cast<int>(std::ceil(options.support_factor * r)) +
-              options.support_margin_px);
+      ko.half_size =
+          std::min(24,
+                   static_cast<int>(std::ceil(options.support_factor * r)) +
+                       options.support_margin_px);
       ko.smoothness = options.smoothness;
       if (rect.width <= 4 * ko.half_size + 8 ||
           rect.height <= 4 * ko.half_size + 8) {
@@ -194,8 +196,8 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
         n << "cell " << cell << ": the kernels carry " << std::setprecision(2)
           << m.light_ratio
           << " of the light (is the sharp capture of the same view?)";
-        out.capture_notes[i] += (out.capture_notes[i].empty() ? "" : "; ") +
-                                n.str();
+        out.capture_notes[i] +=
+            (out.capture_notes[i].empty() ? "" : "; ") + n.str();
         continue;
       }
       DPKernels k = m.kernels;
@@ -261,9 +263,8 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
     }
   }
   std::ostringstream summary;
-  summary << std::setprecision(3) << "kernel shapes measured in "
-          << num_cells << " cell(s) at " << ref
-          << " px; centroid offset per radius";
+  summary << std::setprecision(3) << "kernel shapes measured in " << num_cells
+          << " cell(s) at " << ref << " px; centroid offset per radius";
   for (int cell = 0; cell < num_cells; ++cell) {
     summary << (cell ? ", " : " ") << out.cell_centroid_offsets[cell];
   }

@@ -48,7 +48,7 @@ struct TargetCalibrationOptions {
   BlurEstimationOptions blur;
   // kappa nodes, log-spaced over the family's range.
   double min_centroid_offset = 0.03;
-  double max_centroid_offset = 0.414;
+  double max_centroid_offset = 0.47;
   int num_nodes = 17;
   // A capture whose patches read less than this (median |r| under the
   // linear split) carries too little blur to see the profile: sharp
