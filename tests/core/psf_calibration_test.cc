@@ -40,7 +40,7 @@ std::vector<ProfilePatch> RenderPatches(
 SplitProfileFitOptions FastOptions() {
   SplitProfileFitOptions options;
   options.blur.max_radius_px = kMaxRadius;
-  options.num_grid = 9;
+  options.grid_ratio = 1.39;  // 9 nodes over 0.03-0.414 R
   options.num_refine = 4;
   options.num_bootstrap = 100;
   return options;

@@ -60,6 +60,12 @@ void DPScaleEstimatorOptions::Check() const {
   CheckOptionalPositive("focal_length_mm", focal_length_mm);
   CheckOptionalPositive("f_number", f_number);
   CheckOptionalPositive("pixel_pitch_um", pixel_pitch_um);
+  try {
+    view_budget.Check();
+  } catch (const std::invalid_argument& error) {
+    throw InputError(std::string("invalid DPScaleEstimator view budget: ") +
+                     error.what());
+  }
   if (!output_path.empty()) {
     const std::string input =
         workspace_path.empty() ? input_path : workspace_path;

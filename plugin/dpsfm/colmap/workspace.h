@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "dpsfm/core/view_budget.h"
+
 namespace dpsfm {
 
 // A problem with the user's input (paths, workspace contents, option values).
@@ -66,6 +68,8 @@ struct DPScaleEstimatorOptions {
   // default folder. With psf_model auto, a library profile whose camera and
   // lens match every view's is used as calibrated.
   std::string psf_library;
+  // Which views to visit and when to stop (large projects).
+  ViewBudgetOptions view_budget;
 
   // Throws InputError naming the option and the value.
   void Check() const;

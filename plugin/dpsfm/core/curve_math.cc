@@ -1,5 +1,7 @@
 #include "dpsfm/core/curve_math.h"
 
+#include "dpsfm/core/check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -30,6 +32,20 @@ double CurveMinimum(const std::vector<double>& xs,
       (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
   if (!(a > 0)) return x1;
   return std::max(x0, std::min(x2, -b / (2 * a)));
+}
+
+std::vector<double> GeometricNodes(double lo, double hi, double ratio) {
+  DPSFM_CHECK(lo > 0 && hi > lo && ratio > 1 && std::isfinite(hi))
+      << "GeometricNodes needs 0 < lo < hi and ratio > 1";
+  std::vector<double> nodes;
+  for (int k = 0;; ++k) {
+    const double x = lo * std::pow(ratio, k);
+    // A node within 1e-6 of hi is hi.
+    if (x >= hi * (1 - 1e-6)) break;
+    nodes.push_back(x);
+  }
+  nodes.push_back(hi);
+  return nodes;
 }
 
 }  // namespace dpsfm

@@ -77,7 +77,9 @@ bool SplitProfileFitOptions::Check() const {
       << SplitProfileParams::MinCentroidOffset() << ", "
       << SplitProfileParams::MaxCentroidOffset() << "]";
   DPSFM_CHECK_GE(consistency_tolerance, 0);
-  DPSFM_CHECK_GE(num_grid, 5);
+  DPSFM_CHECK(grid_ratio > 1.01 && grid_ratio < 3)
+      << "SplitProfileFitOptions.grid_ratio must lie in (1.01, 3), got "
+      << grid_ratio;
   DPSFM_CHECK_GE(num_refine, 0);
   DPSFM_CHECK_GE(min_abs_radius_px, 0);
   DPSFM_CHECK(trim_fraction >= 0 && trim_fraction < 1);
@@ -208,11 +210,11 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   // Coarse grid, then a finer one around its solution.
   const double lo = std::log(options.min_centroid_offset);
   const double hi = std::log(options.max_centroid_offset);
-  std::vector<double> grid;
-  for (int k = 0; k < options.num_grid; ++k) {
-    grid.push_back(lo + (hi - lo) * k / (options.num_grid - 1));
+  for (const double kappa : GeometricNodes(options.min_centroid_offset,
+                                           options.max_centroid_offset,
+                                           options.grid_ratio)) {
+    evaluate(std::log(kappa));
   }
-  for (const double x : grid) evaluate(x);
   std::vector<double> xs, ys;
   curve(usable, &xs, &ys);
   bool at_edge = false;
@@ -220,7 +222,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   // Refined also next to an end node: the minimum may lie between it and
   // its neighbour (the edge is judged on the refined curve).
   if (std::isfinite(best) && options.num_refine > 0) {
-    const double step = (hi - lo) / (options.num_grid - 1);
+    const double step = std::log(options.grid_ratio);
     const double a = std::max(lo, best - step), b = std::min(hi, best + step);
     for (int k = 1; k <= options.num_refine; ++k) {
       evaluate(a + (b - a) * k / (options.num_refine + 1));

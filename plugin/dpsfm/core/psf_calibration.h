@@ -62,7 +62,10 @@ struct SplitProfileFitOptions {
   // through a bright rim).
   double min_centroid_offset = 0.03;
   double max_centroid_offset = 0.47;
-  int num_grid = 11;
+  // Coarse grid: min, min q, min q^2, ... up to max (GeometricNodes; q is
+  // the spacing of 11 nodes over 0.03-0.414 R, the family's range before
+  // its bright rim).
+  double grid_ratio = 1.3002;
   int num_refine = 4;
   // Self-calibration: profiles whose criterion lies within this fraction
   // above the minimum count as consistent with the data (the criterion is

@@ -99,7 +99,9 @@ bool TargetCalibrationOptions::Check() const {
                   SplitProfileParams::MaxCentroidOffset() * (1 + 1e-9) &&
               min_centroid_offset < max_centroid_offset)
       << "centroid offsets must lie in the family's range";
-  DPSFM_CHECK_GE(num_nodes, 5);
+  DPSFM_CHECK(node_ratio > 1.01 && node_ratio < 2)
+      << "TargetCalibrationOptions.node_ratio must lie in (1.01, 2), got "
+      << node_ratio;
   DPSFM_CHECK_GE(min_reading_px, 0);
   DPSFM_CHECK_GE(min_patches, 3);
   DPSFM_CHECK(grid_rows >= 1 && grid_cols >= 1);
@@ -155,13 +157,9 @@ TargetCalibration CalibrateFromTargets(
   }
 
   // Readings along the path (the expensive part), in parallel.
-  std::vector<double> kappas;
-  for (int k = 0; k < options.num_nodes; ++k) {
-    kappas.push_back(std::exp(std::log(options.min_centroid_offset) +
-                              (std::log(options.max_centroid_offset) -
-                               std::log(options.min_centroid_offset)) *
-                                  k / (options.num_nodes - 1)));
-  }
+  const std::vector<double> kappas = GeometricNodes(options.min_centroid_offset,
+                                                    options.max_centroid_offset,
+                                                    options.node_ratio);
   Readings readings(kappas.size(), std::vector<double>(n, kNaN));
   for (size_t k = 0; k < kappas.size(); ++k) {
     const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(

@@ -46,10 +46,12 @@ struct CalibrationCapture {
 struct TargetCalibrationOptions {
   // The blur search (max_radius_px must match the crops' border).
   BlurEstimationOptions blur;
-  // kappa nodes, log-spaced over the family's range.
+  // kappa nodes: min, min q, min q^2, ... up to max (GeometricNodes; q is
+  // the spacing of 17 nodes over 0.03-0.414 R, the family's range before
+  // its bright rim).
   double min_centroid_offset = 0.03;
   double max_centroid_offset = 0.47;
-  int num_nodes = 17;
+  double node_ratio = 1.1783;
   // A capture whose patches read less than this (median |r| under the
   // linear split) carries too little blur to see the profile: sharp
   // captures read 0.5-0.7 px of noise (real f/20 planes: 0.52 px).

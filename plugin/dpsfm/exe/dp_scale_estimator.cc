@@ -15,6 +15,7 @@
 #include "dpsfm/colmap/psf_profile.h"
 #include "dpsfm/colmap/report.h"
 #include "dpsfm/colmap/report_plots.h"
+#include "dpsfm/colmap/scale_controller.h"
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/colmap/workspace_reader.h"
@@ -106,6 +107,21 @@ void AddCommandOptions(colmap::OptionManager* manager,
       "folder of calibrated profiles (*.dpsf) picked by camera and lens "
       "with psf_model auto (default: $DPSFM_PROFILE_LIBRARY or "
       "~/.local/share/dp-sfm/profiles)");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.max_views",
+      &options->view_budget.max_views,
+      "views visited at most (0: no cap); each keeps its best patches");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.min_views",
+      &options->view_budget.min_views,
+      "views visited before the scale may be declared settled");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.check_every",
+      &options->view_budget.check_every,
+      "views between two provisional estimates of the stopping rule");
+  manager->AddDefaultOption("DPScaleEstimator.all_views",
+                            &options->view_budget.all_views,
+                            "visit every view (no stopping rule, no cap)");
   // The method's parameters (paper names in brackets).
   manager->AddDefaultOption("DPScaleEstimator.patch_size",
                             &core->patch_size,
@@ -308,56 +324,12 @@ int RunDPScaleEstimator(int argc, char** argv) {
                       : "")
               << ")";
     DPScaleEstimator estimator(core_options, psf_field);
-    RunTimings timings;
-    std::vector<DPViewSummary> summaries;
-    // A few views' images for the report's patch overlays (8-bit, to keep
-    // memory bounded): the first, middle and last view.
-    std::vector<std::pair<int, cv::Mat>> overlay_images;
-    const int num_views = static_cast<int>(reader.NumViews());
-    colmap::Timer views_timer;
-    views_timer.Start();
-    for (size_t i = 0; i < reader.NumViews(); ++i) {
-      colmap::Timer read_timer;
-      read_timer.Start();
-      const DPView view = reader.LoadView(i);
-      timings.read += read_timer.ElapsedSeconds();
-      DPViewSummary summary;
-      try {
-        summary = estimator.AddView(view);
-      } catch (const std::invalid_argument& error) {
-        throw InputError("image " + view.name + ": " + error.what());
-      }
-      timings.blur += summary.seconds;
-      const int index = static_cast<int>(i);
-      if (!options.report_path.empty() &&
-          (index == 0 || index == (num_views - 1) / 2 ||
-           index == num_views - 1) &&
-          (overlay_images.empty() || overlay_images.back().first != index)) {
-        cv::Mat image;
-        cv::Mat(0.5 * (view.left + view.right)).convertTo(image, CV_8U, 255.0);
-        overlay_images.emplace_back(index, image);
-      }
-      LOG(INFO) << "[" << i + 1 << "/" << reader.NumViews() << "] " << view.name
-                << ": " << summary.patches_valid << " of "
-                << summary.patches_tried << " patches with a blur estimate, "
-                << summary.patches_kept << " kept ("
-                << FormatSeconds(summary.seconds) << "; "
-                << FormatSeconds(views_timer.ElapsedSeconds()) << " so far"
-                << (i + 1 < reader.NumViews()
-                        ? ", about " +
-                              FormatSeconds(views_timer.ElapsedSeconds() /
-                                            (i + 1) *
-                                            (reader.NumViews() - i - 1)) +
-                              " to go"
-                        : std::string())
-                << ")";
-      summaries.push_back(summary);
-    }
-
-    colmap::PrintHeading2("Scale estimation");
-    const DPScaleResult result = estimator.Estimate();
-    timings.linear = result.seconds_linear;
-    timings.intensity = result.seconds_intensity;
+    DPScaleController controller(
+        options.view_budget, &reader, &estimator, !options.report_path.empty());
+    ScaleRun run = controller.Run();
+    const DPScaleResult& result = run.result;
+    RunTimings& timings = run.timings;
+    const std::vector<DPViewSummary>& summaries = run.summaries;
     if (!result.psf_status.empty()) {
       LOG(INFO) << "DP PSF: " << result.psf_status << " ("
                 << FormatSeconds(result.seconds_psf_fit) << ")";
@@ -380,17 +352,17 @@ int RunDPScaleEstimator(int argc, char** argv) {
     if (!options.report_path.empty()) {
       for (const std::string& plot :
            WriteReportPlots(result,
-                            overlay_images,
+                            run.overlay_images,
                             options.report_path,
                             summaries.empty() ? 0 : summaries[0].patch_size)) {
         LOG(INFO) << "Plot: " << plot;
       }
     }
     if (!options.report_path.empty() && !rescale) {
-      WriteJsonFile(
-          options.report_path,
-          ReportWithSource(MakeReport(result, sources, summaries, timings),
-                           psf_source));
+      nlohmann::json report = ReportWithSource(
+          MakeReport(result, sources, summaries, timings), psf_source);
+      report["view_budget"] = ViewBudgetReport(run, reader);
+      WriteJsonFile(options.report_path, report);
       LOG(INFO) << "Report: " << options.report_path;
     }
     if (!result.success) {
@@ -441,6 +413,7 @@ int RunDPScaleEstimator(int argc, char** argv) {
     if (!options.report_path.empty()) {
       nlohmann::json report = ReportWithSource(
           MakeReport(result, sources, summaries, timings), psf_source);
+      report["view_budget"] = ViewBudgetReport(run, reader);
       report["rescaled_files"] = rescaled.rescaled_files;
       report["cumulative_scale"] = rescaled.entry.cumulative_scale;
       report["record_path"] = rescaled.record_path;
