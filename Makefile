@@ -1,5 +1,5 @@
 # The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench accuracy profiles real clean-cache
+.PHONY: example test build bench accuracy profiles real large clean-cache
 
 example:
 	bash scripts/run_example.sh
@@ -25,6 +25,11 @@ profiles:
 # then r_s per scene and profile mode (a table; gates nothing).
 real:
 	bash scripts/run_real_bench.sh
+
+# A 300-view workspace of 3000x2000 DP frames: the view budget against the
+# distinct views (a table; gates nothing).
+large:
+	bash scripts/run_large_bench.sh
 
 clean-cache:
 	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"

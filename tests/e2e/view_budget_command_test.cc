@@ -18,13 +18,13 @@ struct BudgetRun {
 };
 
 BudgetRun RunWithBudget(const SceneCopy& scene,
-              const std::string& name,
-              const std::vector<std::string>& budget) {
+                        const std::string& name,
+                        const std::vector<std::string>& budget) {
   const std::string report = scene.temp() / (name + ".json");
   BudgetRun run;
-  run.command = RunEstimator(With(
-      With(DenseArgs(scene), {"--dry_run", "1", "--report_path", report}),
-      budget));
+  run.command = RunEstimator(
+      With(With(DenseArgs(scene), {"--dry_run", "1", "--report_path", report}),
+           budget));
   EXPECT_EQ(run.command.exit_code, 0) << run.command.err;
   if (run.command.exit_code == 0) run.report = ReadJson(report);
   return run;
@@ -38,7 +38,8 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
       ReadJson(scene / "ground_truth.json").at("scale").get<double>();
 
   // Every view: no checkpoints, nothing skipped.
-  const BudgetRun all = RunWithBudget(scene, "all", {"--DPScaleEstimator.all_views", "1"});
+  const BudgetRun all =
+      RunWithBudget(scene, "all", {"--DPScaleEstimator.all_views", "1"});
   ASSERT_TRUE(all.report.contains("view_budget"));
   const nlohmann::json& a = all.report.at("view_budget");
   EXPECT_EQ(a.at("views_visited").get<int>(), 8);
@@ -51,11 +52,11 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
   // last checkpoint before the final view) only if the scale settled, and
   // then the answer is the last checkpoint's.
   const BudgetRun rule = RunWithBudget(scene,
-                             "rule",
-                             {"--DPScaleEstimator.min_views",
-                              "4",
-                              "--DPScaleEstimator.check_every",
-                              "2"});
+                                       "rule",
+                                       {"--DPScaleEstimator.min_views",
+                                        "4",
+                                        "--DPScaleEstimator.check_every",
+                                        "2"});
   const nlohmann::json& r = rule.report.at("view_budget");
   const int visited = r.at("views_visited").get<int>();
   EXPECT_EQ(visited + static_cast<int>(r.at("skipped").size()), 8);
@@ -86,11 +87,11 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
 
   // A cap of 5 views: 5 visited, the budget named as the reason.
   const BudgetRun capped = RunWithBudget(scene,
-                               "capped",
-                               {"--DPScaleEstimator.min_views",
-                                "5",
-                                "--DPScaleEstimator.max_views",
-                                "5"});
+                                         "capped",
+                                         {"--DPScaleEstimator.min_views",
+                                          "5",
+                                          "--DPScaleEstimator.max_views",
+                                          "5"});
   const nlohmann::json& c = capped.report.at("view_budget");
   EXPECT_EQ(c.at("views_visited").get<int>(), 5);
   EXPECT_EQ(c.at("skipped").size(), 3u);

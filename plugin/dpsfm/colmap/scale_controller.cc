@@ -139,8 +139,8 @@ ScaleRun DPScaleController::Run() {
   run.checkpoints = budget.Checkpoints();
 
   colmap::PrintHeading2("Scale estimation");
-  if (run.checkpoints.empty() || run.checkpoints.back().views !=
-                                     static_cast<int>(run.visited.size())) {
+  if (run.checkpoints.empty() ||
+      run.checkpoints.back().views != static_cast<int>(run.visited.size())) {
     run.result = estimator_->Estimate();
   } else {
     LOG(INFO) << "  the estimate of the last checkpoint (" << run.visited.size()

@@ -70,6 +70,9 @@ struct DPScaleEstimatorOptions {
   std::string psf_library;
   // Which views to visit and when to stop (large projects).
   ViewBudgetOptions view_budget;
+  // Threads of the COLMAP layer's own loops (-1: all cores); the command
+  // sets it from --DPScaleEstimator.num_threads.
+  int num_threads = -1;
 
   // Throws InputError naming the option and the value.
   void Check() const;

@@ -1,5 +1,9 @@
 #include "dpsfm/colmap/workspace_reader.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -272,11 +276,17 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
                              const colmap::Camera& undistorted,
                              const colmap::Camera& original,
                              const cv::Size& frame_size,
-                             int k) {
+                             int k,
+                             int num_threads) {
   cv::Mat mapped(frame_size, CV_32FC1, cv::Scalar(0));
+#ifdef _OPENMP
+  const int threads = num_threads > 0 ? num_threads : omp_get_max_threads();
+#endif
   const double sx = static_cast<double>(depth.cols) / undistorted.width;
   const double sy = static_cast<double>(depth.rows) / undistorted.height;
-#pragma omp parallel for schedule(static)
+#ifdef _OPENMP
+#pragma omp parallel for schedule(static) num_threads(threads)
+#endif
   for (int y = 0; y < frame_size.height; ++y) {
     for (int x = 0; x < frame_size.width; ++x) {
       // COLMAP puts the top-left pixel centre at 0.5.
@@ -346,8 +356,12 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   if (layout_.dense) {
     view.depth = ReadColmapDepthMap(source.depth_source);
     if (original != nullptr) {
-      view.depth = ResampleDepthToFrame(
-          view.depth, camera, *original, frames.left.size(), k);
+      view.depth = ResampleDepthToFrame(view.depth,
+                                        camera,
+                                        *original,
+                                        frames.left.size(),
+                                        k,
+                                        options_.num_threads);
     }
     // The depth map covers the camera's field at its own resolution; it
     // must keep the camera's aspect (PatchMatch scales both sides alike).

@@ -27,11 +27,13 @@ cv::Mat ReadColmapDepthMap(const std::string& path);
 // camera downsampled by k: frame pixel -> original image -> ray ->
 // undistorted image -> depth pixel (nearest, so depths never blend across
 // edges). Pixels that map outside the depth map get 0 (invalid).
+// num_threads: -1 = all cores.
 cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
                              const colmap::Camera& undistorted,
                              const colmap::Camera& original,
                              const cv::Size& frame_size,
-                             int k);
+                             int k,
+                             int num_threads = -1);
 
 // Where one view's inputs come from, for the log and the report.
 struct ViewSource {

@@ -17,14 +17,15 @@ std::vector<int> SpreadViewOrder(const std::vector<ViewPlacement>& views) {
   for (const ViewPlacement& v : views) mean += v.centre;
   mean /= n;
   double spread = 0;
-  for (const ViewPlacement& v : views) spread += (v.centre - mean).squaredNorm();
+  for (const ViewPlacement& v : views)
+    spread += (v.centre - mean).squaredNorm();
   spread = std::sqrt(spread / n);
   if (!(spread > 0)) spread = 1;
   auto distance = [&](const ViewPlacement& a, const ViewPlacement& b) {
     double d = (a.centre - b.centre).norm() / spread;
-    const double cosine =
-        std::max(-1.0, std::min(1.0, a.direction.normalized().dot(
-                                         b.direction.normalized())));
+    const double cosine = std::max(
+        -1.0,
+        std::min(1.0, a.direction.normalized().dot(b.direction.normalized())));
     d += std::acos(cosine) / (0.5 * M_PI);
     if (a.f_number > 0 && b.f_number > 0) {
       d += std::abs(std::log2(a.f_number / b.f_number));

@@ -188,6 +188,7 @@ int RunDPScaleEstimator(int argc, char** argv) {
   colmap::OptionManager option_manager;
   AddCommandOptions(&option_manager, &options, &core_options);
   option_manager.Parse(argc, argv);
+  options.num_threads = core_options.num_threads;
 
   try {
     colmap::Timer total_timer;
