@@ -6,8 +6,12 @@
 // decoding. Prints figures; never asserts timing.
 //
 //   dp_scale_core_bench [--views N] [--width W] [--height H] [--threads T]
-//                       [--noise SIGMA]
-// --width alone keeps the 3:2 aspect ratio.
+//                       [--noise SIGMA] [--budget 1]
+// --width alone keeps the 3:2 aspect ratio. --budget 1 visits the views
+// under the command's default view budget (core/view_budget.h: checkpoints
+// from 14 views every 7, stop when the scale settles, at most 60), so a
+// large --views shows the peak memory of a large project: views are
+// rendered only when visited.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -27,6 +31,7 @@
 
 #include "../tests/core/synthetic_dp.h"
 #include "dpsfm/core/dp_scale_estimator.h"
+#include "dpsfm/core/view_budget.h"
 
 namespace {
 
@@ -46,6 +51,7 @@ double Now() {
 
 int main(int argc, char** argv) {
   int num_views = 30, width = 3000, height = 0, threads = -1;
+  bool use_budget = false;
   double noise = 0.005;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
@@ -59,6 +65,8 @@ int main(int argc, char** argv) {
       threads = std::atoi(argv[i + 1]);
     else if (flag == "--noise")
       noise = std::atof(argv[i + 1]);
+    else if (flag == "--budget")
+      use_budget = std::atoi(argv[i + 1]) != 0;
     else {
       std::fprintf(stderr, "unknown flag %s\n", argv[i]);
       return 1;
@@ -101,8 +109,15 @@ int main(int argc, char** argv) {
 
   double render_seconds = 0, decode_seconds = 0;
   int patches_tried = 0, patches_valid = 0;
-  double blur_seconds = 0;
-  for (int v = 0; v < num_views; ++v) {
+  double blur_seconds = 0, checkpoint_seconds = 0;
+  ViewBudgetOptions budget_options;
+  budget_options.all_views = !use_budget;
+  ViewBudget budget(budget_options, num_views);
+  const int requested_views = num_views;
+  int visited = 0;
+  DPScaleResult last_checkpoint;
+  std::string stop_reason;
+  for (int v = 0; v < budget.Planned(); ++v) {
     double t0 = Now();
     test::TextureOptions tex;
     tex.channels = 3;
@@ -180,8 +195,38 @@ int main(int argc, char** argv) {
         s.seconds,
         PeakMemoryMb());
     std::fflush(stdout);
+    visited = v + 1;
+    if (budget.IsCheckpoint(visited)) {
+      const double c0 = Now();
+      last_checkpoint = estimator.Estimate();
+      checkpoint_seconds += Now() - c0;
+      Checkpoint c;
+      c.views = visited;
+      c.success = last_checkpoint.success;
+      c.scale = last_checkpoint.scale;
+      c.ci_low = last_checkpoint.scale_ci_low;
+      c.ci_high = last_checkpoint.scale_ci_high;
+      std::printf("  checkpoint after %d views: %s %.5f (%.1f s)\n",
+                  visited,
+                  c.success ? "r_s" : "no scale",
+                  c.success ? c.scale / scale : 0.0,
+                  Now() - c0);
+      if (budget.Record(c, &stop_reason)) break;
+    }
   }
-  const DPScaleResult r = estimator.Estimate();
+  num_views = visited;  // per-view figures over the visited views
+  const DPScaleResult r =
+      stop_reason.empty() ? estimator.Estimate() : last_checkpoint;
+  if (use_budget) {
+    std::printf(
+        "\nview budget: %d of %d views visited (%s); checkpoints %.1f s\n",
+        visited,
+        requested_views,
+        !stop_reason.empty()         ? stop_reason.c_str()
+        : visited == requested_views ? "every view"
+                                     : "the cap reached",
+        checkpoint_seconds);
+  }
   std::printf("\nrendering (not part of the core): %.2f s per view\n",
               render_seconds / num_views);
   std::printf(

@@ -85,8 +85,7 @@ int main(int argc, char** argv) {
     for (fs::recursive_directory_iterator it(in), end; it != end; ++it) {
       if (!fs::is_regular_file(it->path())) continue;
       const fs::path relative = fs::relative(it->path(), in);
-      if (relative.parent_path() == "dense/sparse" ||
-          relative == "lens.csv") {
+      if (relative.parent_path() == "dense/sparse" || relative == "lens.csv") {
         continue;
       }
       Link(it->path(), out / relative);

@@ -137,6 +137,34 @@ TEST(DPPsfCalibrator, RefusesCapturesWithoutBlur) {
   EXPECT_FALSE(fs::exists(dir / "p.dpsf"));
 }
 
+// Each invalid option is refused in one line naming it and its value,
+// before any capture is read.
+TEST(DPPsfCalibrator, RefusesInvalidOptions) {
+  TempDir dir;
+  for (const auto& bad : std::vector<std::pair<std::string, std::string>>{
+           {"grid_cols", "0"},
+           {"num_bootstrap", "5"},
+           {"min_texture_snr", "-1"},
+           {"num_threads", "0"}}) {
+    const CommandResult result = RunCommand({kColmap,
+                                             "dp_psf_calibrator",
+                                             "--dp_image_path",
+                                             dir / "missing",
+                                             "--targets_path",
+                                             dir / "missing.csv",
+                                             "--output_path",
+                                             dir / "p.dpsf",
+                                             "--DPPsfCalibrator." + bad.first,
+                                             bad.second});
+    EXPECT_EQ(result.exit_code, 1) << result.err;
+    EXPECT_EQ(CountErrorLines(
+                  result.err,
+                  "invalid --DPPsfCalibrator." + bad.first + " " + bad.second),
+              1)
+        << result.err;
+  }
+}
+
 std::vector<std::string> DryRun(const std::string& report,
                                 const std::vector<std::string>& more) {
   const std::string scene = kScenes + "/dslr";

@@ -61,6 +61,35 @@ struct CalibratorOptions {
   // fitted strength is written).
   bool measure_shape = true;
   int num_threads = -1;
+
+  // Throws InputError naming the first invalid option and its value.
+  bool Check() const {
+    auto invalid =
+        [](const std::string& name, double value, const std::string& rule) {
+          std::ostringstream message;
+          message << "invalid --DPPsfCalibrator." << name << " " << value
+                  << " (" << rule << ")";
+          throw InputError(message.str());
+        };
+    if (patch_size < 0) invalid("patch_size", patch_size, "0: auto, or > 0");
+    if (stride < 0) invalid("stride", stride, "0: auto, or > 0");
+    if (!(max_radius_px >= 0)) {
+      invalid("max_radius_px", max_radius_px, "0: auto, or > 0");
+    }
+    if (!(min_texture_snr >= 0)) {
+      invalid("min_texture_snr", min_texture_snr, "must be >= 0");
+    }
+    if (max_patches_per_capture < 1) {
+      invalid("max_patches_per_capture", max_patches_per_capture, ">= 1");
+    }
+    if (grid_rows < 1) invalid("grid_rows", grid_rows, ">= 1");
+    if (grid_cols < 1) invalid("grid_cols", grid_cols, ">= 1");
+    if (num_bootstrap < 10) invalid("num_bootstrap", num_bootstrap, ">= 10");
+    if (num_threads != -1 && num_threads < 1) {
+      invalid("num_threads", num_threads, "-1: all cores, or >= 1");
+    }
+    return true;
+  }
 };
 
 // Patches evenly spread over the list, at most `count`.
@@ -211,15 +240,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     colmap::Timer timer;
     timer.Start();
     colmap::PrintHeading1("DP PSF calibration");
-    if (options.max_patches_per_capture < 1 ||
-        !(options.min_texture_snr >= 0) || options.grid_rows < 1 ||
-        options.grid_cols < 1 || options.num_bootstrap < 10 ||
-        (options.num_threads != -1 && options.num_threads < 1)) {
-      throw InputError(
-          "invalid DPPsfCalibrator option values (max_patches_per_capture, "
-          "grid_rows and grid_cols >= 1, num_bootstrap >= 10, "
-          "min_texture_snr >= 0)");
-    }
+    options.Check();
     const std::vector<CalibrationTarget> targets =
         ReadCalibrationTargets(options.targets_path);
     WorkspaceLayout layout;
@@ -317,7 +338,12 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     fit_options.grid_cols = options.grid_cols;
     fit_options.num_bootstrap = options.num_bootstrap;
     fit_options.num_threads = options.num_threads;
-    fit_options.Check();
+    try {
+      fit_options.Check();
+    } catch (const std::invalid_argument& error) {
+      throw InputError(std::string("invalid calibration options: ") +
+                       error.what());
+    }
     colmap::PrintHeading2("Fitting the DP profile");
     const TargetCalibration calibration =
         CalibrateFromTargets(captures, fit_options);
