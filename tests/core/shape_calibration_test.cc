@@ -156,6 +156,30 @@ TEST(CalibrateShapes, OutOfFamilyKernelsPerCell) {
   }
 }
 
+// The stopped-down capture shot after a tripod nudge of (7, -5) px, beyond
+// the kernel's window: the reference is registered first, and the kernels
+// come out as without the nudge.
+TEST(CalibrateShapes, NudgedReferenceIsRegistered) {
+  ShapeCapture c = Capture(6, 60);
+  const cv::Mat move = (cv::Mat_<double>(2, 3) << 1, 0, -7, 0, 1, 5);
+  cv::Mat nudged;
+  cv::warpAffine(c.sharp,
+                 nudged,
+                 move,
+                 c.sharp.size(),
+                 cv::INTER_NEAREST,
+                 cv::BORDER_REFLECT);
+  c.sharp = nudged;
+  const ShapeCalibration s = CalibrateShapes({c}, Options());
+  ASSERT_TRUE(s.determined) << s.reason;
+  std::printf(
+      "shift (%.2f, %.2f)\n", s.capture_shifts[0].x, s.capture_shifts[0].y);
+  EXPECT_NEAR(s.capture_shifts[0].x, 7, 0.5);
+  EXPECT_NEAR(s.capture_shifts[0].y, -5, 0.5);
+  EXPECT_NEAR(s.cell_centroid_offsets[0] / Offset(LeftHalf(6), 6), 1.0, 0.05);
+  EXPECT_NEAR(s.cell_centroid_offsets[1] / Offset(RightHalf(6), 6), 1.0, 0.05);
+}
+
 TEST(CalibrateShapes, RefusesWhatTheCapturesDoNotShow) {
   // Too little blur everywhere.
   const ShapeCalibration sharp = CalibrateShapes({Capture(1, 30)}, Options());

@@ -91,6 +91,39 @@ double OffsetPerRadius(const DPKernels& k, double radius_px) {
          (2 * radius_px);
 }
 
+// The stopped-down capture moved onto the blurred one by whole pixels (a
+// tripod nudged while the aperture was changed): the peak of the
+// normalised cross-correlation of the views' sum with it, within 24 px
+// (phase correlation is no use here: the defocus disk's spectrum changes
+// sign, which whitening turns into wrong peaks). What is left (under a
+// pixel, plus the kernel's own centroid) the re-centring removes.
+cv::Mat RegisterSharp(const ShapeCapture& c, cv::Point2d* shift) {
+  cv::Mat sharp, blurred;
+  c.sharp.convertTo(sharp, CV_32FC1);
+  cv::Mat(c.left + c.right).convertTo(blurred, CV_32FC1);
+  const int reach = std::min(24, std::min(sharp.cols, sharp.rows) / 8);
+  const cv::Rect inner(
+      reach, reach, sharp.cols - 2 * reach, sharp.rows - 2 * reach);
+  cv::Mat score;
+  cv::matchTemplate(sharp, blurred(inner), score, cv::TM_CCOEFF_NORMED);
+  cv::Point best;
+  cv::minMaxLoc(score, nullptr, nullptr, nullptr, &best);
+  // blurred(inner) matches sharp at `best`: blurred(x) = sharp(x - d) with
+  // d = (reach, reach) - best.
+  *shift = cv::Point2d(reach - best.x, reach - best.y);
+  if (shift->x == 0 && shift->y == 0) return c.sharp;
+  const cv::Mat move =
+      (cv::Mat_<double>(2, 3) << 1, 0, shift->x, 0, 1, shift->y);
+  cv::Mat moved;
+  cv::warpAffine(c.sharp,
+                 moved,
+                 move,
+                 c.sharp.size(),
+                 cv::INTER_NEAREST,
+                 cv::BORDER_REFLECT);
+  return moved;
+}
+
 }  // namespace
 
 bool ShapeCalibrationOptions::Check() const {
@@ -139,6 +172,7 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
     out.capture_notes.push_back(note.str());
     if (used) largest = std::max(largest, std::abs(c.signed_radius_px));
     out.capture_cell_offsets.emplace_back(num_cells, kNaN);
+    out.capture_shifts.emplace_back(0, 0);
     out.capture_cell_residuals.emplace_back(num_cells, kNaN);
     out.capture_cell_light.emplace_back(num_cells, kNaN);
   }
@@ -151,6 +185,13 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
   out.reference_radius_px =
       options.reference_radius_px > 0 ? options.reference_radius_px : largest;
   const double ref = out.reference_radius_px;
+
+  std::vector<cv::Mat> registered(num_captures);
+  for (int i = 0; i < num_captures; ++i) {
+    if (out.capture_used[i]) {
+      registered[i] = RegisterSharp(captures[i], &out.capture_shifts[i]);
+    }
+  }
 
   // Per cell: every usable capture's pair, magnified to the reference radius
   // (far side), weighted by |r|^2 (the number of kernel pixels it resolves).
@@ -181,7 +222,8 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
       }
       EstimatedDPKernels m;
       try {
-        m = EstimateDPKernels(c.sharp(rect), c.left(rect), c.right(rect), ko);
+        m = EstimateDPKernels(
+            registered[i](rect), c.left(rect), c.right(rect), ko);
       } catch (const std::invalid_argument& e) {
         out.capture_notes[i] += (out.capture_notes[i].empty() ? "" : "; ") +
                                 std::string("cell ") + std::to_string(cell) +

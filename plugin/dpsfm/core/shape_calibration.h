@@ -7,7 +7,10 @@
 // each measured pair is one sample of the profile at a known radius: it is
 // magnified to a common reference radius (MagnifyKernel, the defocus cone
 // being similar at every depth) and rotated by 180 degrees when it was
-// nearer than the focus, and the samples of a cell are averaged. What the
+// nearer than the focus, and the samples of a cell are averaged. The
+// reference is first moved onto the capture by whole pixels (the peak of
+// their cross-correlation, within 24 px), so a tripod nudged between the
+// exposures does not push the kernel out of its window. What the
 // shape says of the strength (its centroid offset per radius) is reported
 // per capture, nearer and farther than the focus separately.
 #pragma once
@@ -75,6 +78,9 @@ struct ShapeCalibration {
   std::vector<std::vector<double>> capture_cell_offsets;
   std::vector<std::vector<double>> capture_cell_residuals;
   std::vector<std::vector<double>> capture_cell_light;
+  // Where the blurred views lie against the sharp reference (whole px,
+  // cross-correlation; undone before measuring).
+  std::vector<cv::Point2d> capture_shifts;
   // Patch-weighted mean centroid offsets of the captures nearer and
   // farther than the focus (NaN where there are none), and the largest
   // relative deviation of one capture's cell offset from the cell's mean.

@@ -158,8 +158,14 @@ ShapeCalibration MeasureShapes(const std::vector<CalibrationTarget>& targets,
     for (const double o : shape.capture_cell_offsets[i]) {
       line << " " << std::setprecision(4) << o;
     }
-    if (!shape.capture_notes[i].empty())
+    const cv::Point2d& shift = shape.capture_shifts[i];
+    if (shift.x != 0 || shift.y != 0) {
+      line << " (reference moved by " << shift.x << ", " << shift.y
+           << " px to register it)";
+    }
+    if (!shape.capture_notes[i].empty()) {
       line << " (" << shape.capture_notes[i] << ")";
+    }
     LOG(INFO) << line.str();
   }
   LOG(INFO) << "  " << shape.reason;
