@@ -1,8 +1,7 @@
-// The run of `colmap dp_scale_estimator` between reading the workspace and
-// writing results: the view loop, its order and stopping rule
-// (core/view_budget.h), progress, and what the report needs from it. The
-// command file parses options, builds the reader and the estimator, calls
-// Run and prints; the rescale follows in the command.
+// The run of `colmap dp_scale_estimator` (RunScaleEstimation): recovery,
+// reading, the DP profile, the view loop with its order and stopping rule
+// (DPScaleController, core/view_budget.h), the report and the rescale. The
+// command file only parses options, calls it and prints its one line.
 #pragma once
 
 #include <string>
@@ -51,6 +50,25 @@ class DPScaleController {
   DPScaleEstimator* estimator_;
   bool capture_overlays_;
 };
+
+// What a run of `colmap dp_scale_estimator` ended in: success (the scale
+// written, or the dry run's report), or the one line that says why not.
+struct ScaleEstimationOutcome {
+  bool success = false;
+  std::string failure;
+  static ScaleEstimationOutcome Success() { return {true, ""}; }
+  static ScaleEstimationOutcome Failure(const std::string& why) {
+    return {false, why};
+  }
+};
+
+// The whole run after option parsing: finishing an interrupted commit, the
+// already-rescaled policy, reading the workspace, choosing the DP profile
+// (given, library or auto), the view loop (DPScaleController), the report
+// and plots, and the rescale. Throws InputError for what the user must
+// fix; the command prints it as its one error line.
+ScaleEstimationOutcome RunScaleEstimation(
+    const DPScaleEstimatorOptions& options, DPScaleOptions core_options);
 
 // The report's "view_budget" section: visited, planned and skipped views,
 // why the run stopped, and the checkpoints' scales.

@@ -2,24 +2,11 @@
 
 #include <cstdlib>
 #include <exception>
-#include <iomanip>
 #include <iostream>
-#include <memory>
-#include <sstream>
 
 #include "colmap/controllers/option_manager.h"
-#include "colmap/util/logging.h"
-#include "colmap/util/misc.h"
-#include "colmap/util/timer.h"
-#include "dpsfm/colmap/database_check.h"
-#include "dpsfm/colmap/psf_profile.h"
-#include "dpsfm/colmap/report.h"
-#include "dpsfm/colmap/report_plots.h"
 #include "dpsfm/colmap/scale_controller.h"
-#include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
-#include "dpsfm/colmap/workspace_reader.h"
-#include "dpsfm/core/dp_psf.h"
 #include "dpsfm/core/dp_scale_estimator.h"
 
 namespace dpsfm {
@@ -29,12 +16,6 @@ namespace {
 int Fail(const std::string& message) {
   std::cerr << "ERROR: dp_scale_estimator: " << message << std::endl;
   return EXIT_FAILURE;
-}
-
-std::string FormatSeconds(double seconds) {
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(2) << seconds << " s";
-  return text.str();
 }
 
 void AddCommandOptions(colmap::OptionManager* manager,
@@ -172,13 +153,6 @@ void AddCommandOptions(colmap::OptionManager* manager,
                             "threads (-1: all cores)");
 }
 
-// The report with where the DP profile came from.
-nlohmann::json ReportWithSource(nlohmann::json report,
-                                const std::string& psf_source) {
-  report["psf"]["source"] = psf_source;
-  return report;
-}
-
 }  // namespace
 
 int RunDPScaleEstimator(int argc, char** argv) {
@@ -191,244 +165,9 @@ int RunDPScaleEstimator(int argc, char** argv) {
   options.num_threads = core_options.num_threads;
 
   try {
-    colmap::Timer total_timer;
-    total_timer.Start();
-    colmap::PrintHeading1("DP scale estimation");
-    const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-    try {
-      core_options.Check();
-    } catch (const std::invalid_argument& error) {
-      throw InputError(std::string("invalid DPScaleEstimator option: ") +
-                       error.what());
-    }
-    LOG(INFO) << "Model: " << layout.model_path << " ("
-              << (layout.dense ? "dense workspace" : "sparse model") << ")";
-
-    // The folder whose metric files are rescaled and which holds the record.
-    const std::string root =
-        layout.dense ? options.workspace_path : options.input_path;
-    const bool in_place = !options.dry_run && options.output_path.empty();
-    if (in_place) {
-      // A commit cut short by a crash or kill is finished (or rolled back)
-      // before anything else reads the workspace.
-      const RecoveryReport recovery = RecoverInterruptedCommit(root);
-      if (recovery.action == RecoveryReport::Action::kRolledForward) {
-        // The interrupted run had estimated and staged everything; finishing
-        // its commit is the whole job. Estimating again would rescale twice.
-        const ScaleRecord finished = ReadScaleRecord(root);
-        LOG(WARNING) << "Finished an interrupted rescale: "
-                     << recovery.Describe();
-        if (finished.IsRescaled()) {
-          LOG(INFO) << "Scale " << finished.entries.back().scale
-                    << " metres per model unit (applied "
-                    << finished.entries.back().time
-                    << "); the model is now in metres. Record: "
-                    << ScaleRecordPath(root);
-        }
-        return EXIT_SUCCESS;
-      }
-      if (recovery.action == RecoveryReport::Action::kRolledBack) {
-        LOG(WARNING) << "Rolled back an interrupted rescale: "
-                     << recovery.Describe();
-      }
-    }
-    const ScaleRecord record = ReadScaleRecord(root);
-    if (record.IsRescaled()) {
-      const ScaleRecordEntry& last = record.entries.back();
-      std::ostringstream note;
-      note << "this workspace was already rescaled by dp_scale_estimator ("
-           << record.entries.size() << " time(s), last on " << last.time
-           << " by " << last.scale << ", total " << record.CumulativeScale()
-           << "; see " << ScaleRecordPath(root) << ")";
-      if (in_place && !options.force) {
-        throw InputError(note.str() +
-                         "; pass --force 1 to apply another scale on top");
-      }
-      LOG(WARNING) << note.str();
-    }
-
-    if (!options.dry_run) {
-      // What the rescale at the end would refuse, refused now.
-      CheckRescaleIsPossible(
-          root,
-          colmap::CSVToVector<std::string>(options.extra_model_paths),
-          options.output_path);
-    }
-    const WorkspaceReader reader(options, layout);
-    if (!options.database_path.empty()) {
-      const DatabaseCheck& check = reader.database_check();
-      LOG(INFO) << "Database: " << check.num_database_images << " images; "
-                << check.missing_images.size()
-                << " model images missing from it, "
-                << check.camera_mismatches.size()
-                << " with a different camera aspect; "
-                << check.original_cameras.size() << " original cameras";
-      for (const std::string& name : check.missing_images) {
-        LOG(WARNING) << "  not in the database: " << name;
-      }
-      for (const std::string& name : check.camera_mismatches) {
-        LOG(WARNING) << "  camera differs from the database's: " << name;
-      }
-    }
-    std::vector<ViewSource> sources;
-    for (size_t i = 0; i < reader.NumViews(); ++i) {
-      const ViewSource& source = reader.Source(i);
-      sources.push_back(source);
-      std::ostringstream line;
-      line << "  " << source.image_name << ": f "
-           << source.lens.lens.focal_length_mm << " mm ("
-           << source.lens.focal_length_source << "), f/"
-           << source.lens.lens.f_number << " (" << source.lens.f_number_source
-           << "), pitch " << source.lens.lens.pixel_pitch_um << " um ("
-           << source.lens.pixel_pitch_source << ")";
-      if (!source.lens.focus_source.empty()) {
-        line << ", focus " << source.lens.lens.recorded_focus_mm / 1000
-             << " m (" << source.lens.focus_source << ")";
-      }
-      LOG(INFO) << line.str();
-    }
-
-    colmap::PrintHeading2("Per-patch DP blur estimation");
-    // The profile: the given one, or (auto) a calibrated one from the
-    // library when every view has the same known camera and lens.
-    std::string psf_model = options.psf_model, psf_path = options.psf_path;
-    std::string psf_source =
-        psf_model == "calibrated" ? "psf_path " + psf_path : psf_model;
-    if (psf_model == "auto" && !sources.empty()) {
-      const std::string& camera = sources[0].lens.camera;
-      const std::string& lens = sources[0].lens.lens_model;
-      bool same = true;
-      for (const ViewSource& source : sources) {
-        same = same && source.lens.camera == camera &&
-               source.lens.lens_model == lens;
-      }
-      const std::string library = options.psf_library.empty()
-                                      ? DefaultProfileLibrary()
-                                      : options.psf_library;
-      const std::string found =
-          same ? FindLibraryProfile(library, camera, lens) : "";
-      if (!found.empty()) {
-        psf_model = "calibrated";
-        psf_path = found;
-        psf_source = "library " + found + " (camera '" + camera + "', lens '" +
-                     lens + "')";
-      } else if (same && !camera.empty() && !lens.empty()) {
-        LOG(INFO) << "DP PSF: no profile for camera '" << camera << "', lens '"
-                  << lens << "' in the library " << library;
-      }
-    }
-    const DPPsfField psf_field =
-        MakePsfField(psf_model, psf_path, &core_options);
-    LOG(INFO) << "DP PSF: " << psf_source << " (" << psf_field.Name()
-              << (core_options.psf_self_calibration
-                      ? ", self-calibrated from the data before the scale"
-                      : "")
-              << ")";
-    DPScaleEstimator estimator(core_options, psf_field);
-    DPScaleController controller(
-        options.view_budget, &reader, &estimator, !options.report_path.empty());
-    ScaleRun run = controller.Run();
-    const DPScaleResult& result = run.result;
-    RunTimings& timings = run.timings;
-    const std::vector<DPViewSummary>& summaries = run.summaries;
-    if (!result.psf_status.empty()) {
-      LOG(INFO) << "DP PSF: " << result.psf_status << " ("
-                << FormatSeconds(result.seconds_psf_fit) << ")";
-    }
-    if (!result.focus_check.empty()) {
-      if (result.focus_agrees) {
-        LOG(INFO) << "Recorded focus: " << result.focus_check;
-      } else {
-        LOG(WARNING) << "Recorded focus: " << result.focus_check;
-      }
-    }
-    for (const DPViewResult& view : result.views) {
-      LOG(INFO) << "  " << view.name << ": "
-                << (view.used ? "used" : "not used") << " (" << view.reason
-                << ")";
-    }
-    // Without a rescale to follow, the report is complete now.
-    const bool rescale = result.success && !options.dry_run;
-    timings.total = total_timer.ElapsedSeconds();
-    if (!options.report_path.empty()) {
-      for (const std::string& plot :
-           WriteReportPlots(result,
-                            run.overlay_images,
-                            options.report_path,
-                            summaries.empty() ? 0 : summaries[0].patch_size)) {
-        LOG(INFO) << "Plot: " << plot;
-      }
-    }
-    if (!options.report_path.empty() && !rescale) {
-      nlohmann::json report = ReportWithSource(
-          MakeReport(result, sources, summaries, timings), psf_source);
-      report["view_budget"] = ViewBudgetReport(run, reader);
-      WriteJsonFile(options.report_path, report);
-      LOG(INFO) << "Report: " << options.report_path;
-    }
-    if (!result.success) {
-      return Fail("no scale: " + result.failure_reason +
-                  "; nothing was changed");
-    }
-    LOG(INFO) << "Linear estimate s* = " << result.scale_initial
-              << ", final s = " << result.scale << " (95% interval "
-              << result.scale_ci_low << " .. " << result.scale_ci_high
-              << "; intensity stage: " << result.intensity_status << ")";
-    LOG(INFO) << "Timings: read " << FormatSeconds(timings.read) << ", blur "
-              << FormatSeconds(timings.blur) << ", linear "
-              << FormatSeconds(timings.linear) << ", intensity "
-              << FormatSeconds(timings.intensity);
-
-    if (options.dry_run) {
-      LOG(INFO) << "Scale " << result.scale
-                << " metres per model unit (dry run: nothing was changed)";
-      return EXIT_SUCCESS;
-    }
-    colmap::PrintHeading2(options.output_path.empty()
-                              ? "Rescaling the workspace in place"
-                              : "Writing a rescaled copy");
-    colmap::Timer rescale_timer;
-    rescale_timer.Start();
-    RescaleWorkspaceOptions rescale_options;
-    rescale_options.extra_model_dirs =
-        colmap::CSVToVector<std::string>(options.extra_model_paths);
-    rescale_options.force = options.force;
-    rescale_options.tool_version = "dp-sfm " + DPSFMVersion();
-    for (const std::string* input : {&options.workspace_path,
-                                     &options.input_path,
-                                     &options.dp_image_path,
-                                     &options.lens_path,
-                                     &options.image_path}) {
-      if (!input->empty()) rescale_options.inputs.push_back(*input);
-    }
-    const RescaleWorkspaceResult rescaled =
-        options.output_path.empty()
-            ? RescaleWorkspaceInPlace(root, result.scale, rescale_options)
-            : WriteRescaledCopy(
-                  root, options.output_path, result.scale, rescale_options);
-    timings.rescale = rescale_timer.ElapsedSeconds();
-    for (const std::string& file : rescaled.rescaled_files) {
-      VLOG(1) << "  rescaled " << file;
-    }
-    timings.total = total_timer.ElapsedSeconds();
-    if (!options.report_path.empty()) {
-      nlohmann::json report = ReportWithSource(
-          MakeReport(result, sources, summaries, timings), psf_source);
-      report["view_budget"] = ViewBudgetReport(run, reader);
-      report["rescaled_files"] = rescaled.rescaled_files;
-      report["cumulative_scale"] = rescaled.entry.cumulative_scale;
-      report["record_path"] = rescaled.record_path;
-      WriteJsonFile(options.report_path, report);
-      LOG(INFO) << "Report: " << options.report_path;
-    }
-    LOG(INFO) << "Scale " << result.scale
-              << " metres per model unit: " << rescaled.rescaled_files.size()
-              << " files rescaled "
-              << (options.output_path.empty() ? "in place in " + root
-                                              : "into " + options.output_path)
-              << " (" << FormatSeconds(timings.rescale)
-              << "); the model is now in metres. Record: "
-              << rescaled.record_path;
+    const ScaleEstimationOutcome outcome =
+        RunScaleEstimation(options, core_options);
+    if (!outcome.success) return Fail(outcome.failure);
     return EXIT_SUCCESS;
   } catch (const InputError& error) {
     return Fail(error.what());
