@@ -224,7 +224,6 @@ Calibrated Calibrate(const Sensor& sensor, double noise) {
   const ShapeCalibration shape = CalibrateShapes(shape_captures, shape_options);
   out.note += "; shape: " + shape.reason;
   if (!shape.determined) return out;
-  double log_sum = 0, weight = 0;
   out.shape.layout = c.layout;
   for (size_t cell = 0; cell < shape.cell_kernels.size(); ++cell) {
     out.shape.cells.push_back(std::make_shared<const MeasuredKernelPsf>(
@@ -232,13 +231,10 @@ Calibrated Calibrate(const Sensor& sensor, double noise) {
         shape.cell_kernels[cell].right,
         shape.reference_radius_px,
         true));
-    const double w = std::max(1, c.cell_patches[cell]);
-    log_sum += w * std::log(shape.cell_centroid_offsets[cell]);
-    weight += w;
   }
-  out.shape_uncertainty =
-      std::max(out.family_uncertainty,
-               std::abs(std::exp(log_sum / weight) / c.strength - 1));
+  out.shape_uncertainty = std::max(
+      out.family_uncertainty,
+      std::abs(MeasuredStrength(shape, c.cell_patches) / c.strength - 1));
   return out;
 }
 

@@ -526,8 +526,11 @@ std::string DPPsfField::Name() const {
 double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px) {
   DPSFM_CHECK(radius_px > 0 && std::isfinite(radius_px))
       << "radius must be positive, got " << radius_px;
-  const DPKernels k = psf.Kernels(radius_px);
-  return (KernelCentroid(k.right).x - KernelCentroid(k.left).x) /
+  return CentroidOffsetPerRadius(psf.Kernels(radius_px), radius_px);
+}
+
+double CentroidOffsetPerRadius(const DPKernels& kernels, double radius_px) {
+  return (KernelCentroid(kernels.right).x - KernelCentroid(kernels.left).x) /
          (2 * radius_px);
 }
 

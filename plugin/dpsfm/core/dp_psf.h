@@ -251,6 +251,8 @@ struct DPPsfField {
 // disk at large r). The quantity DP disparity measures; a profile with a
 // different one scales every recovered radius by the ratio.
 double CentroidOffsetPerRadius(const DPPsfModel& psf, double radius_px);
+// The same of a kernel pair given at |r| = radius_px (far side).
+double CentroidOffsetPerRadius(const DPKernels& kernels, double radius_px);
 
 // True 2-D convolution (not correlation) of a CV_32FC1 or CV_32FC3 image with
 // a PSF (CV_32FC1, odd width and height, centre = origin); output has the

@@ -86,11 +86,6 @@ DPKernels TrimToSupport(const DPKernels& k) {
   return out;
 }
 
-double OffsetPerRadius(const DPKernels& k, double radius_px) {
-  return (KernelCentroid(k.right).x - KernelCentroid(k.left).x) /
-         (2 * radius_px);
-}
-
 // The stopped-down capture moved onto the blurred one by whole pixels (a
 // tripod nudged while the aperture was changed): the peak of the
 // normalised cross-correlation of the views' sum with it, within 24 px
@@ -247,7 +242,7 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
         cv::flip(k.left, k.left, -1);
         cv::flip(k.right, k.right, -1);
       }
-      const double offset = OffsetPerRadius(k, r);
+      const double offset = CentroidOffsetPerRadius(k, r);
       out.capture_cell_offsets[i][cell] = offset;
       std::vector<double>& side = c.signed_radius_px < 0 ? near_sum : far_sum;
       side[0] += r * r * offset;
@@ -274,7 +269,7 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
     }
     mean.left /= total;
     mean.right /= total;
-    out.cell_centroid_offsets[cell] = OffsetPerRadius(mean, ref);
+    out.cell_centroid_offsets[cell] = CentroidOffsetPerRadius(mean, ref);
     if (!(out.cell_centroid_offsets[cell] > 0)) {
       out.reason = "cell " + std::to_string(cell) +
                    "'s measured kernels break the DP convention (the left "
@@ -320,6 +315,20 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
   out.reason = summary.str();
   out.determined = true;
   return out;
+}
+
+double MeasuredStrength(const ShapeCalibration& shape,
+                        const std::vector<int>& cell_weights) {
+  DPSFM_CHECK(shape.determined &&
+              cell_weights.size() == shape.cell_centroid_offsets.size())
+      << "MeasuredStrength needs a measured shape and one weight per cell";
+  double log_sum = 0, weight = 0;
+  for (size_t c = 0; c < cell_weights.size(); ++c) {
+    const double w = std::max(1, cell_weights[c]);
+    log_sum += w * std::log(shape.cell_centroid_offsets[c]);
+    weight += w;
+  }
+  return std::exp(log_sum / weight);
 }
 
 }  // namespace dpsfm

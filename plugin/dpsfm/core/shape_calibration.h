@@ -92,4 +92,10 @@ struct ShapeCalibration {
 ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
                                  const ShapeCalibrationOptions& options);
 
+// The measured shape's overall strength: the geometric mean of the cells'
+// centroid offsets weighted as the strength fit weights them (by their
+// patches, at least 1 each; TargetCalibration::cell_patches).
+double MeasuredStrength(const ShapeCalibration& shape,
+                        const std::vector<int>& cell_weights);
+
 }  // namespace dpsfm

@@ -172,19 +172,6 @@ ShapeCalibration MeasureShapes(const std::vector<CalibrationTarget>& targets,
   return shape;
 }
 
-// The measured shape's overall strength, weighted as the strength fit
-// weights its cells (by their patches).
-double ShapeStrength(const ShapeCalibration& shape,
-                     const TargetCalibration& calibration) {
-  double log_sum = 0, weight = 0;
-  for (size_t c = 0; c < shape.cell_centroid_offsets.size(); ++c) {
-    const double w = std::max(1, calibration.cell_patches[c]);
-    log_sum += w * std::log(shape.cell_centroid_offsets[c]);
-    weight += w;
-  }
-  return std::exp(log_sum / weight);
-}
-
 }  // namespace
 
 int RunDPPsfCalibrator(int argc, char** argv) {
@@ -402,7 +389,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
         profile.left_kernels.push_back(k.left);
         profile.right_kernels.push_back(k.right);
       }
-      const double shape_strength = ShapeStrength(shape, calibration);
+      const double shape_strength =
+          MeasuredStrength(shape, calibration.cell_patches);
       uncertainty = std::max(
           uncertainty, std::abs(shape_strength / calibration.strength - 1));
       LOG(INFO) << "Measured shape: strength " << std::setprecision(4)
