@@ -6,12 +6,13 @@
 // decoding. Prints figures; never asserts timing.
 //
 //   dp_scale_core_bench [--views N] [--width W] [--height H] [--threads T]
-//                       [--noise SIGMA] [--budget 1]
+//                       [--noise SIGMA] [--budget 1] [--resize F]
 // --width alone keeps the 3:2 aspect ratio. --budget 1 visits the views
 // under the command's default view budget (core/view_budget.h: checkpoints
 // from 14 views every 7, stop when the scale settles, at most 60), so a
 // large --views shows the peak memory of a large project: views are
-// rendered only when visited.
+// rendered only when visited. --resize F sets DPScaleOptions::resize_factor
+// (0 = the automatic working resolution).
 #include <sys/resource.h>
 
 #include <chrono>
@@ -52,7 +53,7 @@ double Now() {
 int main(int argc, char** argv) {
   int num_views = 30, width = 3000, height = 0, threads = -1;
   bool use_budget = false;
-  double noise = 0.005;
+  double noise = 0.005, resize = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--views")
@@ -67,6 +68,8 @@ int main(int argc, char** argv) {
       noise = std::atof(argv[i + 1]);
     else if (flag == "--budget")
       use_budget = std::atoi(argv[i + 1]) != 0;
+    else if (flag == "--resize")
+      resize = std::atof(argv[i + 1]);
     else {
       std::fprintf(stderr, "unknown flag %s\n", argv[i]);
       return 1;
@@ -96,6 +99,7 @@ int main(int argc, char** argv) {
   auto psf = std::make_shared<TranslatingDiskPsf>();
   DPScaleOptions options;  // automatic geometry for the frame size
   options.num_threads = threads;
+  options.resize_factor = resize;
   DPScaleEstimator estimator(options, psf);
 
   // Lens: 50 mm f/2.8, pitch chosen so that the blur spans about the

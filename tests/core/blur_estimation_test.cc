@@ -290,16 +290,33 @@ TEST(EstimatePatchBlur, Timing) {
 }
 
 TEST(PatchGeometry, Defaults) {
-  const PatchGeometry dslr = DefaultPatchGeometry(cv::Size(6720, 4480));
+  // The reference code's DSLR anchor, at its explicit resize.
+  const PatchGeometry dslr = DefaultPatchGeometry(cv::Size(6720, 4480), 0.5);
   EXPECT_DOUBLE_EQ(dslr.resize_factor, 0.5);
   EXPECT_EQ(dslr.patch_size, 111);
   EXPECT_EQ(dslr.stride, 47);
   EXPECT_DOUBLE_EQ(dslr.max_radius_px, 20);
+  // Automatically the same 40 frame px of bound at 1/4, where it is 10.
+  const PatchGeometry dslr_auto = DefaultPatchGeometry(cv::Size(6720, 4480));
+  EXPECT_DOUBLE_EQ(dslr_auto.resize_factor, 0.25);
+  EXPECT_DOUBLE_EQ(dslr_auto.max_radius_px, 10);
+  EXPECT_EQ(dslr_auto.patch_size, 51);
   const PatchGeometry phone = DefaultPatchGeometry(cv::Size(2016, 1512));
   EXPECT_DOUBLE_EQ(phone.resize_factor, 1.0);
   EXPECT_EQ(phone.patch_size, 51);
   EXPECT_EQ(phone.stride, 27);
   EXPECT_DOUBLE_EQ(phone.max_radius_px, 10);
+  // 3000x2000: 16.5 frame px of bound (as at full resolution), halved.
+  const PatchGeometry full = DefaultPatchGeometry(cv::Size(3000, 2000), 1.0);
+  EXPECT_DOUBLE_EQ(full.max_radius_px, 16.5);
+  const PatchGeometry half = DefaultPatchGeometry(cv::Size(3000, 2000));
+  EXPECT_DOUBLE_EQ(half.resize_factor, 0.5);
+  EXPECT_DOUBLE_EQ(half.max_radius_px, 8.5);  // 8.25 on the half-px grid
+  // Below ~1880 px on the short side nothing is resized.
+  EXPECT_DOUBLE_EQ(DefaultPatchGeometry(cv::Size(2700, 1800)).resize_factor,
+                   1.0);
+  EXPECT_DOUBLE_EQ(DefaultPatchGeometry(cv::Size(1000, 667)).resize_factor,
+                   1.0);
   // The rule on its own reproduces both anchors (a calibrated profile's
   // bound for small frames uses it).
   const PatchGeometry ten = PatchGeometryForRadius(10, 1.0);
@@ -309,14 +326,18 @@ TEST(PatchGeometry, Defaults) {
   EXPECT_EQ(twenty.patch_size, 111);
   EXPECT_EQ(twenty.stride, 47);
   EXPECT_DOUBLE_EQ(twenty.resize_factor, 0.5);
-  // In between: monotone, odd, and the bound fits the patch.
-  const PatchGeometry mid = DefaultPatchGeometry(cv::Size(3000, 2000));
-  EXPECT_EQ(mid.resize_factor, 1.0);
-  EXPECT_GT(mid.max_radius_px, 10);
-  EXPECT_LT(mid.max_radius_px, 20);
+  // In between: odd, and the bound fits the patch; the working bound stays
+  // within a factor 1.5 of 10 px once frames are reduced.
+  const PatchGeometry mid = DefaultPatchGeometry(cv::Size(3000, 2000), 1.0);
   EXPECT_EQ(mid.patch_size % 2, 1);
   EXPECT_GT(mid.patch_size, 51);
   EXPECT_LT(mid.patch_size, 111);
+  for (const int side : {2000, 2240, 2800, 3500, 4000, 4480, 6000}) {
+    const PatchGeometry g = DefaultPatchGeometry(cv::Size(side * 3 / 2, side));
+    EXPECT_LT(g.resize_factor, 1.0) << side;
+    EXPECT_GE(g.max_radius_px, 6.5) << side;
+    EXPECT_LE(g.max_radius_px, 13.5) << side;
+  }
   for (const int side : {300, 800, 1512, 2000, 2240, 2800, 3500}) {
     const PatchGeometry g = DefaultPatchGeometry(cv::Size(side * 3 / 2, side));
     EXPECT_EQ(g.patch_size % 2, 1);

@@ -221,16 +221,23 @@ struct PatchGeometry {
   double resize_factor;  // working frame = DP frame * resize_factor
 };
 
-// Defaults for a DP frame size, following the reference code: DSLR 6720x4480
-// resized by 0.5, patch 111, stride 47, |r| <= 20; phone DP frames ~1512 px on
-// the short side, no resize, patch 51, stride 27, |r| <= 10. The resize is
-// 1/k with the smallest integer k that brings the short side to <= 2800 px
-// (so a DSLR frame is halved and a phone frame kept); the radius bound is
-// interpolated linearly in the working short side between the two anchors
-// (proportional beyond them), and patch = 6 |r|max - 9 (>= 2 |r|max + 21),
-// stride = 2 |r|max + 7, which reproduce both anchors.
+// Defaults for a DP frame size. The search bound follows the reference code's
+// anchors, DSLR 6720x4480 resized by 0.5 with |r| <= 20 and phone DP frames
+// ~1512 px on the short side with |r| <= 10: at the reference resize (1/k,
+// smallest integer k bringing the short side to <= 2800 px) it is
+// interpolated linearly in the short side between the anchors (proportional
+// beyond them), which fixes it in frame pixels. The working resolution is
+// then 1/k with k = round(frame bound / 10 px) (at least 1): the coarsest
+// reduction keeping the bound near the phone anchor's 10 px. So phone
+// frames and frames up to ~1880 px on the short side keep their
+// resolution, 3000x2000 is halved (|r| <= 8.5) and a 6720x4480 DSLR frame
+// works at 1/4 (|r| <= 10), the reference's 0.5 cut in half again (the
+// scale does not change: docs/benchmark.md). patch = 6 |r|max - 9
+// (>= 2 |r|max + 21), stride = 2 |r|max + 7, which reproduce both anchors.
 PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size);
-// The same with an explicit resize factor in (0, 1].
+// The same with an explicit resize factor in (0, 1]: the bound is the same in
+// frame pixels (so 0.5 on a 6720x4480 frame gives the reference's 111 / 47 /
+// |r| <= 20).
 PatchGeometry DefaultPatchGeometry(const cv::Size& frame_size,
                                    double resize_factor);
 // The patch and stride that go with a radius bound (the rule above).
