@@ -37,9 +37,13 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
   const double truth =
       ReadJson(scene / "ground_truth.json").at("scale").get<double>();
 
-  // Every view: no checkpoints, nothing skipped.
-  const BudgetRun all =
-      RunWithBudget(scene, "all", {"--DPScaleEstimator.all_views", "1"});
+  // Every view: no checkpoints, nothing skipped; read one by one here.
+  const BudgetRun all = RunWithBudget(scene,
+                                      "all",
+                                      {"--DPScaleEstimator.all_views",
+                                       "1",
+                                       "--DPScaleEstimator.prefetch_views",
+                                       "0"});
   ASSERT_TRUE(all.report.contains("view_budget"));
   const nlohmann::json& a = all.report.at("view_budget");
   EXPECT_EQ(a.at("views_visited").get<int>(), 8);
@@ -47,6 +51,20 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
   EXPECT_TRUE(a.at("checkpoints").empty());
   EXPECT_EQ(a.at("stop_reason").get<std::string>(), "");
   const double all_scale = all.report.at("scale").get<double>();
+  // Reading three views ahead on worker threads changes nothing but when
+  // the reads happen.
+  const BudgetRun ahead = RunWithBudget(scene,
+                                        "ahead",
+                                        {"--DPScaleEstimator.all_views",
+                                         "1",
+                                         "--DPScaleEstimator.prefetch_views",
+                                         "3"});
+  EXPECT_DOUBLE_EQ(ahead.report.at("scale").get<double>(), all_scale);
+  EXPECT_EQ(ahead.report.at("view_budget").at("visited"), a.at("visited"));
+  const nlohmann::json& timings = ahead.report.at("timings");
+  EXPECT_GT(timings.at("read").get<double>(), 0);
+  EXPECT_LE(timings.at("read_wait").get<double>(),
+            timings.at("read").get<double>() + 0.05);
 
   // The stopping rule from 4 views, every 2: it may stop at 6 views (the
   // last checkpoint before the final view) only if the scale settled, and
@@ -112,6 +130,13 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
                          "DPScaleEstimator view budget"),
             std::string::npos)
       << bad.err;
+  const CommandResult bad_prefetch = RunEstimator(
+      With(DenseArgs(scene),
+           {"--dry_run", "1", "--DPScaleEstimator.prefetch_views", "-1"}));
+  EXPECT_EQ(bad_prefetch.exit_code, 1);
+  EXPECT_NE(bad_prefetch.err.find("prefetch_views must be in [0, 8], got -1"),
+            std::string::npos)
+      << bad_prefetch.err;
 }
 
 }  // namespace test

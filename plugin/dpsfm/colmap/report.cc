@@ -218,6 +218,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
 
   report["seconds"] = timings.total;
   report["timings"] = {{"read", timings.read},
+                       {"read_wait", timings.read_wait},
                        {"blur", timings.blur},
                        {"linear", timings.linear},
                        {"psf_fit", result.seconds_psf_fit},

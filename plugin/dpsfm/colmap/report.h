@@ -16,8 +16,9 @@ namespace dpsfm {
 std::string DPSFMVersion();
 
 struct RunTimings {
-  double read = 0;  // loading DP views and depths
-  double blur = 0;  // per-patch blur estimation (inside AddView)
+  double read = 0;       // loading DP views and depths (the reads' own time)
+  double read_wait = 0;  // of it, not hidden behind the blur search
+  double blur = 0;       // per-patch blur estimation (inside AddView)
   double linear = 0;
   double intensity = 0;
   double rescale = 0;

@@ -13,6 +13,7 @@
 #include "dpsfm/colmap/report_plots.h"
 #include "dpsfm/colmap/rescale.h"
 #include "dpsfm/colmap/transaction.h"
+#include "dpsfm/colmap/view_prefetcher.h"
 #include "dpsfm/colmap/workspace.h"
 
 namespace dpsfm {
@@ -36,11 +37,13 @@ nlohmann::json ReportWithSource(nlohmann::json report,
 DPScaleController::DPScaleController(const ViewBudgetOptions& budget,
                                      const WorkspaceReader* reader,
                                      DPScaleEstimator* estimator,
-                                     bool capture_overlays)
+                                     bool capture_overlays,
+                                     int prefetch_views)
     : budget_(budget),
       reader_(reader),
       estimator_(estimator),
-      capture_overlays_(capture_overlays) {
+      capture_overlays_(capture_overlays),
+      prefetch_views_(prefetch_views) {
   budget_.Check();
 }
 
@@ -68,14 +71,20 @@ ScaleRun DPScaleController::Run() {
   const std::vector<int> order = VisitingOrder();
   colmap::Timer views_timer;
   views_timer.Start();
-  // Overlays: the first, middle and last view of those planned.
   const int planned = run.planned;
+  // Views are read ahead (decoding and depth maps overlap the blur search),
+  // never beyond those planned.
+  ViewPrefetcher prefetcher(
+      reader_,
+      std::vector<int>(order.begin(), order.begin() + planned),
+      prefetch_views_);
+  // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
-    colmap::Timer read_timer;
-    read_timer.Start();
-    const DPView view = reader_->LoadView(index);
-    run.timings.read += read_timer.ElapsedSeconds();
+    ViewPrefetcher::Read read = prefetcher.Next();
+    const DPView& view = read.view;
+    run.timings.read += read.seconds;
+    run.timings.read_wait += read.waited;
     DPViewSummary summary;
     try {
       summary = estimator_->AddView(view);
@@ -327,8 +336,11 @@ ScaleEstimationOutcome RunScaleEstimation(
                     : "")
             << ")";
   DPScaleEstimator estimator(core_options, psf_field);
-  DPScaleController controller(
-      options.view_budget, &reader, &estimator, !options.report_path.empty());
+  DPScaleController controller(options.view_budget,
+                               &reader,
+                               &estimator,
+                               !options.report_path.empty(),
+                               options.prefetch_views);
   ScaleRun run = controller.Run();
   const DPScaleResult& result = run.result;
   RunTimings& timings = run.timings;
@@ -375,7 +387,8 @@ ScaleEstimationOutcome RunScaleEstimation(
             << ", final s = " << result.scale << " (95% interval "
             << result.scale_ci_low << " .. " << result.scale_ci_high
             << "; intensity stage: " << result.intensity_status << ")";
-  LOG(INFO) << "Timings: read " << Seconds(timings.read) << ", blur "
+  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
+            << Seconds(timings.read_wait) << " not overlapped), blur "
             << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
             << ", intensity " << Seconds(timings.intensity);
 

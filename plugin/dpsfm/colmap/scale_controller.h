@@ -36,10 +36,13 @@ class DPScaleController {
   DPScaleController(const ViewBudgetOptions& budget,
                     const WorkspaceReader* reader,
                     DPScaleEstimator* estimator,
-                    bool capture_overlays);
+                    bool capture_overlays,
+                    int prefetch_views = 1);
 
   // Visits views in SpreadViewOrder until the budget's rule stops, then
-  // estimates. Throws InputError naming the image for malformed input.
+  // estimates. The next prefetch_views views are read (ViewPrefetcher) while
+  // a view's blur search runs. Throws InputError naming the image for malformed
+  // input.
   ScaleRun Run();
 
  private:
@@ -49,6 +52,7 @@ class DPScaleController {
   const WorkspaceReader* reader_;
   DPScaleEstimator* estimator_;
   bool capture_overlays_;
+  int prefetch_views_;
 };
 
 // What a run of `colmap dp_scale_estimator` ended in: success (the scale

@@ -60,6 +60,11 @@ void DPScaleEstimatorOptions::Check() const {
   CheckOptionalPositive("focal_length_mm", focal_length_mm);
   CheckOptionalPositive("f_number", f_number);
   CheckOptionalPositive("pixel_pitch_um", pixel_pitch_um);
+  if (prefetch_views < 0 || prefetch_views > 8) {
+    throw InputError(
+        "--DPScaleEstimator.prefetch_views must be in [0, 8], got " +
+        std::to_string(prefetch_views));
+  }
   try {
     view_budget.Check();
   } catch (const std::invalid_argument& error) {

@@ -73,6 +73,9 @@ struct DPScaleEstimatorOptions {
   // Threads of the COLMAP layer's own loops (-1: all cores); the command
   // sets it from --DPScaleEstimator.num_threads.
   int num_threads = -1;
+  // Views read ahead of the blur search (0: read each when it is needed).
+  // Each one waiting costs a view's frames and depth map in memory.
+  int prefetch_views = 1;
 
   // Throws InputError naming the option and the value.
   void Check() const;

@@ -103,7 +103,16 @@ void AddCommandOptions(colmap::OptionManager* manager,
   manager->AddDefaultOption("DPScaleEstimator.all_views",
                             &options->view_budget.all_views,
                             "visit every view (no stopping rule, no cap)");
+  manager->AddDefaultOption(
+      "DPScaleEstimator.prefetch_views",
+      &options->prefetch_views,
+      "views read ahead while the blur search runs (0: none)");
   // The method's parameters (paper names in brackets).
+  manager->AddDefaultOption(
+      "DPScaleEstimator.resize_factor",
+      &core->resize_factor,
+      "working resolution as a fraction of the DP frame (0: auto, about 10 "
+      "px of search bound)");
   manager->AddDefaultOption("DPScaleEstimator.patch_size",
                             &core->patch_size,
                             "patch side in px of the working frame (0: auto)");
