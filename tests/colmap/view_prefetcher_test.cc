@@ -112,7 +112,9 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
     }
   }
   // Dropping a prefetcher with reads in flight waits for them.
-  { ViewPrefetcher dropped(&reader, {0, 1, 2}, 2); }
+  {
+    ViewPrefetcher dropped(&reader, {0, 1, 2}, 2);
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "dpsfm/colmap/dp_images.h"
 #include "dpsfm/colmap/lens_data.h"
 #include "dpsfm/colmap/workspace_reader.h"
+#include "dpsfm/core/check.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -545,6 +546,47 @@ TEST(ResampleDepthToFrame, FollowsTheDistortion) {
   // The principal points correspond: frame centre -> depth map centre.
   const float centre_value = mapped.at<float>(75, 100);
   EXPECT_NEAR(static_cast<int>(centre_value - 1) % 1000, 110, 2);
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+TEST(DPScaleEstimatorOptions, CheckNamesTheFlag) {
+  DPScaleEstimatorOptions options;
+  EXPECT_FALSE(options.Check());
+  EXPECT_NE(OptionCheckFailure().find("give exactly one of --workspace_path"),
+            std::string::npos)
+      << OptionCheckFailure();
+  options.input_path = "sparse";
+  options.dp_image_path = "dp";
+  EXPECT_TRUE(options.Check()) << OptionCheckFailure();
+  options.f_number = -4;
+  EXPECT_FALSE(options.Check());
+  EXPECT_EQ(OptionCheckFailure(),
+            "--DPScaleEstimator.f_number must be a positive number, got -4");
+  options.f_number = 0;
+  options.prefetch_views = 9;
+  EXPECT_FALSE(options.Check());
+  EXPECT_NE(OptionCheckFailure().find("prefetch_views must be in [0, 8]"),
+            std::string::npos);
+  options.prefetch_views = 1;
+  options.view_budget.check_every = 0;
+  EXPECT_FALSE(options.Check());
+  EXPECT_EQ(OptionCheckFailure(),
+            "invalid DPScaleEstimator view budget: check_every >= 1 (got 0)");
+  // The layout acts on it: an InputError with the same line.
+  try {
+    ResolveWorkspaceLayout(options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "invalid DPScaleEstimator view budget: check_every >= 1 (got 0)");
+  }
 }
 
 }  // namespace

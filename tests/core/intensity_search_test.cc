@@ -259,7 +259,10 @@ TEST(SearchScaleByIntensity, RefusesWithoutInput) {
           .success);
   IntensitySearchOptions bad;
   bad.relative_range = 1.0;
-  EXPECT_THROW(bad.Check(), std::invalid_argument);
+  EXPECT_FALSE(bad.Check());
+  EXPECT_THROW(
+      SearchScaleByIntensity(scene.views, scene.patches, 1.0, psf, bad),
+      std::invalid_argument);
 }
 
 }  // namespace

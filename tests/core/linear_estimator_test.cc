@@ -280,11 +280,12 @@ TEST(EstimateScaleLinear, SingleViewWorks) {
   EXPECT_NEAR(est.scale / 3.0, 1.0, 1e-7);
 }
 
-TEST(LinearEstimatorOptions, CheckThrows) {
+TEST(LinearEstimatorOptions, CheckIsActedOn) {
   LinearEstimatorOptions options;
   EXPECT_TRUE(options.Check());
   options.min_samples_per_view = 1;
-  EXPECT_THROW(options.Check(), std::invalid_argument);
+  EXPECT_FALSE(options.Check());
+  EXPECT_THROW(EstimateScaleLinear({}, options), std::invalid_argument);
 }
 
 }  // namespace

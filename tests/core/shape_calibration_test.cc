@@ -199,7 +199,8 @@ TEST(CalibrateShapes, RefusesWhatTheCapturesDoNotShow) {
   EXPECT_FALSE(unrelated.determined) << unrelated.reason;
   ShapeCalibrationOptions bad = Options();
   bad.min_radius_px = 0;
-  EXPECT_THROW(bad.Check(), std::invalid_argument);
+  EXPECT_FALSE(bad.Check());
+  EXPECT_THROW(CalibrateShapes({other}, bad), std::invalid_argument);
 }
 
 }  // namespace dpsfm

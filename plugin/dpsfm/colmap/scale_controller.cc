@@ -15,6 +15,7 @@
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/view_prefetcher.h"
 #include "dpsfm/colmap/workspace.h"
+#include "dpsfm/core/check.h"
 
 namespace dpsfm {
 namespace {
@@ -44,7 +45,7 @@ DPScaleController::DPScaleController(const ViewBudgetOptions& budget,
       estimator_(estimator),
       capture_overlays_(capture_overlays),
       prefetch_views_(prefetch_views) {
-  budget_.Check();
+  DPSFM_CHECK_OPTIONS(budget_, "ViewBudgetOptions");
 }
 
 std::vector<int> DPScaleController::VisitingOrder() const {
@@ -207,11 +208,9 @@ ScaleEstimationOutcome RunScaleEstimation(
   total_timer.Start();
   colmap::PrintHeading1("DP scale estimation");
   const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  try {
-    core_options.Check();
-  } catch (const std::invalid_argument& error) {
-    throw InputError(std::string("invalid DPScaleEstimator option: ") +
-                     error.what());
+  if (!core_options.Check()) {
+    throw InputError("invalid DPScaleEstimator option: " +
+                     OptionCheckFailure());
   }
   LOG(INFO) << "Model: " << layout.model_path << " ("
             << (layout.dense ? "dense workspace" : "sparse model") << ")";

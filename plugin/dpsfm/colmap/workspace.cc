@@ -5,6 +5,8 @@
 
 #include <boost/filesystem.hpp>
 
+#include "dpsfm/core/check.h"
+
 namespace dpsfm {
 namespace {
 
@@ -32,56 +34,57 @@ void RequireFile(const std::string& path, const std::string& what) {
   }
 }
 
-void CheckOptionalPositive(const char* name, double value) {
-  // 0 means "not given"; anything else must be a finite positive number.
-  if (value != 0.0 && !(std::isfinite(value) && value > 0.0)) {
-    std::ostringstream message;
-    message << "--DPScaleEstimator." << name
-            << " must be a positive number, got " << value;
-    throw InputError(message.str());
-  }
+// 0 means "not given"; anything else must be a finite positive number.
+bool OptionalPositive(double value) {
+  return value == 0.0 || (std::isfinite(value) && value > 0.0);
+}
+
+std::string NotPositive(const char* name, double value) {
+  std::ostringstream message;
+  message << "--DPScaleEstimator." << name << " must be a positive number, got "
+          << value;
+  return message.str();
 }
 
 }  // namespace
 
-void DPScaleEstimatorOptions::Check() const {
-  if (workspace_path.empty() == input_path.empty()) {
-    throw InputError(
-        "give exactly one of --workspace_path (dense workspace) and "
-        "--input_path (sparse model)");
-  }
-  if (dp_image_path.empty()) {
-    throw InputError("--dp_image_path is required");
-  }
-  if (input_type != "geometric" && input_type != "photometric") {
-    throw InputError("--input_type must be geometric or photometric, got '" +
-                     input_type + "'");
-  }
-  CheckOptionalPositive("focal_length_mm", focal_length_mm);
-  CheckOptionalPositive("f_number", f_number);
-  CheckOptionalPositive("pixel_pitch_um", pixel_pitch_um);
-  if (prefetch_views < 0 || prefetch_views > 8) {
-    throw InputError(
-        "--DPScaleEstimator.prefetch_views must be in [0, 8], got " +
-        std::to_string(prefetch_views));
-  }
-  try {
-    view_budget.Check();
-  } catch (const std::invalid_argument& error) {
-    throw InputError(std::string("invalid DPScaleEstimator view budget: ") +
-                     error.what());
+bool DPScaleEstimatorOptions::Check() const {
+  DPSFM_CHECK_OPTION_MESSAGE(
+      workspace_path.empty() != input_path.empty(),
+      "give exactly one of --workspace_path (dense workspace) and "
+      "--input_path (sparse model)");
+  DPSFM_CHECK_OPTION_MESSAGE(!dp_image_path.empty(),
+                             "--dp_image_path is required");
+  DPSFM_CHECK_OPTION_MESSAGE(
+      input_type == "geometric" || input_type == "photometric",
+      "--input_type must be geometric or photometric, got '" + input_type +
+          "'");
+  DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(focal_length_mm),
+                             NotPositive("focal_length_mm", focal_length_mm));
+  DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(f_number),
+                             NotPositive("f_number", f_number));
+  DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(pixel_pitch_um),
+                             NotPositive("pixel_pitch_um", pixel_pitch_um));
+  DPSFM_CHECK_OPTION_MESSAGE(
+      prefetch_views >= 0 && prefetch_views <= 8,
+      "--DPScaleEstimator.prefetch_views must be in [0, 8], got " +
+          std::to_string(prefetch_views));
+  if (!view_budget.Check()) {
+    internal::SetOptionCheckFailure("invalid DPScaleEstimator view budget: " +
+                                    OptionCheckFailure());
+    return false;
   }
   if (!output_path.empty()) {
     const std::string input =
         workspace_path.empty() ? input_path : workspace_path;
-    if (fs::exists(output_path) && fs::exists(input) &&
-        fs::equivalent(output_path, input)) {
-      throw InputError(
-          "--output_path is the input itself; leave it out to rescale in "
-          "place: " +
-          output_path);
-    }
+    DPSFM_CHECK_OPTION_MESSAGE(
+        !(fs::exists(output_path) && fs::exists(input) &&
+          fs::equivalent(output_path, input)),
+        "--output_path is the input itself; leave it out to rescale in "
+        "place: " +
+            output_path);
   }
+  return true;
 }
 
 bool IsModelDir(const std::string& dir) {
@@ -96,7 +99,7 @@ bool IsModelDir(const std::string& dir) {
 }
 
 WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options) {
-  options.Check();
+  if (!options.Check()) throw InputError(OptionCheckFailure());
   WorkspaceLayout layout;
   if (!options.workspace_path.empty()) {
     layout.dense = true;

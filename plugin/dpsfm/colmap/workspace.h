@@ -77,8 +77,9 @@ struct DPScaleEstimatorOptions {
   // Each one waiting costs a view's frames and depth map in memory.
   int prefetch_views = 1;
 
-  // Throws InputError naming the option and the value.
-  void Check() const;
+  // False at the first invalid option; OptionCheckFailure() (core/check.h)
+  // says which, in the words of the command line.
+  bool Check() const;
 };
 
 // Where each piece of the input lives on disk.

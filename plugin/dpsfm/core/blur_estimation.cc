@@ -83,24 +83,28 @@ double Dot(const std::vector<float>& a, const std::vector<float>& b) {
 }  // namespace
 
 bool BlurEstimationOptions::Check() const {
-  const double eps = 1e-9;
-  if (!(std::isfinite(max_radius_px) && max_radius_px >= 1)) return false;
-  if (!(std::isfinite(grid_step_px) && grid_step_px > 0 && grid_step_px <= 1)) {
-    return false;
-  }
-  if (!(std::isfinite(coarse_step_px) && coarse_step_px >= grid_step_px &&
-        coarse_step_px <= max_radius_px)) {
-    return false;
-  }
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(max_radius_px) && max_radius_px >= 1,
+                           max_radius_px);
+  DPSFM_CHECK_OPTION_VALUE(
+      std::isfinite(grid_step_px) && grid_step_px > 0 && grid_step_px <= 1,
+      grid_step_px);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(coarse_step_px) &&
+                               coarse_step_px >= grid_step_px &&
+                               coarse_step_px <= max_radius_px,
+                           coarse_step_px);
+  // The coarse nodes are nodes of the kernel grid.
   const double ratio = coarse_step_px / grid_step_px;
-  if (std::abs(ratio - std::round(ratio)) > eps * ratio) return false;
-  if (!(coarse_band > 0 && coarse_band <= 1)) return false;
-  if (!(min_texture >= 0) || !std::isfinite(min_texture)) return false;
-  if (!(min_fit_quality >= 0 && min_fit_quality <= 1)) return false;
-  if (!(fit_quality_offset_px > 0 && fit_quality_offset_px < max_radius_px)) {
-    return false;
-  }
-  if (max_refinement_evaluations < 3) return false;
+  DPSFM_CHECK_OPTION_VALUE(std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio,
+                           coarse_step_px);
+  DPSFM_CHECK_OPTION_VALUE(coarse_band > 0 && coarse_band <= 1, coarse_band);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(min_texture) && min_texture >= 0,
+                           min_texture);
+  DPSFM_CHECK_OPTION_VALUE(min_fit_quality >= 0 && min_fit_quality <= 1,
+                           min_fit_quality);
+  DPSFM_CHECK_OPTION_VALUE(
+      fit_quality_offset_px > 0 && fit_quality_offset_px < max_radius_px,
+      fit_quality_offset_px);
+  DPSFM_CHECK_OPTION_GE(max_refinement_evaluations, 3);
   return true;
 }
 
@@ -147,7 +151,7 @@ struct PatchBlurEstimator::Tables {
 PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
                                        const BlurEstimationOptions& options,
                                        const cv::Size& patch_size) {
-  DPSFM_CHECK(options.Check()) << "invalid BlurEstimationOptions";
+  DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
   std::unique_ptr<Tables> t(new Tables);
   t->options = options;
   t->patch_size = patch_size;
@@ -700,7 +704,7 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
                                     const cv::Mat& right,
                                     const DPPsfModel& psf,
                                     const BlurEstimationOptions& options) {
-  DPSFM_CHECK(options.Check()) << "invalid BlurEstimationOptions";
+  DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
   DPSFM_CHECK(left.size() == right.size())
       << "left and right patches differ in size";
   std::ostringstream key;

@@ -49,3 +49,81 @@ class CheckMessage {
 #define DPSFM_CHECK_LT(a, b) DPSFM_CHECK((a) < (b))
 #define DPSFM_CHECK_LE(a, b) DPSFM_CHECK((a) <= (b))
 #define DPSFM_CHECK_EQ(a, b) DPSFM_CHECK((a) == (b))
+
+// Option structs (COLMAP's CHECK_OPTION_* style): every struct of options
+// has `bool Check() const` made of these; the first failed check returns
+// false from Check() and records the field, the bound and the value given,
+// e.g. "min_views >= 1 (got 0)". OptionCheckFailure() returns that text for
+// the thread; DPSFM_CHECK_OPTIONS acts on a Check() by throwing
+// std::invalid_argument("invalid <Name>: <failure>").
+//
+//   bool ViewBudgetOptions::Check() const {
+//     DPSFM_CHECK_OPTION_GE(min_views, 1);
+//     DPSFM_CHECK_OPTION_VALUE(settled_change > 0 && settled_change < 1,
+//                              settled_change);
+//     DPSFM_CHECK_NESTED_OPTIONS(blur);  // "blur.max_radius_px >= 1 (...)"
+//     return true;
+//   }
+//   DPSFM_CHECK_OPTIONS(options, "ViewBudgetOptions");
+namespace dpsfm {
+
+// What the last failed option check on this thread said ("" if none).
+const std::string& OptionCheckFailure();
+
+namespace internal {
+
+void SetOptionCheckFailure(const std::string& failure);
+void PrefixOptionCheckFailure(const char* field);
+[[noreturn]] void ThrowInvalidOptions(const char* name);
+
+inline bool CheckOption(bool ok, const char* condition) {
+  if (!ok) SetOptionCheckFailure(condition);
+  return ok;
+}
+
+template <typename T>
+bool CheckOptionValue(bool ok, const char* condition, const T& value) {
+  if (!ok) {
+    std::ostringstream failure;
+    failure << condition << " (got " << value << ")";
+    SetOptionCheckFailure(failure.str());
+  }
+  return ok;
+}
+
+}  // namespace internal
+}  // namespace dpsfm
+
+#define DPSFM_CHECK_OPTION(condition)                             \
+  if (!::dpsfm::internal::CheckOption((condition), #condition)) { \
+    return false;                                                 \
+  }
+#define DPSFM_CHECK_OPTION_VALUE(condition, value) \
+  if (!::dpsfm::internal::CheckOptionValue(        \
+          (condition), #condition, (value))) {     \
+    return false;                                  \
+  }
+// With the message a user should read instead of the condition.
+#define DPSFM_CHECK_OPTION_MESSAGE(condition, message) \
+  if (!(condition)) {                                  \
+    ::dpsfm::internal::SetOptionCheckFailure(message); \
+    return false;                                      \
+  }
+#define DPSFM_CHECK_OPTION_OP(a, op, b)        \
+  if (!::dpsfm::internal::CheckOptionValue(    \
+          (a)op(b), #a " " #op " " #b, (a))) { \
+    return false;                              \
+  }
+#define DPSFM_CHECK_OPTION_GT(a, b) DPSFM_CHECK_OPTION_OP(a, >, b)
+#define DPSFM_CHECK_OPTION_GE(a, b) DPSFM_CHECK_OPTION_OP(a, >=, b)
+#define DPSFM_CHECK_OPTION_LT(a, b) DPSFM_CHECK_OPTION_OP(a, <, b)
+#define DPSFM_CHECK_OPTION_LE(a, b) DPSFM_CHECK_OPTION_OP(a, <=, b)
+// A nested options struct: its failure, prefixed with the field's name.
+#define DPSFM_CHECK_NESTED_OPTIONS(field)                \
+  if (!(field).Check()) {                                \
+    ::dpsfm::internal::PrefixOptionCheckFailure(#field); \
+    return false;                                        \
+  }
+// Acting on a Check(): throws std::invalid_argument naming the struct.
+#define DPSFM_CHECK_OPTIONS(options, name) \
+  if (!(options).Check()) ::dpsfm::internal::ThrowInvalidOptions(name)

@@ -149,13 +149,36 @@ DPKernels TranslatingDiskPsf::Kernels(double signed_radius_px) const {
   return AssignBySign(signed_radius_px, towards_plus_x, towards_minus_x);
 }
 
+bool SplitProfileParams::CheckCentroidOffsetRange(double min_centroid_offset,
+                                                  double max_centroid_offset) {
+  // Inside the family's range.
+  DPSFM_CHECK_OPTION_VALUE(
+      min_centroid_offset >=
+          SplitProfileParams::MinCentroidOffset() * (1 - 1e-9),
+      min_centroid_offset);
+  DPSFM_CHECK_OPTION_VALUE(
+      max_centroid_offset <=
+          SplitProfileParams::MaxCentroidOffset() * (1 + 1e-9),
+      max_centroid_offset);
+  DPSFM_CHECK_OPTION_VALUE(min_centroid_offset < max_centroid_offset,
+                           max_centroid_offset);
+  return true;
+}
+
 bool SplitProfileParams::Check() const {
-  return std::isfinite(split_exponent) && split_exponent >= 0.05 &&
-         split_exponent <= 8 && std::isfinite(crosstalk) && crosstalk >= 0 &&
-         crosstalk <= 0.45 && std::isfinite(rim_softness) &&
-         rim_softness >= 0 && rim_softness <= 0.5 &&
-         std::isfinite(rim_brightness) && rim_brightness >= 0 &&
-         rim_brightness <= 4;
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(split_exponent) &&
+                               split_exponent >= 0.05 && split_exponent <= 8,
+                           split_exponent);
+  DPSFM_CHECK_OPTION_VALUE(
+      std::isfinite(crosstalk) && crosstalk >= 0 && crosstalk <= 0.45,
+      crosstalk);
+  DPSFM_CHECK_OPTION_VALUE(
+      std::isfinite(rim_softness) && rim_softness >= 0 && rim_softness <= 0.5,
+      rim_softness);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(rim_brightness) &&
+                               rim_brightness >= 0 && rim_brightness <= 4,
+                           rim_brightness);
+  return true;
 }
 
 std::string SplitProfileParams::ToString() const {
@@ -169,8 +192,8 @@ std::string SplitProfileParams::ToString() const {
 SplitProfilePsf::SplitProfilePsf(const SplitProfileParams& params,
                                  int subsamples_per_pixel)
     : params_(params), subsamples_per_pixel_(subsamples_per_pixel) {
-  DPSFM_CHECK(params.Check())
-      << "invalid split profile (" << params.ToString() << ")";
+  DPSFM_CHECK(params.Check()) << "invalid split profile (" << params.ToString()
+                              << "): " << OptionCheckFailure();
   DPSFM_CHECK_GE(subsamples_per_pixel, 1)
       << "subsamples_per_pixel must be positive";
 }
@@ -466,9 +489,13 @@ DPPsfLayout DPPsfLayout::ColumnBands(int num_bands) {
 }
 
 bool DPPsfLayout::Check() const {
-  return rows >= 1 && cols >= 1 && std::isfinite(x0) && std::isfinite(x1) &&
-         std::isfinite(y0) && std::isfinite(y1) && x0 < x1 && y0 < y1 &&
-         x0 >= 0 && y0 >= 0 && x1 <= 1 && y1 <= 1;
+  DPSFM_CHECK_OPTION_GE(rows, 1);
+  DPSFM_CHECK_OPTION_GE(cols, 1);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(x0) && x0 >= 0, x0);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(y0) && y0 >= 0, y0);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(x1) && x1 > x0 && x1 <= 1, x1);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(y1) && y1 > y0 && y1 <= 1, y1);
+  return true;
 }
 
 int DPPsfLayout::CellAt(double x_fraction, double y_fraction) const {
@@ -501,7 +528,8 @@ const DPPsfModel& DPPsfField::At(double x_fraction, double y_fraction) const {
 }
 
 void DPPsfField::CheckValid() const {
-  DPSFM_CHECK(layout.Check()) << "invalid DP PSF layout " << layout.ToString();
+  DPSFM_CHECK(layout.Check()) << "invalid DP PSF layout " << layout.ToString()
+                              << ": " << OptionCheckFailure();
   DPSFM_CHECK_EQ(static_cast<int>(cells.size()), layout.NumCells())
       << "the DP PSF layout " << layout.ToString() << " needs "
       << layout.NumCells() << " profiles, got " << cells.size();

@@ -142,6 +142,10 @@ struct SplitProfileParams {
   static SplitProfileParams ForCentroidOffset(double kappa);
   static double MinCentroidOffset();
   static double MaxCentroidOffset();
+  // A range [min, max] of centroid offsets inside the family's (an options
+  // check, core/check.h: false with the failing bound recorded).
+  static bool CheckCentroidOffsetRange(double min_centroid_offset,
+                                       double max_centroid_offset);
 };
 
 class SplitProfilePsf : public DPPsfModel {

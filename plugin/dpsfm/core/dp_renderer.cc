@@ -12,7 +12,7 @@
 namespace dpsfm {
 
 bool DPRenderOptions::Check() const {
-  DPSFM_CHECK_GT(radius_step_px, 0.0);
+  DPSFM_CHECK_OPTION_GT(radius_step_px, 0.0);
   return true;
 }
 
@@ -23,7 +23,7 @@ void RenderDPViews(const cv::Mat& sharp,
                    const DPRenderOptions& options,
                    cv::Mat* left,
                    cv::Mat* right) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "DPRenderOptions");
   DPSFM_CHECK(sharp.type() == CV_32FC1 || sharp.type() == CV_32FC3)
       << "sharp image must be CV_32FC1 or CV_32FC3";
   DPSFM_CHECK(depth.type() == CV_32FC1 && depth.size() == sharp.size())

@@ -96,45 +96,52 @@ bool IntervalContains(
 }  // namespace
 
 bool DPScaleOptions::Check() const {
-  DPSFM_CHECK_GE(patch_size, 0);
-  DPSFM_CHECK_GE(stride, 0);
-  DPSFM_CHECK_GE(max_radius_px, 0);
-  DPSFM_CHECK_GE(min_auto_radius_px, 0);
-  DPSFM_CHECK(resize_factor >= 0 && resize_factor <= 1)
-      << "resize_factor must be in (0, 1] or 0 (auto), got " << resize_factor;
-  DPSFM_CHECK(top_patch_fraction > 0 && top_patch_fraction <= 1);
-  DPSFM_CHECK_GE(min_patches_per_view, 0);
-  DPSFM_CHECK_GE(depth_strata, 1);
-  DPSFM_CHECK_GE(blur_search_factor, 0);
-  DPSFM_CHECK_GE(max_stored_patches_per_view, 0);
-  DPSFM_CHECK_GE(max_stored_megabytes_per_view, 0);
-  DPSFM_CHECK(min_depth_coverage > 0 && min_depth_coverage <= 1);
-  DPSFM_CHECK_GE(min_depth_points_per_patch, 1);
-  DPSFM_CHECK_GT(max_relative_depth_spread, 0);
-  DPSFM_CHECK_GE(min_texture_snr, 0);
-  DPSFM_CHECK_GE(max_relative_residual, 0);
-  DPSFM_CHECK_GE(relative_residual_factor, 0);
-  DPSFM_CHECK_GT(max_intensity_ci_relative_width, 0);
-  DPSFM_CHECK_GT(max_scale_ci_relative_width, 0);
-  DPSFM_CHECK_GE(recorded_focus_tolerance, 0);
-  DPSFM_CHECK_GE(min_total_patches, 0);
-  DPSFM_CHECK_GE(scale_systematic_uncertainty, 0);
-  DPSFM_CHECK_GE(lens_geometry_uncertainty, 0);
-  DPSFM_CHECK(profile_relative_uncertainty >= 0 &&
-              profile_relative_uncertainty < 1)
-      << "profile_relative_uncertainty must lie in [0, 1)";
-  DPSFM_CHECK(min_intensity_bootstrap_support >= 0 &&
-              min_intensity_bootstrap_support <= 1);
-  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
-  DPSFM_CHECK_GE(max_psf_fit_patches, 1);
-  DPSFM_CHECK(psf_fit_radius_factor >= 1 && psf_fit_radius_factor <= 4)
-      << "psf_fit_radius_factor must lie in [1, 4]";
-  DPSFM_CHECK_GE(psf_fit_bands, 1);
-  DPSFM_CHECK_GE(max_psf_fit_depth_spread, 0);
-  if (psf_self_calibration) psf_fit.Check();
-  DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
-  linear.Check();
-  intensity.Check();
+  DPSFM_CHECK_OPTION_GE(patch_size, 0);
+  DPSFM_CHECK_OPTION_GE(stride, 0);
+  DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
+  DPSFM_CHECK_OPTION_GE(min_auto_radius_px, 0);
+  // 0 is automatic.
+  DPSFM_CHECK_OPTION_VALUE(resize_factor >= 0 && resize_factor <= 1,
+                           resize_factor);
+  DPSFM_CHECK_OPTION_VALUE(top_patch_fraction > 0 && top_patch_fraction <= 1,
+                           top_patch_fraction);
+  DPSFM_CHECK_OPTION_GE(min_patches_per_view, 0);
+  DPSFM_CHECK_OPTION_GE(depth_strata, 1);
+  DPSFM_CHECK_OPTION_GE(blur_search_factor, 0);
+  DPSFM_CHECK_OPTION_GE(max_stored_patches_per_view, 0);
+  DPSFM_CHECK_OPTION_GE(max_stored_megabytes_per_view, 0);
+  DPSFM_CHECK_OPTION_VALUE(min_depth_coverage > 0 && min_depth_coverage <= 1,
+                           min_depth_coverage);
+  DPSFM_CHECK_OPTION_GE(min_depth_points_per_patch, 1);
+  DPSFM_CHECK_OPTION_GT(max_relative_depth_spread, 0);
+  DPSFM_CHECK_OPTION_GE(min_texture_snr, 0);
+  DPSFM_CHECK_OPTION_GE(max_relative_residual, 0);
+  DPSFM_CHECK_OPTION_GE(relative_residual_factor, 0);
+  DPSFM_CHECK_OPTION_GT(max_intensity_ci_relative_width, 0);
+  DPSFM_CHECK_OPTION_GT(max_scale_ci_relative_width, 0);
+  DPSFM_CHECK_OPTION_GE(recorded_focus_tolerance, 0);
+  DPSFM_CHECK_OPTION_GE(min_total_patches, 0);
+  DPSFM_CHECK_OPTION_GE(scale_systematic_uncertainty, 0);
+  DPSFM_CHECK_OPTION_GE(lens_geometry_uncertainty, 0);
+  DPSFM_CHECK_OPTION_VALUE(
+      profile_relative_uncertainty >= 0 && profile_relative_uncertainty < 1,
+      profile_relative_uncertainty);
+  DPSFM_CHECK_OPTION_VALUE(min_intensity_bootstrap_support >= 0 &&
+                               min_intensity_bootstrap_support <= 1,
+                           min_intensity_bootstrap_support);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
+  DPSFM_CHECK_OPTION_GE(max_psf_fit_patches, 1);
+  DPSFM_CHECK_OPTION_VALUE(
+      psf_fit_radius_factor >= 1 && psf_fit_radius_factor <= 4,
+      psf_fit_radius_factor);
+  DPSFM_CHECK_OPTION_GE(psf_fit_bands, 1);
+  DPSFM_CHECK_OPTION_GE(max_psf_fit_depth_spread, 0);
+  if (psf_self_calibration) {
+    DPSFM_CHECK_NESTED_OPTIONS(psf_fit);
+  }
+  DPSFM_CHECK_NESTED_OPTIONS(blur);
+  DPSFM_CHECK_NESTED_OPTIONS(linear);
+  DPSFM_CHECK_NESTED_OPTIONS(intensity);
   return true;
 }
 
@@ -158,7 +165,7 @@ DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
 DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
                                    DPPsfField field)
     : options_(options), field_(std::move(field)) {
-  options_.Check();
+  DPSFM_CHECK_OPTIONS(options_, "DPScaleOptions");
   field_.CheckValid();
   DPSFM_CHECK(field_.cells.size() == 1 || !options_.psf_self_calibration)
       << "self-calibration fits one profile for the whole frame";
@@ -181,8 +188,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       << "view '" << name << "': left and right differ in size or type";
   DPSFM_CHECK(view.left.type() == CV_32FC1 || view.left.type() == CV_32FC3)
       << "view '" << name << "': DP images must be CV_32FC1 or CV_32FC3";
-  DPSFM_CHECK(view.lens.Check()) << "view '" << name << "': invalid lens data ("
-                                 << view.lens.ToString() << ")";
+  DPSFM_CHECK(view.lens.Check())
+      << "view '" << name << "': invalid lens data (" << view.lens.ToString()
+      << "): " << OptionCheckFailure();
   DPSFM_CHECK(!view.depth.empty() || !view.depth_points.empty())
       << "view '" << name << "': neither a depth map nor depth points";
   DPSFM_CHECK(view.depth.empty() || view.depth.type() == CV_32FC1)

@@ -444,17 +444,19 @@ const char* IntensityLossName(IntensityLoss loss) {
 }
 
 bool IntensitySearchOptions::Check() const {
-  DPSFM_CHECK_GE(num_candidates, 3);
-  DPSFM_CHECK(relative_range > 0 && relative_range < 1)
-      << "T_s must lie in (0, 1) so that every candidate scale is positive";
-  DPSFM_CHECK_GE(num_refine_candidates, 0);
-  DPSFM_CHECK_GT(robust_loss_scale, 0);
-  DPSFM_CHECK_GT(max_radius_px, 0);
-  DPSFM_CHECK(grid_step_px >= 0 && grid_step_px <= 1)
-      << "grid_step_px must lie in [0, 1], got " << grid_step_px;
-  DPSFM_CHECK_GE(num_bootstrap, 0);
-  DPSFM_CHECK(confidence_level > 0 && confidence_level < 1);
-  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  DPSFM_CHECK_OPTION_GE(num_candidates, 3);
+  // T_s < 1 keeps every candidate scale positive.
+  DPSFM_CHECK_OPTION_VALUE(relative_range > 0 && relative_range < 1,
+                           relative_range);
+  DPSFM_CHECK_OPTION_GE(num_refine_candidates, 0);
+  DPSFM_CHECK_OPTION_GT(robust_loss_scale, 0);
+  DPSFM_CHECK_OPTION_GT(max_radius_px, 0);
+  DPSFM_CHECK_OPTION_VALUE(grid_step_px >= 0 && grid_step_px <= 1,
+                           grid_step_px);
+  DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
+  DPSFM_CHECK_OPTION_VALUE(confidence_level > 0 && confidence_level < 1,
+                           confidence_level);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
   return true;
 }
 
@@ -524,7 +526,7 @@ IntensitySearchResult SearchScaleByIntensity(
     double initial_scale,
     const DPPsfModel& psf,
     const IntensitySearchOptions& options) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "IntensitySearchOptions");
   IntensitySearchResult result;
   if (!(initial_scale > 0) || !std::isfinite(initial_scale)) {
     result.failure_reason = "no positive initial scale";

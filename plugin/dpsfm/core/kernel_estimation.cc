@@ -183,19 +183,17 @@ Eigen::VectorXd SolveNonNegativeQuadratic(const Eigen::MatrixXd& hm,
 }  // namespace
 
 bool KernelEstimationOptions::Check() const {
-  DPSFM_CHECK(half_size >= 1 && half_size <= 24)
-      << "KernelEstimationOptions.half_size must lie in [1, 24], got "
-      << half_size;
-  DPSFM_CHECK(smoothness >= 0 && std::isfinite(smoothness))
-      << "KernelEstimationOptions.smoothness must be >= 0, got " << smoothness;
-  DPSFM_CHECK_GE(max_iterations, 1) << "KernelEstimationOptions.max_iterations";
+  DPSFM_CHECK_OPTION_VALUE(half_size >= 1 && half_size <= 24, half_size);
+  DPSFM_CHECK_OPTION_VALUE(smoothness >= 0 && std::isfinite(smoothness),
+                           smoothness);
+  DPSFM_CHECK_OPTION_GE(max_iterations, 1);
   return true;
 }
 
 EstimatedKernel EstimateKernel(const cv::Mat& sharp,
                                const cv::Mat& blurred,
                                const KernelEstimationOptions& options) {
-  DPSFM_CHECK(options.Check());
+  DPSFM_CHECK_OPTIONS(options, "KernelEstimationOptions");
   const int h = options.half_size, k = 2 * h + 1;
   DPSFM_CHECK(sharp.size() == blurred.size() && sharp.channels() == 1 &&
               blurred.channels() == 1)

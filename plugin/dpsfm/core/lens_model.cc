@@ -9,9 +9,12 @@
 namespace dpsfm {
 
 bool DPLensData::Check() const {
-  return std::isfinite(focal_length_mm) && focal_length_mm > 0 &&
-         std::isfinite(f_number) && f_number > 0 &&
-         std::isfinite(pixel_pitch_um) && pixel_pitch_um > 0;
+  DPSFM_CHECK_OPTION_VALUE(
+      std::isfinite(focal_length_mm) && focal_length_mm > 0, focal_length_mm);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(f_number) && f_number > 0, f_number);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(pixel_pitch_um) && pixel_pitch_um > 0,
+                           pixel_pitch_um);
+  return true;
 }
 
 std::string DPLensData::ToString() const {

@@ -51,23 +51,25 @@ double WeightedL1Fit1D(const std::vector<double>& gamma,
 }  // namespace
 
 bool IrlsOptions::Check() const {
-  DPSFM_CHECK_GT(max_iterations, 0);
-  DPSFM_CHECK_GT(epsilon, 0);
-  DPSFM_CHECK_GT(tolerance, 0);
+  DPSFM_CHECK_OPTION_GT(max_iterations, 0);
+  DPSFM_CHECK_OPTION_GT(epsilon, 0);
+  DPSFM_CHECK_OPTION_GT(tolerance, 0);
   return true;
 }
 
 bool LinearEstimatorOptions::Check() const {
-  DPSFM_CHECK_GE(min_blur_range_px, 0);
-  DPSFM_CHECK_GT(num_selected_views, 0);
-  DPSFM_CHECK_GT(max_residual_to_range, 0);
-  DPSFM_CHECK_GE(min_samples_per_view, 2)
-      << "a single-view solve has two unknowns";
-  DPSFM_CHECK_GE(min_rcond, 0);
-  DPSFM_CHECK_GE(min_relative_depth_range, 0);
-  DPSFM_CHECK_GE(num_bootstrap, 0);
-  DPSFM_CHECK(confidence_level > 0 && confidence_level < 1);
-  return irls.Check();
+  DPSFM_CHECK_OPTION_GE(min_blur_range_px, 0);
+  DPSFM_CHECK_OPTION_GT(num_selected_views, 0);
+  DPSFM_CHECK_OPTION_GT(max_residual_to_range, 0);
+  // A single-view solve has two unknowns.
+  DPSFM_CHECK_OPTION_GE(min_samples_per_view, 2);
+  DPSFM_CHECK_OPTION_GE(min_rcond, 0);
+  DPSFM_CHECK_OPTION_GE(min_relative_depth_range, 0);
+  DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
+  DPSFM_CHECK_OPTION_VALUE(confidence_level > 0 && confidence_level < 1,
+                           confidence_level);
+  DPSFM_CHECK_NESTED_OPTIONS(irls);
+  return true;
 }
 
 const char* ViewRejectionPhrase(ViewRejection rejection) {
@@ -108,7 +110,7 @@ double Median(std::vector<double> values) {
 IrlsResult SolveL1Irls(const DPLinearSystem& system,
                        const IrlsOptions& options,
                        const std::vector<double>* row_weights) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "IrlsOptions");
   const int n = system.num_views;
   const int m = n + 1;
   const int num_rows = system.NumRows();
@@ -378,7 +380,7 @@ std::string FailureFromCounts(const std::vector<LinearViewResult>& results,
 
 LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
                                    const LinearEstimatorOptions& options) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "LinearEstimatorOptions");
   LinearEstimate estimate;
   const int num_views = static_cast<int>(views.size());
   estimate.views.resize(num_views);

@@ -68,33 +68,28 @@ double ZeroCrossing(const std::vector<double>& xs,
 }  // namespace
 
 bool SplitProfileFitOptions::Check() const {
-  DPSFM_CHECK(min_centroid_offset >=
-                  SplitProfileParams::MinCentroidOffset() * (1 - 1e-9) &&
-              max_centroid_offset <=
-                  SplitProfileParams::MaxCentroidOffset() * (1 + 1e-9) &&
-              min_centroid_offset < max_centroid_offset)
-      << "centroid offset range must lie in ["
-      << SplitProfileParams::MinCentroidOffset() << ", "
-      << SplitProfileParams::MaxCentroidOffset() << "]";
-  DPSFM_CHECK_GE(consistency_tolerance, 0);
-  DPSFM_CHECK(grid_ratio > 1.01 && grid_ratio < 3)
-      << "SplitProfileFitOptions.grid_ratio must lie in (1.01, 3), got "
-      << grid_ratio;
-  DPSFM_CHECK_GE(num_refine, 0);
-  DPSFM_CHECK_GE(min_abs_radius_px, 0);
-  DPSFM_CHECK(trim_fraction >= 0 && trim_fraction < 1);
-  DPSFM_CHECK_GE(min_patches, 3);
-  DPSFM_CHECK_GE(num_bootstrap, 0);
-  DPSFM_CHECK_GT(max_relative_uncertainty, 0);
-  DPSFM_CHECK_GE(min_improvement_over_translating_disk, 1);
-  DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
-  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  if (!SplitProfileParams::CheckCentroidOffsetRange(min_centroid_offset,
+                                                    max_centroid_offset)) {
+    return false;
+  }
+  DPSFM_CHECK_OPTION_GE(consistency_tolerance, 0);
+  DPSFM_CHECK_OPTION_VALUE(grid_ratio > 1.01 && grid_ratio < 3, grid_ratio);
+  DPSFM_CHECK_OPTION_GE(num_refine, 0);
+  DPSFM_CHECK_OPTION_GE(min_abs_radius_px, 0);
+  DPSFM_CHECK_OPTION_VALUE(trim_fraction >= 0 && trim_fraction < 1,
+                           trim_fraction);
+  DPSFM_CHECK_OPTION_GE(min_patches, 3);
+  DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
+  DPSFM_CHECK_OPTION_GT(max_relative_uncertainty, 0);
+  DPSFM_CHECK_OPTION_GE(min_improvement_over_translating_disk, 1);
+  DPSFM_CHECK_NESTED_OPTIONS(blur);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
   return true;
 }
 
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
   const auto start = std::chrono::steady_clock::now();
   SplitProfileFit fit;
   fit.translating_disk_centroid_offset =

@@ -122,25 +122,22 @@ cv::Mat RegisterSharp(const ShapeCapture& c, cv::Point2d* shift) {
 }  // namespace
 
 bool ShapeCalibrationOptions::Check() const {
-  DPSFM_CHECK(layout.Check()) << "ShapeCalibrationOptions.layout is invalid";
-  DPSFM_CHECK(reference_radius_px >= 0 && std::isfinite(reference_radius_px))
-      << "ShapeCalibrationOptions.reference_radius_px must be >= 0";
-  DPSFM_CHECK(min_radius_px >= 0.5)
-      << "ShapeCalibrationOptions.min_radius_px must be >= 0.5, got "
-      << min_radius_px;
-  DPSFM_CHECK(support_factor >= 1)
-      << "ShapeCalibrationOptions.support_factor must be >= 1";
-  DPSFM_CHECK_GE(support_margin_px, 1)
-      << "ShapeCalibrationOptions.support_margin_px";
-  DPSFM_CHECK(smoothness >= 0) << "ShapeCalibrationOptions.smoothness";
-  DPSFM_CHECK(min_light_ratio > 0 && max_light_ratio > min_light_ratio)
-      << "ShapeCalibrationOptions: need 0 < min_light_ratio < max_light_ratio";
+  DPSFM_CHECK_NESTED_OPTIONS(layout);
+  DPSFM_CHECK_OPTION_VALUE(
+      reference_radius_px >= 0 && std::isfinite(reference_radius_px),
+      reference_radius_px);
+  DPSFM_CHECK_OPTION_GE(min_radius_px, 0.5);
+  DPSFM_CHECK_OPTION_GE(support_factor, 1);
+  DPSFM_CHECK_OPTION_GE(support_margin_px, 1);
+  DPSFM_CHECK_OPTION_GE(smoothness, 0);
+  DPSFM_CHECK_OPTION_GT(min_light_ratio, 0);
+  DPSFM_CHECK_OPTION_GT(max_light_ratio, min_light_ratio);
   return true;
 }
 
 ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
                                  const ShapeCalibrationOptions& options) {
-  DPSFM_CHECK(options.Check());
+  DPSFM_CHECK_OPTIONS(options, "ShapeCalibrationOptions");
   ShapeCalibration out;
   out.layout = options.layout;
   const int num_cells = options.layout.NumCells();

@@ -92,31 +92,29 @@ struct Solution {
 }  // namespace
 
 bool TargetCalibrationOptions::Check() const {
-  DPSFM_CHECK(blur.Check()) << "invalid BlurEstimationOptions";
-  DPSFM_CHECK(min_centroid_offset >=
-                  SplitProfileParams::MinCentroidOffset() * (1 - 1e-9) &&
-              max_centroid_offset <=
-                  SplitProfileParams::MaxCentroidOffset() * (1 + 1e-9) &&
-              min_centroid_offset < max_centroid_offset)
-      << "centroid offsets must lie in the family's range";
-  DPSFM_CHECK(node_ratio > 1.01 && node_ratio < 2)
-      << "TargetCalibrationOptions.node_ratio must lie in (1.01, 2), got "
-      << node_ratio;
-  DPSFM_CHECK_GE(min_reading_px, 0);
-  DPSFM_CHECK_GE(min_patches, 3);
-  DPSFM_CHECK(grid_rows >= 1 && grid_cols >= 1);
-  DPSFM_CHECK(min_focus_mm > 0 && max_focus_mm > min_focus_mm);
-  DPSFM_CHECK_GE(num_focus_steps, 10);
-  DPSFM_CHECK_GT(max_relative_uncertainty, 0);
-  DPSFM_CHECK_GE(num_bootstrap, 0);
-  DPSFM_CHECK(num_threads == -1 || num_threads > 0);
+  DPSFM_CHECK_NESTED_OPTIONS(blur);
+  if (!SplitProfileParams::CheckCentroidOffsetRange(min_centroid_offset,
+                                                    max_centroid_offset)) {
+    return false;
+  }
+  DPSFM_CHECK_OPTION_VALUE(node_ratio > 1.01 && node_ratio < 2, node_ratio);
+  DPSFM_CHECK_OPTION_GE(min_reading_px, 0);
+  DPSFM_CHECK_OPTION_GE(min_patches, 3);
+  DPSFM_CHECK_OPTION_GE(grid_rows, 1);
+  DPSFM_CHECK_OPTION_GE(grid_cols, 1);
+  DPSFM_CHECK_OPTION_GT(min_focus_mm, 0);
+  DPSFM_CHECK_OPTION_GT(max_focus_mm, min_focus_mm);
+  DPSFM_CHECK_OPTION_GE(num_focus_steps, 10);
+  DPSFM_CHECK_OPTION_GT(max_relative_uncertainty, 0);
+  DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
   return true;
 }
 
 TargetCalibration CalibrateFromTargets(
     const std::vector<CalibrationCapture>& captures,
     const TargetCalibrationOptions& options) {
-  options.Check();
+  DPSFM_CHECK_OPTIONS(options, "TargetCalibrationOptions");
   const auto start = std::chrono::steady_clock::now();
   TargetCalibration out;
   out.layout.rows = options.grid_rows;

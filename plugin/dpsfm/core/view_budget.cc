@@ -53,24 +53,20 @@ std::vector<int> SpreadViewOrder(const std::vector<ViewPlacement>& views) {
 }
 
 bool ViewBudgetOptions::Check() const {
-  DPSFM_CHECK_GE(min_views, 1) << "ViewBudgetOptions.min_views must be >= 1";
-  DPSFM_CHECK_GE(check_every, 1)
-      << "ViewBudgetOptions.check_every must be >= 1";
-  DPSFM_CHECK(settled_change > 0 && settled_change < 1)
-      << "ViewBudgetOptions.settled_change must lie in (0, 1), got "
-      << settled_change;
-  DPSFM_CHECK(settled_shrink > 0 && settled_shrink <= 1)
-      << "ViewBudgetOptions.settled_shrink must lie in (0, 1], got "
-      << settled_shrink;
-  DPSFM_CHECK(max_views == 0 || max_views >= min_views)
-      << "ViewBudgetOptions.max_views must be 0 (no cap) or >= min_views ("
-      << min_views << "), got " << max_views;
+  DPSFM_CHECK_OPTION_GE(min_views, 1);
+  DPSFM_CHECK_OPTION_GE(check_every, 1);
+  DPSFM_CHECK_OPTION_VALUE(settled_change > 0 && settled_change < 1,
+                           settled_change);
+  DPSFM_CHECK_OPTION_VALUE(settled_shrink > 0 && settled_shrink <= 1,
+                           settled_shrink);
+  // 0 is no cap.
+  DPSFM_CHECK_OPTION_VALUE(max_views == 0 || max_views >= min_views, max_views);
   return true;
 }
 
 ViewBudget::ViewBudget(const ViewBudgetOptions& options, int num_views)
     : options_(options), num_views_(num_views) {
-  DPSFM_CHECK(options.Check());
+  DPSFM_CHECK_OPTIONS(options, "ViewBudgetOptions");
   planned_ = options.all_views || options.max_views == 0
                  ? num_views
                  : std::min(num_views, options.max_views);

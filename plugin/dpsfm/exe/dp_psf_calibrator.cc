@@ -18,6 +18,7 @@
 #include "dpsfm/colmap/psf_profile.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/core/blur_estimation.h"
+#include "dpsfm/core/check.h"
 #include "dpsfm/core/kernel_grid.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/psf_calibration.h"
@@ -62,32 +63,18 @@ struct CalibratorOptions {
   bool measure_shape = true;
   int num_threads = -1;
 
-  // Throws InputError naming the first invalid option and its value.
+  // False at the first invalid option; OptionCheckFailure() names it and
+  // its value.
   bool Check() const {
-    auto invalid =
-        [](const std::string& name, double value, const std::string& rule) {
-          std::ostringstream message;
-          message << "invalid --DPPsfCalibrator." << name << " " << value
-                  << " (" << rule << ")";
-          throw InputError(message.str());
-        };
-    if (patch_size < 0) invalid("patch_size", patch_size, "0: auto, or > 0");
-    if (stride < 0) invalid("stride", stride, "0: auto, or > 0");
-    if (!(max_radius_px >= 0)) {
-      invalid("max_radius_px", max_radius_px, "0: auto, or > 0");
-    }
-    if (!(min_texture_snr >= 0)) {
-      invalid("min_texture_snr", min_texture_snr, "must be >= 0");
-    }
-    if (max_patches_per_capture < 1) {
-      invalid("max_patches_per_capture", max_patches_per_capture, ">= 1");
-    }
-    if (grid_rows < 1) invalid("grid_rows", grid_rows, ">= 1");
-    if (grid_cols < 1) invalid("grid_cols", grid_cols, ">= 1");
-    if (num_bootstrap < 10) invalid("num_bootstrap", num_bootstrap, ">= 10");
-    if (num_threads != -1 && num_threads < 1) {
-      invalid("num_threads", num_threads, "-1: all cores, or >= 1");
-    }
+    DPSFM_CHECK_OPTION_GE(patch_size, 0);  // 0: auto
+    DPSFM_CHECK_OPTION_GE(stride, 0);
+    DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
+    DPSFM_CHECK_OPTION_GE(min_texture_snr, 0);
+    DPSFM_CHECK_OPTION_GE(max_patches_per_capture, 1);
+    DPSFM_CHECK_OPTION_GE(grid_rows, 1);
+    DPSFM_CHECK_OPTION_GE(grid_cols, 1);
+    DPSFM_CHECK_OPTION_GE(num_bootstrap, 10);
+    DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
     return true;
   }
 };
@@ -233,7 +220,10 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     colmap::Timer timer;
     timer.Start();
     colmap::PrintHeading1("DP PSF calibration");
-    options.Check();
+    if (!options.Check()) {
+      throw InputError("invalid --DPPsfCalibrator option: " +
+                       OptionCheckFailure());
+    }
     const std::vector<CalibrationTarget> targets =
         ReadCalibrationTargets(options.targets_path);
     WorkspaceLayout layout;
@@ -331,11 +321,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     fit_options.grid_cols = options.grid_cols;
     fit_options.num_bootstrap = options.num_bootstrap;
     fit_options.num_threads = options.num_threads;
-    try {
-      fit_options.Check();
-    } catch (const std::invalid_argument& error) {
-      throw InputError(std::string("invalid calibration options: ") +
-                       error.what());
+    if (!fit_options.Check()) {
+      throw InputError("invalid calibration options: " + OptionCheckFailure());
     }
     colmap::PrintHeading2("Fitting the DP profile");
     const TargetCalibration calibration =

@@ -1,0 +1,203 @@
+// One way of checking options (core/check.h): every options struct's
+// Check() passes on its defaults, fails on a bad field with a failure text
+// that names the field and the value given, and DPSFM_CHECK_OPTIONS turns
+// it into std::invalid_argument naming the struct. Nested structs prefix
+// the field with their member's name. One case per struct.
+#include <functional>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "dpsfm/core/blur_estimation.h"
+#include "dpsfm/core/check.h"
+#include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/dp_renderer.h"
+#include "dpsfm/core/dp_scale_estimator.h"
+#include "dpsfm/core/intensity_search.h"
+#include "dpsfm/core/kernel_estimation.h"
+#include "dpsfm/core/lens_model.h"
+#include "dpsfm/core/linear_estimator.h"
+#include "dpsfm/core/psf_calibration.h"
+#include "dpsfm/core/shape_calibration.h"
+#include "dpsfm/core/target_calibration.h"
+#include "dpsfm/core/view_budget.h"
+
+namespace dpsfm {
+namespace {
+
+// Defaults pass; `spoil` makes them fail with a text containing `expected`.
+template <typename Options>
+void ExpectCheck(const char* name,
+                 Options options,
+                 const std::function<void(Options*)>& spoil,
+                 const std::string& expected) {
+  SCOPED_TRACE(name);
+  EXPECT_TRUE(options.Check()) << OptionCheckFailure();
+  spoil(&options);
+  EXPECT_FALSE(options.Check());
+  EXPECT_NE(OptionCheckFailure().find(expected), std::string::npos)
+      << OptionCheckFailure();
+  try {
+    DPSFM_CHECK_OPTIONS(options, name);
+    ADD_FAILURE() << "DPSFM_CHECK_OPTIONS did not throw";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()),
+              std::string("invalid ") + name + ": " + OptionCheckFailure());
+  }
+}
+
+TEST(OptionsCheck, BlurEstimationOptions) {
+  ExpectCheck<BlurEstimationOptions>(
+      "BlurEstimationOptions",
+      {},
+      [](auto* o) { o->max_radius_px = 0.5; },
+      "max_radius_px >= 1 (got 0.5)");
+  // The coarse step must be a multiple of the grid step.
+  ExpectCheck<BlurEstimationOptions>(
+      "BlurEstimationOptions",
+      {},
+      [](auto* o) { o->coarse_step_px = 0.6; },
+      "(got 0.6)");
+}
+
+TEST(OptionsCheck, DPScaleOptionsWithNestedStructs) {
+  ExpectCheck<DPScaleOptions>(
+      "DPScaleOptions",
+      {},
+      [](auto* o) { o->top_patch_fraction = 2; },
+      "top_patch_fraction");
+  ExpectCheck<DPScaleOptions>(
+      "DPScaleOptions",
+      {},
+      [](auto* o) { o->blur.coarse_band = 0; },
+      "blur.coarse_band > 0 && coarse_band <= 1 (got 0)");
+  ExpectCheck<DPScaleOptions>(
+      "DPScaleOptions",
+      {},
+      [](auto* o) { o->linear.irls.tolerance = -1; },
+      "linear.irls.tolerance > 0 (got -1)");
+  ExpectCheck<DPScaleOptions>(
+      "DPScaleOptions",
+      {},
+      [](auto* o) { o->intensity.num_candidates = 2; },
+      "intensity.num_candidates >= 3 (got 2)");
+}
+
+TEST(OptionsCheck, IntensitySearchOptions) {
+  ExpectCheck<IntensitySearchOptions>(
+      "IntensitySearchOptions",
+      {},
+      [](auto* o) { o->relative_range = 1; },
+      "relative_range");
+}
+
+TEST(OptionsCheck, DPRenderOptions) {
+  ExpectCheck<DPRenderOptions>(
+      "DPRenderOptions",
+      {},
+      [](auto* o) { o->radius_step_px = 0; },
+      "radius_step_px > 0.0 (got 0)");
+}
+
+TEST(OptionsCheck, KernelEstimationOptions) {
+  ExpectCheck<KernelEstimationOptions>(
+      "KernelEstimationOptions",
+      {},
+      [](auto* o) { o->half_size = 30; },
+      "half_size >= 1 && half_size <= 24 (got 30)");
+}
+
+TEST(OptionsCheck, TargetCalibrationOptions) {
+  ExpectCheck<TargetCalibrationOptions>(
+      "TargetCalibrationOptions",
+      {},
+      [](auto* o) { o->num_focus_steps = 3; },
+      "num_focus_steps >= 10 (got 3)");
+  ExpectCheck<TargetCalibrationOptions>(
+      "TargetCalibrationOptions",
+      {},
+      [](auto* o) { o->blur.grid_step_px = 2; },
+      "blur.");
+}
+
+TEST(OptionsCheck, ShapeCalibrationOptions) {
+  ExpectCheck<ShapeCalibrationOptions>(
+      "ShapeCalibrationOptions",
+      {},
+      [](auto* o) { o->max_light_ratio = 0.1; },
+      "max_light_ratio > min_light_ratio (got 0.1)");
+  ExpectCheck<ShapeCalibrationOptions>(
+      "ShapeCalibrationOptions",
+      {},
+      [](auto* o) { o->layout.rows = 0; },
+      "layout.rows >= 1 (got 0)");
+}
+
+TEST(OptionsCheck, SplitProfileParams) {
+  ExpectCheck<SplitProfileParams>(
+      "SplitProfileParams",
+      {},
+      [](auto* o) { o->crosstalk = 0.5; },
+      "crosstalk");
+}
+
+TEST(OptionsCheck, DPPsfLayout) {
+  ExpectCheck<DPPsfLayout>(
+      "DPPsfLayout", {}, [](auto* o) { o->x1 = 1.5; }, "(got 1.5)");
+}
+
+TEST(OptionsCheck, ViewBudgetOptions) {
+  ExpectCheck<ViewBudgetOptions>(
+      "ViewBudgetOptions",
+      {},
+      [](auto* o) { o->max_views = 5; },
+      "max_views == 0 || max_views >= min_views (got 5)");
+}
+
+TEST(OptionsCheck, SplitProfileFitOptions) {
+  ExpectCheck<SplitProfileFitOptions>(
+      "SplitProfileFitOptions",
+      {},
+      [](auto* o) { o->trim_fraction = 1; },
+      "trim_fraction");
+}
+
+TEST(OptionsCheck, DPLensData) {
+  DPLensData lens;
+  lens.focal_length_mm = 50;
+  lens.f_number = 2.8;
+  lens.pixel_pitch_um = 5.36;
+  ExpectCheck<DPLensData>(
+      "DPLensData", lens, [](auto* o) { o->f_number = -2; }, "(got -2)");
+}
+
+TEST(OptionsCheck, IrlsOptions) {
+  ExpectCheck<IrlsOptions>(
+      "IrlsOptions",
+      {},
+      [](auto* o) { o->max_iterations = 0; },
+      "max_iterations > 0 (got 0)");
+}
+
+TEST(OptionsCheck, LinearEstimatorOptions) {
+  ExpectCheck<LinearEstimatorOptions>(
+      "LinearEstimatorOptions",
+      {},
+      [](auto* o) { o->min_samples_per_view = 1; },
+      "min_samples_per_view >= 2 (got 1)");
+}
+
+TEST(OptionsCheck, FailureIsPerThreadAndOverwritten) {
+  ViewBudgetOptions a;
+  a.min_views = 0;
+  EXPECT_FALSE(a.Check());
+  EXPECT_NE(OptionCheckFailure().find("min_views"), std::string::npos);
+  IrlsOptions b;
+  b.epsilon = 0;
+  EXPECT_FALSE(b.Check());
+  EXPECT_EQ(OptionCheckFailure().find("min_views"), std::string::npos);
+  EXPECT_NE(OptionCheckFailure().find("epsilon"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dpsfm
