@@ -15,57 +15,20 @@
 #endif
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/crop_store.h"
 #include "dpsfm/core/curve_math.h"
 #include "dpsfm/core/kernel_grid.h"
+#include "dpsfm/core/patch_grid.h"
+#include "dpsfm/core/patch_selection.h"
 
 namespace dpsfm {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Patch rejection reasons that more than one place tests for.
-const char* const kTextureTooWeak = "with texture too weak for the noise";
-const char* const kLeftUnsearched =
-    "left unsearched (ranked below the blur-search share by texture and "
-    "depth flatness)";
-
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
       .count();
-}
-
-cv::Mat ToU16(const cv::Mat& image) {
-  cv::Mat out;
-  image.convertTo(out, CV_MAKETYPE(CV_16U, image.channels()), 65535.0);
-  return out;
-}
-
-struct DepthStats {
-  bool ok = false;
-  double median = 0;
-  double relative_spread = 0;    // (p90 - p10) / median
-  double relative_variance = 0;  // var(z) / median^2
-};
-
-DepthStats StatsOf(std::vector<float>* values) {
-  DepthStats stats;
-  if (values->empty()) return stats;
-  std::vector<float>& v = *values;
-  const size_t n = v.size();
-  std::nth_element(v.begin(), v.begin() + n / 2, v.end());
-  stats.median = v[n / 2];
-  std::nth_element(v.begin(), v.begin() + n / 10, v.end());
-  const double p10 = v[n / 10];
-  std::nth_element(v.begin(), v.begin() + (9 * n) / 10, v.end());
-  const double p90 = v[std::min(n - 1, (9 * n) / 10)];
-  double mean = 0, sq = 0;
-  for (float z : v) mean += z;
-  mean /= n;
-  for (float z : v) sq += (z - mean) * (z - mean);
-  stats.relative_spread = (p90 - p10) / stats.median;
-  stats.relative_variance = sq / n / (stats.median * stats.median);
-  stats.ok = stats.median > 0 && std::isfinite(stats.median);
-  return stats;
 }
 
 double TextureSnr(const PatchBlurEstimate& e) {
@@ -150,12 +113,7 @@ struct DPScaleEstimator::ViewData {
   DPLensData lens;
   double working_pitch_mm = 0;
   std::vector<PatchSample> samples;  // valid patches only
-  struct Stored {
-    int sample = -1;
-    cv::Mat left, right;  // CV_16UC1/3 crops with border
-    int border = 0;
-  };
-  std::vector<Stored> stored;
+  std::vector<StoredCrop> stored;    // best selected patches (crop_store.h)
 };
 
 DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
@@ -256,180 +214,72 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   };
   const int p = geometry.patch_size;
   const int crop = p + 2 * border;
-
-  // Patch grid (interior top-left corners) in working pixels.
-  struct Candidate {
-    cv::Rect interior;
-    DepthStats depth;
-    std::string reject;
-  };
-  std::vector<Candidate> candidates;
-  for (int y = border; y + p + border <= left.rows; y += geometry.stride) {
-    for (int x = border; x + p + border <= left.cols; x += geometry.stride) {
-      Candidate c;
-      c.interior = cv::Rect(x, y, p, p);
-      candidates.push_back(c);
-    }
-  }
-  summary.patches_tried = static_cast<int>(candidates.size());
-
-  // Depth per patch. Interior edges in frame pixels: [x / sx, (x + p) / sx).
-  const bool dense = !view.depth.empty();
-  const double dw = dense ? view.depth.cols : 0,
-               dh = dense ? view.depth.rows : 0;
-  for (Candidate& c : candidates) {
-    std::vector<float> values;
-    const double fx0 = c.interior.x / sx, fx1 = (c.interior.x + p) / sx;
-    const double fy0 = c.interior.y / sy, fy1 = (c.interior.y + p) / sy;
-    int total = 0;
-    if (dense) {
-      const double kx = dw / view.left.cols, ky = dh / view.left.rows;
-      // Depth pixels whose centres fall inside the patch's frame area.
-      const int i0 = std::max(0, static_cast<int>(std::ceil(fx0 * kx - 0.5)));
-      const int i1 = std::min(static_cast<int>(dw) - 1,
-                              static_cast<int>(std::ceil(fx1 * kx - 0.5)) - 1);
-      const int j0 = std::max(0, static_cast<int>(std::ceil(fy0 * ky - 0.5)));
-      const int j1 = std::min(static_cast<int>(dh) - 1,
-                              static_cast<int>(std::ceil(fy1 * ky - 0.5)) - 1);
-      for (int j = j0; j <= j1; ++j) {
-        const float* row = view.depth.ptr<float>(j);
-        for (int i = i0; i <= i1; ++i) {
-          ++total;
-          if (std::isfinite(row[i]) && row[i] > 0) values.push_back(row[i]);
-        }
-      }
-      if (total == 0 || values.size() < options_.min_depth_coverage * total) {
-        c.reject = "without depth";
-        continue;
-      }
-    } else {
-      // Pixel centres at integer frame coordinates: the area
-      // [fx0, fx1) in edge coordinates holds centres x + 0.5 in it.
-      for (const DepthPoint& point : view.depth_points) {
-        const double ex = point.x + 0.5, ey = point.y + 0.5;
-        if (ex >= fx0 && ex < fx1 && ey >= fy0 && ey < fy1 &&
-            std::isfinite(point.depth) && point.depth > 0) {
-          values.push_back(static_cast<float>(point.depth));
-        }
-      }
-      if (static_cast<int>(values.size()) <
-          options_.min_depth_points_per_patch) {
-        c.reject = "without depth";
-        continue;
-      }
-    }
-    c.depth = StatsOf(&values);
-    if (!c.depth.ok) {
-      c.reject = "without depth";
-    } else if (c.depth.relative_spread > options_.max_relative_depth_spread) {
-      c.reject = "across a depth edge";
-    }
-  }
-
-  // Screening (cheap, every patch with depth): texture against noise, and
-  // the part of the confidence known before the blur search.
-  const int num = static_cast<int>(candidates.size());
-  std::vector<PatchBlurEstimate> estimates(num);
-  int with_depth = 0;
-  for (const Candidate& c : candidates) with_depth += c.reject.empty();
-  summary.patches_with_depth = with_depth;
 #ifdef _OPENMP
   const int threads =
       options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
 #endif
-  const int crop_border = border;
-  auto crop_of = [&](int k) {
-    return cv::Rect(candidates[k].interior.x - crop_border,
-                    candidates[k].interior.y - crop_border,
-                    p + 2 * crop_border,
-                    p + 2 * crop_border);
-  };
-  std::vector<int> screened;  // candidates that pass, in grid order
-  std::vector<double> screening_confidence, screening_inverse_depth;
-  if (with_depth > 0) {
-    const PatchScreening screening(gray_left, gray_right);
-    std::vector<char> pass(num, 0);
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-    for (int k = 0; k < num; ++k) {
-      if (!candidates[k].reject.empty()) continue;
-      const cv::Rect r = crop_of(k);
-      // A patch whose horizontal texture does not clear what noise alone
-      // gives would be dropped after the search anyway (the estimator's
-      // measures, with a 10 % margin for its gain equalisation).
-      estimates[k].texture = screening.Texture(r);
-      estimates[k].noise_sigma = screening.NoiseSigma(r);
-      if (options_.min_texture_snr > 0 &&
-          TextureSnr(estimates[k]) < 0.9 * options_.min_texture_snr) {
-        estimates[k].reject_reason = kTextureTooWeak;
-        continue;
-      }
-      pass[k] = 1;
-    }
-    for (int k = 0; k < num; ++k) {
-      if (!pass[k]) continue;
-      screened.push_back(k);
-      // The confidence below without its fit quality (<= 1): an upper bound
-      // of each patch's final confidence.
-      screening_confidence.push_back(
-          estimates[k].texture /
-          (candidates[k].depth.relative_variance + 1e-4));
-      screening_inverse_depth.push_back(1.0 / candidates[k].depth.median);
-    }
+
+  // 1. The patch grid and each patch's depth (patch_grid.h).
+  std::vector<PatchCandidate> candidates =
+      MakePatchGrid(left.size(), p, geometry.stride, border);
+  summary.patches_tried = static_cast<int>(candidates.size());
+  PatchDepthOptions depth_options;
+  depth_options.min_coverage = options_.min_depth_coverage;
+  depth_options.min_points = options_.min_depth_points_per_patch;
+  depth_options.max_relative_spread = options_.max_relative_depth_spread;
+  MeasurePatchDepths(view.depth,
+                     view.depth_points,
+                     view.left.size(),
+                     sx,
+                     sy,
+                     depth_options,
+                     &candidates);
+  const int num = static_cast<int>(candidates.size());
+  for (const PatchCandidate& c : candidates) {
+    summary.patches_with_depth += c.reject.empty();
   }
 
-  // Which patches the blur search runs on. The paper searches them all and
-  // keeps the top T_c by confidence; the search is the core's cost, and a
-  // patch's confidence never exceeds its screening confidence, so searching
-  // the best blur_search_factor x T_c share by screening confidence (spread
-  // over depth like the final selection) and keeping the best third of the
-  // usable ones finds the same kind of patches at a fraction of the cost.
-  std::vector<char> search(num, 0);
-  int num_searched = 0;
-  if (!screened.empty()) {
-    std::vector<int> chosen;
-    if (options_.blur_search_factor > 0 &&
-        options_.blur_search_factor * options_.top_patch_fraction < 1) {
-      chosen = SelectTopFractionStratified(
-          screening_confidence,
-          screening_inverse_depth,
-          options_.blur_search_factor * options_.top_patch_fraction,
-          static_cast<int>(std::ceil(options_.blur_search_factor *
-                                     options_.min_patches_per_view)),
-          options_.depth_strata);
-    } else {
-      chosen.resize(screened.size());
-      for (size_t i = 0; i < screened.size(); ++i) {
-        chosen[i] = static_cast<int>(i);
-      }
-    }
-    for (int i : chosen) search[screened[i]] = 1;
-    num_searched = static_cast<int>(chosen.size());
-    for (int k : screened) {
-      if (!search[k]) {
-        estimates[k].reject_reason = kLeftUnsearched;
-      }
-    }
+  // 2. Screening and the blur-search share (patch_selection.h).
+  std::vector<PatchBlurEstimate> estimates(num);
+  ScreenedPatches screened;
+  if (summary.patches_with_depth > 0) {
+    screened = ScreenPatches(gray_left,
+                             gray_right,
+                             candidates,
+                             border,
+                             options_.min_texture_snr,
+                             options_.num_threads,
+                             &estimates);
   }
+  SearchShareOptions share;
+  share.blur_search_factor = options_.blur_search_factor;
+  share.top_patch_fraction = options_.top_patch_fraction;
+  share.min_patches_per_view = options_.min_patches_per_view;
+  share.depth_strata = options_.depth_strata;
+  const std::vector<char> search =
+      ChooseSearchedPatches(screened, num, share, &estimates);
+  const int num_searched =
+      static_cast<int>(std::count(search.begin(), search.end(), 1));
   summary.patches_searched = num_searched;
 
-  // Blur per searched patch (the expensive part), in parallel.
+  // 3. The blur search on the chosen patches (the expensive part), in
+  // parallel.
   if (num_searched > 0) {
     std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
     for (const auto& psf : field_.cells) {
       estimators.emplace_back(
           new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
-      DPSFM_CHECK_LE(estimators.back()->Border(), crop_border);
+      DPSFM_CHECK_LE(estimators.back()->Border(), border);
     }
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
     for (int k = 0; k < num; ++k) {
       if (!search[k]) continue;
-      const cv::Rect r = crop_of(k);
+      const cv::Rect& interior = candidates[k].interior;
+      const cv::Rect r(interior.x - border, interior.y - border, crop, crop);
       try {
-        estimates[k] = estimators[band_of(candidates[k].interior)]->Estimate(
+        estimates[k] = estimators[band_of(interior)]->Estimate(
             gray_left(r).clone(), gray_right(r).clone());
       } catch (const std::exception& e) {
         estimates[k].valid = false;
@@ -438,57 +288,24 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     }
   }
 
-  // Residual threshold of this view (see max_relative_residual).
-  double residual_threshold = options_.max_relative_residual;
-  {
-    std::vector<double> residuals;
-    for (int k = 0; k < num; ++k) {
-      if (candidates[k].reject.empty() && estimates[k].valid &&
-          std::isfinite(estimates[k].relative_residual)) {
-        residuals.push_back(estimates[k].relative_residual);
-      }
-    }
-    if (!residuals.empty()) {
-      std::nth_element(residuals.begin(),
-                       residuals.begin() + residuals.size() / 2,
-                       residuals.end());
-      residual_threshold = std::max(
-          residual_threshold,
-          options_.relative_residual_factor * residuals[residuals.size() / 2]);
-    }
-  }
-  auto usable = [&](int k) {
-    const PatchBlurEstimate& e = estimates[k];
-    return candidates[k].reject.empty() && e.valid && !e.at_bound &&
-           std::isfinite(e.radius_px) &&
-           TextureSnr(e) >= options_.min_texture_snr &&
-           !(e.relative_residual > residual_threshold);
-  };
-
+  // 4. Usable patches become samples; the others are counted by reason.
+  const double residual_threshold =
+      ViewResidualThreshold(candidates,
+                            estimates,
+                            options_.max_relative_residual,
+                            options_.relative_residual_factor);
   std::map<std::string, int> rejections;
+  std::vector<int> sample_candidate;  // grid index of each sample
   for (int k = 0; k < num; ++k) {
-    const Candidate& c = candidates[k];
-    if (!c.reject.empty()) {
-      rejections[c.reject]++;
-      continue;
-    }
+    const PatchCandidate& c = candidates[k];
     const PatchBlurEstimate& e = estimates[k];
-    if (!e.valid || e.at_bound || !std::isfinite(e.radius_px)) {
-      rejections[e.reject_reason.empty() ? std::string("with no blur estimate")
-                                         : e.reject_reason]++;
+    const std::string reject =
+        PatchRejection(c, e, options_.min_texture_snr, residual_threshold);
+    if (!reject.empty()) {
+      rejections[reject]++;
       continue;
     }
-    const double texture_snr = TextureSnr(e);
-    if (!(texture_snr >= options_.min_texture_snr)) {
-      rejections[kTextureTooWeak]++;
-      continue;
-    }
-    if (e.relative_residual > residual_threshold) {
-      rejections
-          ["not fitted by one blur (blur beyond the search bound or "
-           "depth varying inside)"]++;
-      continue;
-    }
+    sample_candidate.push_back(k);
     PatchSample s;
     s.view = summary.index;
     s.psf_band = band_of(c.interior);
@@ -502,7 +319,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     s.radius_frame_px = e.radius_px / rf;
     s.fit_quality = e.fit_quality;
     s.texture = e.texture;
-    s.texture_snr = texture_snr;
+    s.texture_snr = TextureSnr(e);
     // Reference confidence sobel * exp(-1e6 loss) / (var(depth) + 1e-10),
     // with the blur estimator's fit quality in place of exp(-1e6 loss) (which
     // underflows at real noise levels) and the RELATIVE depth variance (scale
@@ -516,18 +333,17 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   summary.patches_valid = static_cast<int>(data->samples.size());
   for (const auto& r : rejections) summary.rejections.emplace_back(r);
 
-  // Top-T_c selection, then crops of the best ones for the intensity stage.
+  // 5. Top-T_c selection (of all screened patches, taken from the searched
+  // ones; all of them when blur_search_factor is 0).
   std::vector<double> confidence, inverse_depth;
   for (const PatchSample& s : data->samples) {
     confidence.push_back(s.confidence);
     inverse_depth.push_back(1.0 / s.depth);
   }
-  // T_c of all screened patches, taken from the searched ones (all of them
-  // when blur_search_factor is 0).
   const double keep_fraction =
       num_searched > 0 ? std::min(1.0,
                                   options_.top_patch_fraction *
-                                      screened.size() / num_searched)
+                                      screened.index.size() / num_searched)
                        : options_.top_patch_fraction;
   const std::vector<int> top =
       SelectTopFractionStratified(confidence,
@@ -537,12 +353,16 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                                   options_.depth_strata);
   for (int i : top) data->samples[i].selected = true;
   summary.patches_kept = static_cast<int>(top.size());
+
+  // 6. Crops of the best selected patches for the intensity stage and
+  // self-calibration (crop_store.h), best first. With self-calibration
+  // their border supports blur up to psf_fit_radius_factor x the search
+  // bound (see the option). The budget is for crops with the blur stage's
+  // border: the wider border self-calibration needs does not cost patches.
   std::vector<int> by_confidence = top;
   std::stable_sort(by_confidence.begin(),
                    by_confidence.end(),
                    [&](int a, int b) { return confidence[a] > confidence[b]; });
-  // Stored crops: with self-calibration their border supports blur up to
-  // psf_fit_radius_factor x the search bound (see the option).
   int store_border = border;
   if (options_.psf_self_calibration) {
     for (const auto& psf : field_.cells) {
@@ -553,44 +373,16 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                                               options_.blur.grid_step_px)));
     }
   }
-  const int store_crop = p + 2 * store_border;
-  {
-    // The budget is for crops with the blur stage's border: the wider
-    // border self-calibration needs does not cost patches.
-    const double crop_bytes = 2.0 * crop * crop * left.channels() * 2;
-    const int by_memory = static_cast<int>(
-        options_.max_stored_megabytes_per_view * 1e6 / crop_bytes);
-    const int cap = std::min(options_.max_stored_patches_per_view, by_memory);
-    if (static_cast<int>(by_confidence.size()) > cap) {
-      by_confidence.resize(std::max(0, cap));
-    }
-  }
-  // Map samples back to their grid rectangles.
-  std::vector<int> sample_candidate;
-  for (int k = 0; k < num; ++k) {
-    if (usable(k)) sample_candidate.push_back(k);
-  }
-  // Frames padded (reflected) so that wider stored crops near the edges
-  // exist too.
-  const int pad = store_border - border;
-  cv::Mat padded_left = left, padded_right = right;
-  if (pad > 0 && !by_confidence.empty()) {
-    cv::copyMakeBorder(
-        left, padded_left, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
-    cv::copyMakeBorder(
-        right, padded_right, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
-  }
+  const int cap = MaxStoredCrops(crop,
+                                 left.channels(),
+                                 options_.max_stored_patches_per_view,
+                                 options_.max_stored_megabytes_per_view);
+  if (static_cast<int>(by_confidence.size()) > cap) by_confidence.resize(cap);
+  std::vector<std::pair<int, cv::Rect>> to_store;
   for (int i : by_confidence) {
-    const cv::Rect interior = candidates[sample_candidate[i]].interior;
-    const cv::Rect r(
-        interior.x - border, interior.y - border, store_crop, store_crop);
-    ViewData::Stored stored;
-    stored.sample = i;
-    stored.left = ToU16(padded_left(r));
-    stored.right = ToU16(padded_right(r));
-    stored.border = store_border;
-    data->stored.push_back(stored);
+    to_store.emplace_back(i, candidates[sample_candidate[i]].interior);
   }
+  data->stored = StoreCrops(left, right, to_store, border, store_border);
 
   summary.seconds = SecondsSince(start);
   views_.push_back(std::move(data));
@@ -667,7 +459,7 @@ void DPScaleEstimator::CalibrateProfile(
                          (flat.size() + options_.max_psf_fit_patches - 1) /
                              options_.max_psf_fit_patches);
     for (size_t k = 0; k < flat.size(); k += step) {
-      const ViewData::Stored& st = views_[flat[k].view]->stored[flat[k].stored];
+      const StoredCrop& st = views_[flat[k].view]->stored[flat[k].stored];
       ProfilePatch patch;
       patch.left = gray_of(st.left);
       patch.right = gray_of(st.right);
@@ -748,7 +540,7 @@ void DPScaleEstimator::CalibrateProfile(
 #endif
     for (int k = 0; k < static_cast<int>(refs.size()); ++k) {
       const ViewData& v = *views_[refs[k].view];
-      const ViewData::Stored& st = v.stored[refs[k].stored];
+      const StoredCrop& st = v.stored[refs[k].stored];
       PatchSample& s = (*samples)[refs[k].view][st.sample];
       try {
         const PatchBlurEstimate e = estimators[s.psf_band]->Estimate(
@@ -1095,7 +887,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       iv.focus_distance_model = linear.views[i].focus_model;
       const int index = static_cast<int>(iviews.size());
       iviews.push_back(iv);
-      for (const ViewData::Stored& st : v.stored) {
+      for (const StoredCrop& st : v.stored) {
         IntensityPatch ip;
         ip.view = index;
         if (!samples[i][st.sample].selected) continue;

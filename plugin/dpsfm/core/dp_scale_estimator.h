@@ -19,17 +19,10 @@
 #include "dpsfm/core/intensity_search.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/linear_estimator.h"
+#include "dpsfm/core/patch_grid.h"
 #include "dpsfm/core/psf_calibration.h"
 
 namespace dpsfm {
-
-// A scale-ambiguous depth sample: DP-frame pixel coordinates (pixel centres
-// at integer coordinates) and z' in model units.
-struct DepthPoint {
-  double x = 0;
-  double y = 0;
-  double depth = 0;
-};
 
 struct DPView {
   std::string name;
