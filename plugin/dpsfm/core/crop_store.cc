@@ -40,7 +40,8 @@ std::vector<StoredCrop> StoreCrops(
     cv::copyMakeBorder(
         right, padded_right, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
   }
-  for (const auto& [sample, interior] : sample_interiors) {
+  for (const auto& sample_interior : sample_interiors) {
+    const cv::Rect& interior = sample_interior.second;
     // In padded coordinates the interior moved by pad: its crop starts at
     // interior - border.
     const cv::Rect r(interior.x - border,
@@ -48,7 +49,7 @@ std::vector<StoredCrop> StoreCrops(
                      interior.width + 2 * store_border,
                      interior.height + 2 * store_border);
     StoredCrop crop;
-    crop.sample = sample;
+    crop.sample = sample_interior.first;
     crop.left = ToU16(padded_left(r));
     crop.right = ToU16(padded_right(r));
     crop.border = store_border;

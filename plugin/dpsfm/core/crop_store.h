@@ -10,9 +10,9 @@
 namespace dpsfm {
 
 struct StoredCrop {
-  int sample = -1;       // index of the view's PatchSample
-  cv::Mat left, right;   // CV_16UC1/3 crops with border
-  int border = 0;        // px around the patch interior
+  int sample = -1;      // index of the view's PatchSample
+  cv::Mat left, right;  // CV_16UC1/3 crops with border
+  int border = 0;       // px around the patch interior
 };
 
 // How many crops of a `crop` px square with `channels` channels (two views,

@@ -20,6 +20,7 @@
 #include "dpsfm/core/kernel_grid.h"
 #include "dpsfm/core/patch_grid.h"
 #include "dpsfm/core/patch_selection.h"
+#include "dpsfm/core/refusal.h"
 
 namespace dpsfm {
 namespace {
@@ -33,17 +34,6 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 
 double TextureSnr(const PatchBlurEstimate& e) {
   return dpsfm::TextureSnr(e.texture, e.noise_sigma);
-}
-
-std::string CountsToString(
-    const std::vector<std::pair<std::string, int>>& counts) {
-  std::ostringstream s;
-  bool first = true;
-  for (const auto& c : counts) {
-    s << (first ? "" : ", ") << c.second << " " << c.first;
-    first = false;
-  }
-  return s.str();
 }
 
 // Whether `value` lies in [lo, hi] widened by a relative systematic term
@@ -114,6 +104,26 @@ struct DPScaleEstimator::ViewData {
   double working_pitch_mm = 0;
   std::vector<PatchSample> samples;  // valid patches only
   std::vector<StoredCrop> stored;    // best selected patches (crop_store.h)
+};
+
+// The terms that widen a statistical scale interval: the estimator's
+// systematic term and the lens geometry's (relative, in quadrature), then
+// the DP profile's own uncertainty (factors on the bounds).
+struct DPScaleEstimator::IntervalTerms {
+  double systematic = 0;
+  double lens_geometry = 0;
+  double profile_low = 1, profile_high = 1;
+
+  void Widen(double s, double* lo, double* hi) const {
+    const double sys = std::hypot(systematic, lens_geometry) * s;
+    const double dl = std::max(0.0, s - *lo), dh = std::max(0.0, *hi - s);
+    *lo = s - std::sqrt(dl * dl + sys * sys);
+    *hi = s + std::sqrt(dh * dh + sys * sys);
+  }
+  void ApplyProfile(double* lo, double* hi) const {
+    *lo *= profile_low;
+    *hi *= profile_high;
+  }
 };
 
 DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
@@ -621,7 +631,6 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   }
   const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
   result.psf_model = field.Name();
-  const bool banded = field.cells.size() > 1;
 
   // --- Linear stage. ---
   auto start = std::chrono::steady_clock::now();
@@ -684,46 +693,18 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       result.patches.push_back(copy);
     }
   }
-  // Where the patches went, summed over views, for refusal messages; and
-  // the leading cause when most patches had too little texture (then the
-  // views' other symptoms, e.g. a small blur range, follow from it).
-  int patches_tried = 0, patches_valid = 0;
-  std::string patch_rejections, leading_cause;
-  {
-    std::map<std::string, int> rejections;
-    for (const auto& v : views_) {
-      patches_tried += v->summary.patches_tried;
-      patches_valid += v->summary.patches_valid;
-      for (const auto& r : v->summary.rejections) {
-        // Patches the blur search skipped by design are no defect of the
-        // data; a refusal lists what went wrong.
-        if (r.first == kLeftUnsearched) continue;
-        rejections[r.first] += r.second;
-      }
-    }
-    if (!rejections.empty()) {
-      patch_rejections =
-          CountsToString(std::vector<std::pair<std::string, int>>(
-              rejections.begin(), rejections.end()));
-    }
-    const int weak = rejections[kTextureTooWeak];
-    if (weak > 0 && weak >= 0.5 * patches_tried) {
-      std::ostringstream cause;
-      cause << "too little texture: " << weak << " of " << patches_tried
-            << " patches have texture too weak for the sensor noise; ";
-      leading_cause = cause.str();
-    }
+  // Where the patches went, summed over views, for refusal messages
+  // (refusal.h).
+  std::vector<ViewPatchCounts> counts;
+  for (const auto& v : views_) {
+    counts.push_back({v->summary.patches_tried,
+                      v->summary.patches_valid,
+                      v->summary.rejections});
   }
+  const PatchAccount account = AccountPatches(counts);
   if (!linear.success) {
-    std::ostringstream s;
-    s << leading_cause << linear.failure_reason
-      << " (patches over all views: " << patches_tried << " tried, "
-      << patches_valid << " usable";
-    if (!patch_rejections.empty()) {
-      s << "; " << patch_rejections;
-    }
-    s << ")";
-    result.failure_reason = s.str();
+    result.failure_reason =
+        account.leading_cause + linear.failure_reason + account.Summary();
     return result;
   }
   // Intervals: the bootstrap's, widened by the systematic terms: the
@@ -748,13 +729,9 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     }
   }
   result.lens_geometry_uncertainty = lens_geometry;
-  auto widen = [&](double s, double* lo, double* hi) {
-    const double sys =
-        std::hypot(options_.scale_systematic_uncertainty, lens_geometry) * s;
-    const double dl = std::max(0.0, s - *lo), dh = std::max(0.0, *hi - s);
-    *lo = s - std::sqrt(dl * dl + sys * sys);
-    *hi = s + std::sqrt(dh * dh + sys * sys);
-  };
+  IntervalTerms terms;
+  terms.systematic = options_.scale_systematic_uncertainty;
+  terms.lens_geometry = lens_geometry;
   // The profile's own uncertainty (self-calibration): scale ~ the assumed
   // centroid offset, so the offsets the data allow move it by their ratio.
   if (options_.psf_self_calibration) {
@@ -767,16 +744,14 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     result.profile_scale_factor_high =
         1 + options_.profile_relative_uncertainty;
   }
-  auto own_profile = [&](double* lo, double* hi) {
-    *lo *= result.profile_scale_factor_low;
-    *hi *= result.profile_scale_factor_high;
-  };
+  terms.profile_low = result.profile_scale_factor_low;
+  terms.profile_high = result.profile_scale_factor_high;
   const double statistical_width =
       (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
-  widen(linear.scale, &linear.scale_ci_low, &linear.scale_ci_high);
+  terms.Widen(linear.scale, &linear.scale_ci_low, &linear.scale_ci_high);
   const double statistical_ci_low = linear.scale_ci_low;
   const double statistical_ci_high = linear.scale_ci_high;
-  own_profile(&linear.scale_ci_low, &linear.scale_ci_high);
+  terms.ApplyProfile(&linear.scale_ci_low, &linear.scale_ci_high);
   {
     const double width =
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
@@ -793,7 +768,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
              options_.max_scale_ci_relative_width);
     if (linear.num_rows < options_.min_total_patches || no_interval ||
         !(width <= options_.max_scale_ci_relative_width)) {
-      s << leading_cause;
+      s << account.leading_cause;
     }
     if (linear.num_rows < options_.min_total_patches) {
       s << "too few usable patches for a scale (" << linear.num_rows
@@ -802,54 +777,33 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       s << "the scale's interval could not be measured ("
         << linear.interval_status << "): a scale without one is not reported";
     } else if (profile_open && !options_.psf_self_calibration) {
-      s << "the DP profile's own uncertainty (+-" << std::fixed
-        << std::setprecision(1) << 100 * options_.profile_relative_uncertainty
-        << " % from its calibration) and the data's leave the scale between "
-        << std::setprecision(4) << linear.scale_ci_low << " and "
-        << linear.scale_ci_high << " (estimate " << linear.scale
-        << "), wider than the limit of " << std::setprecision(0)
-        << 100 * options_.max_scale_ci_relative_width
-        << " %. Calibrate from more captures of the target (more distances, "
-           "finer texture), or allow a wider interval with "
-           "--DPScaleEstimator.max_scale_ci_relative_width";
+      s << CalibratedProfileOpenReason(options_.profile_relative_uncertainty,
+                                       linear.scale,
+                                       linear.scale_ci_low,
+                                       linear.scale_ci_high,
+                                       options_.max_scale_ci_relative_width);
       if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
         result.failure_reason = s.str();
         return result;
       }
     } else if (profile_open) {
-      s << "the sensor's DP profile is unknown: "
-        // The whole frame's fit in short (the report has every band's).
-        << (result.psf_fit.reason.empty()
-                ? ""
-                : "self-calibration: " + result.psf_fit.reason + "; ")
-        << "profiles consistent with the data give scales from "
-        << linear.scale_ci_low << " to " << linear.scale_ci_high
-        << " (estimate " << linear.scale
-        << " with the profile used). Calibrate the camera's DP profile "
-           "once with colmap dp_psf_calibrator (a textured plane at two or "
-           "more distances) and run with --DPScaleEstimator.psf_model "
-           "calibrated --DPScaleEstimator.psf_path FILE";
+      s << UnknownProfileReason(result.psf_fit.reason,
+                                linear.scale,
+                                linear.scale_ci_low,
+                                linear.scale_ci_high);
       if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
         result.failure_reason = s.str();
         return result;
       }
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
-      s << "the data do not determine the scale: its bootstrap interval ["
-        << linear.scale_ci_low << ", " << linear.scale_ci_high << "] spans "
-        << std::fixed << std::setprecision(0) << 100 * width
-        << " % of the estimate " << std::setprecision(4) << linear.scale
-        << " (limit " << std::setprecision(0)
-        << 100 * options_.max_scale_ci_relative_width << " %)";
+      s << UndeterminedScaleReason(linear.scale,
+                                   linear.scale_ci_low,
+                                   linear.scale_ci_high,
+                                   width,
+                                   options_.max_scale_ci_relative_width);
     }
     if (!s.str().empty() && !result.scale_from_recorded_focus) {
-      s << "; patches over all views: " << patches_tried << " tried, "
-        << patches_valid << " usable";
-      if (!patch_rejections.empty()) {
-        s << " (" << patch_rejections << ")";
-      }
-      s << ". Typical causes: sensor noise too strong for the texture, "
-           "too little defocus blur (small aperture, distant subjects), "
-           "textureless surfaces";
+      s << account.TypicalCauses();
       result.failure_reason = s.str();
       return result;
     }
@@ -867,15 +821,51 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   result.num_patches = linear.num_rows;
 
   // --- Intensity stage on the selected views and their stored patches. ---
-  start = std::chrono::steady_clock::now();
-  result.intensity_loss = IntensityLossName(options_.intensity.loss);
-  if (result.scale_from_recorded_focus) {
+  const auto start_intensity = std::chrono::steady_clock::now();
+  IntensityStage(linear, samples, field, terms, &result);
+  result.seconds_intensity = SecondsSince(start_intensity);
+
+  // Focus distances and predicted blur under the final scale. g_i' is the
+  // linear stage's (the intensity stage keeps it fixed), so the focus in
+  // metres is s * g_i'.
+  for (int i = 0; i < num_views; ++i) {
+    DPViewResult& out = result.views[i];
+    out.focus_distance_m = std::isfinite(out.focus_distance_model)
+                               ? result.scale * out.focus_distance_model
+                               : kNaN;
+  }
+  for (PatchSample& s : result.patches) {
+    const DPViewResult& v = result.views[s.view];
+    s.predicted_radius_px =
+        std::isfinite(v.focus_distance_model)
+            ? PredictBlurRadiusPx(v.lens,
+                                  views_[s.view]->working_pitch_mm,
+                                  result.scale,
+                                  v.focus_distance_model,
+                                  s.depth)
+            : kNaN;
+  }
+  CheckAgainstRecordedFocus(&result);
+  result.success = true;
+  return result;
+}
+
+void DPScaleEstimator::IntensityStage(
+    const LinearEstimate& linear,
+    const std::vector<std::vector<PatchSample>>& samples,
+    const DPPsfField& field,
+    const IntervalTerms& terms,
+    DPScaleResult* result) const {
+  const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
+  const bool banded = field.cells.size() > 1;
+  result->intensity_loss = IntensityLossName(options_.intensity.loss);
+  if (result->scale_from_recorded_focus) {
     // It compares the frames against blur rendered with the profile, the
     // very thing that is unknown here.
-    result.intensity_status =
+    result->intensity_status =
         "skipped: the scale comes from the recorded focus distances";
   } else if (!options_.intensity_refinement) {
-    result.intensity_status = "disabled; linear estimate kept";
+    result->intensity_status = "disabled; linear estimate kept";
   } else {
     std::vector<IntensityView> iviews;
     std::vector<IntensityPatch> ipatches;
@@ -911,8 +901,8 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       max_r = std::max(
           max_r,
           views_[i]->summary.max_radius_px *
-              (result.psf_self_calibrated ? options_.psf_fit_radius_factor
-                                          : 1.0));
+              (result->psf_self_calibrated ? options_.psf_fit_radius_factor
+                                           : 1.0));
     }
     search.max_radius_px = max_r;
     IntensitySearchResult intensity;
@@ -923,17 +913,17 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       intensity.success = false;
       intensity.failure_reason = e.what();
     }
-    result.candidate_scales = intensity.candidate_scales;
-    result.candidate_losses = intensity.candidate_losses;
+    result->candidate_scales = intensity.candidate_scales;
+    result->candidate_losses = intensity.candidate_losses;
     std::ostringstream status;
     if (!intensity.success) {
       status << "failed (" << intensity.failure_reason
              << "); linear estimate kept";
     } else {
-      result.scale_intensity = intensity.scale;
-      result.intensity_ci_low = intensity.scale_ci_low;
-      result.intensity_ci_high = intensity.scale_ci_high;
-      result.intensity_bootstrap_support = intensity.bootstrap_support;
+      result->scale_intensity = intensity.scale;
+      result->intensity_ci_low = intensity.scale_ci_low;
+      result->intensity_ci_high = intensity.scale_ci_high;
+      result->intensity_bootstrap_support = intensity.bootstrap_support;
       const double width =
           (intensity.scale_ci_high - intensity.scale_ci_low) / intensity.scale;
       if (intensity.at_boundary) {
@@ -972,42 +962,18 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                << std::setprecision(2)
                << 100 * (intensity.scale / linear.scale - 1) << std::noshowpos
                << " % from the linear estimate)";
-        result.intensity_used = true;
-        result.scale = intensity.scale;
-        result.scale_ci_low = intensity.scale_ci_low;
-        result.scale_ci_high = intensity.scale_ci_high;
-        widen(result.scale, &result.scale_ci_low, &result.scale_ci_high);
-        own_profile(&result.scale_ci_low, &result.scale_ci_high);
-        result.num_patches = intensity.num_patches;
+        result->intensity_used = true;
+        result->scale = intensity.scale;
+        result->scale_ci_low = intensity.scale_ci_low;
+        result->scale_ci_high = intensity.scale_ci_high;
+        terms.Widen(
+            result->scale, &result->scale_ci_low, &result->scale_ci_high);
+        terms.ApplyProfile(&result->scale_ci_low, &result->scale_ci_high);
+        result->num_patches = intensity.num_patches;
       }
     }
-    result.intensity_status = status.str();
+    result->intensity_status = status.str();
   }
-  result.seconds_intensity = SecondsSince(start);
-
-  // Focus distances and predicted blur under the final scale. g_i' is the
-  // linear stage's (the intensity stage keeps it fixed), so the focus in
-  // metres is s * g_i'.
-  for (int i = 0; i < num_views; ++i) {
-    DPViewResult& out = result.views[i];
-    out.focus_distance_m = std::isfinite(out.focus_distance_model)
-                               ? result.scale * out.focus_distance_model
-                               : kNaN;
-  }
-  for (PatchSample& s : result.patches) {
-    const DPViewResult& v = result.views[s.view];
-    s.predicted_radius_px =
-        std::isfinite(v.focus_distance_model)
-            ? PredictBlurRadiusPx(v.lens,
-                                  views_[s.view]->working_pitch_mm,
-                                  result.scale,
-                                  v.focus_distance_model,
-                                  s.depth)
-            : kNaN;
-  }
-  CheckAgainstRecordedFocus(&result);
-  result.success = true;
-  return result;
 }
 
 bool DPScaleEstimator::PinToRecordedFocus(const LinearEstimate& linear,

@@ -347,6 +347,16 @@ class DPScaleEstimator {
 
  private:
   struct ViewData;
+  struct IntervalTerms;
+  // The intensity stage: refines the linear scale on the
+  // selected views' stored crops; fills the result's intensity fields and,
+  // when its estimate is used, the scale and its interval (widened by
+  // `terms`).
+  void IntensityStage(const LinearEstimate& linear,
+                      const std::vector<std::vector<PatchSample>>& samples,
+                      const DPPsfField& field,
+                      const IntervalTerms& terms,
+                      DPScaleResult* result) const;
   // Self-calibration: fits the split profile to the stored patches and, if
   // it replaces the given PSF, re-estimates them (samples[i] of view i; only
   // the stored ones stay selected) and sets *psf.

@@ -1,0 +1,116 @@
+#include "dpsfm/core/refusal.h"
+
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "dpsfm/core/patch_selection.h"
+
+namespace dpsfm {
+
+std::string CountsToString(
+    const std::vector<std::pair<std::string, int>>& counts) {
+  std::ostringstream s;
+  bool first = true;
+  for (const auto& c : counts) {
+    s << (first ? "" : ", ") << c.second << " " << c.first;
+    first = false;
+  }
+  return s.str();
+}
+
+PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views) {
+  PatchAccount account;
+  std::map<std::string, int> rejections;
+  for (const ViewPatchCounts& v : views) {
+    account.tried += v.tried;
+    account.usable += v.usable;
+    for (const auto& r : v.rejections) {
+      if (r.first == kLeftUnsearched) continue;
+      rejections[r.first] += r.second;
+    }
+  }
+  if (!rejections.empty()) {
+    account.rejections = CountsToString(std::vector<std::pair<std::string, int>>(
+        rejections.begin(), rejections.end()));
+  }
+  const int weak = rejections[kTextureTooWeak];
+  if (weak > 0 && weak >= 0.5 * account.tried) {
+    std::ostringstream cause;
+    cause << "too little texture: " << weak << " of " << account.tried
+          << " patches have texture too weak for the sensor noise; ";
+    account.leading_cause = cause.str();
+  }
+  return account;
+}
+
+std::string PatchAccount::Summary() const {
+  std::ostringstream s;
+  s << " (patches over all views: " << tried << " tried, " << usable
+    << " usable";
+  if (!rejections.empty()) s << "; " << rejections;
+  s << ")";
+  return s.str();
+}
+
+std::string PatchAccount::TypicalCauses() const {
+  std::ostringstream s;
+  s << "; patches over all views: " << tried << " tried, " << usable
+    << " usable";
+  if (!rejections.empty()) s << " (" << rejections << ")";
+  s << ". Typical causes: sensor noise too strong for the texture, "
+       "too little defocus blur (small aperture, distant subjects), "
+       "textureless surfaces";
+  return s.str();
+}
+
+std::string UndeterminedScaleReason(double scale,
+                                    double ci_low,
+                                    double ci_high,
+                                    double width,
+                                    double limit) {
+  std::ostringstream s;
+  s << "the data do not determine the scale: its bootstrap interval ["
+    << ci_low << ", " << ci_high << "] spans " << std::fixed
+    << std::setprecision(0) << 100 * width << " % of the estimate "
+    << std::setprecision(4) << scale << " (limit " << std::setprecision(0)
+    << 100 * limit << " %)";
+  return s.str();
+}
+
+std::string CalibratedProfileOpenReason(double relative_uncertainty,
+                                        double scale,
+                                        double ci_low,
+                                        double ci_high,
+                                        double limit) {
+  std::ostringstream s;
+  s << "the DP profile's own uncertainty (+-" << std::fixed
+    << std::setprecision(1) << 100 * relative_uncertainty
+    << " % from its calibration) and the data's leave the scale between "
+    << std::setprecision(4) << ci_low << " and " << ci_high << " (estimate "
+    << scale << "), wider than the limit of " << std::setprecision(0)
+    << 100 * limit
+    << " %. Calibrate from more captures of the target (more distances, "
+       "finer texture), or allow a wider interval with "
+       "--DPScaleEstimator.max_scale_ci_relative_width";
+  return s.str();
+}
+
+std::string UnknownProfileReason(const std::string& fit_reason,
+                                 double scale,
+                                 double ci_low,
+                                 double ci_high) {
+  std::ostringstream s;
+  // The whole frame's fit in short (the report has every band's).
+  s << "the sensor's DP profile is unknown: "
+    << (fit_reason.empty() ? "" : "self-calibration: " + fit_reason + "; ")
+    << "profiles consistent with the data give scales from " << ci_low
+    << " to " << ci_high << " (estimate " << scale
+    << " with the profile used). Calibrate the camera's DP profile "
+       "once with colmap dp_psf_calibrator (a textured plane at two or "
+       "more distances) and run with --DPScaleEstimator.psf_model "
+       "calibrated --DPScaleEstimator.psf_path FILE";
+  return s.str();
+}
+
+}  // namespace dpsfm

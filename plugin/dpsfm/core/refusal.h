@@ -1,0 +1,63 @@
+// Refusal reasons (DPScaleEstimator::Estimate): where the patches of all
+// views went, and the messages that say why no scale is reported, in words
+// a user can act on. No decisions are made here, only the wording.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace dpsfm {
+
+// "3 without depth, 12 across a depth edge" from (reason, count) pairs.
+std::string CountsToString(
+    const std::vector<std::pair<std::string, int>>& counts);
+
+struct PatchAccount {
+  int tried = 0;
+  int usable = 0;
+  // The reasons over all views, except patches the blur search skipped by
+  // design (no defect of the data); "" if none.
+  std::string rejections;
+  // "too little texture: ...; " when at least half the patches had texture
+  // too weak for the noise (the views' other symptoms, e.g. a small blur
+  // range, follow from it); else "".
+  std::string leading_cause;
+
+  // " (patches over all views: N tried, M usable; <rejections>)".
+  std::string Summary() const;
+  // "; patches over all views: ... . Typical causes: ..." (the tail of a
+  // refusal for an undetermined scale).
+  std::string TypicalCauses() const;
+};
+
+// Per view: (tried, usable, (reason, count) pairs).
+struct ViewPatchCounts {
+  int tried = 0;
+  int usable = 0;
+  std::vector<std::pair<std::string, int>> rejections;
+};
+PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views);
+
+// Why the interval leaves the scale open (the bootstrap interval spans
+// `width` of the estimate, over the limit).
+std::string UndeterminedScaleReason(double scale,
+                                    double ci_low,
+                                    double ci_high,
+                                    double width,
+                                    double limit);
+
+// The DP profile's own uncertainty leaves the scale open: a calibrated
+// profile's (+-relative_uncertainty), or, with self-calibration, an unknown
+// profile (fit_reason: the self-calibration's reason, may be "").
+std::string CalibratedProfileOpenReason(double relative_uncertainty,
+                                        double scale,
+                                        double ci_low,
+                                        double ci_high,
+                                        double limit);
+std::string UnknownProfileReason(const std::string& fit_reason,
+                                 double scale,
+                                 double ci_low,
+                                 double ci_high);
+
+}  // namespace dpsfm
