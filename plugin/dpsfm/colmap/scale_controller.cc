@@ -202,70 +202,55 @@ nlohmann::json ViewBudgetReport(const ScaleRun& run,
   return out;
 }
 
-ScaleEstimationOutcome RunScaleEstimation(
-    const DPScaleEstimatorOptions& options, DPScaleOptions core_options) {
-  colmap::Timer total_timer;
-  total_timer.Start();
-  colmap::PrintHeading1("DP scale estimation");
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  if (!core_options.Check()) {
-    throw InputError("invalid DPScaleEstimator option: " +
-                     OptionCheckFailure());
-  }
-  LOG(INFO) << "Model: " << layout.model_path << " ("
-            << (layout.dense ? "dense workspace" : "sparse model") << ")";
+namespace {
 
-  // The folder whose metric files are rescaled and which holds the record.
-  const std::string root =
-      layout.dense ? options.workspace_path : options.input_path;
-  const bool in_place = !options.dry_run && options.output_path.empty();
-  if (in_place) {
-    // A commit cut short by a crash or kill is finished (or rolled back)
-    // before anything else reads the workspace.
-    const RecoveryReport recovery = RecoverInterruptedCommit(root);
-    if (recovery.action == RecoveryReport::Action::kRolledForward) {
-      // The interrupted run had estimated and staged everything; finishing
-      // its commit is the whole job. Estimating again would rescale twice.
-      const ScaleRecord finished = ReadScaleRecord(root);
-      LOG(WARNING) << "Finished an interrupted rescale: "
-                   << recovery.Describe();
-      if (finished.IsRescaled()) {
-        LOG(INFO) << "Scale " << finished.entries.back().scale
-                  << " metres per model unit (applied "
-                  << finished.entries.back().time
-                  << "); the model is now in metres. Record: "
-                  << ScaleRecordPath(root);
-      }
-      return ScaleEstimationOutcome::Success();
+// Step 1: a commit cut short by a crash or kill is finished (or rolled
+// back) before anything else reads the workspace. True if the interrupted
+// run had estimated and staged everything, so finishing its commit was the
+// whole job (estimating again would rescale twice).
+bool FinishInterruptedCommit(const std::string& root) {
+  const RecoveryReport recovery = RecoverInterruptedCommit(root);
+  if (recovery.action == RecoveryReport::Action::kRolledForward) {
+    const ScaleRecord finished = ReadScaleRecord(root);
+    LOG(WARNING) << "Finished an interrupted rescale: " << recovery.Describe();
+    if (finished.IsRescaled()) {
+      LOG(INFO) << "Scale " << finished.entries.back().scale
+                << " metres per model unit (applied "
+                << finished.entries.back().time
+                << "); the model is now in metres. Record: "
+                << ScaleRecordPath(root);
     }
-    if (recovery.action == RecoveryReport::Action::kRolledBack) {
-      LOG(WARNING) << "Rolled back an interrupted rescale: "
-                   << recovery.Describe();
-    }
+    return true;
   }
+  if (recovery.action == RecoveryReport::Action::kRolledBack) {
+    LOG(WARNING) << "Rolled back an interrupted rescale: "
+                 << recovery.Describe();
+  }
+  return false;
+}
+
+// Step 2: the already-rescaled policy. Rescaling in place twice needs
+// --force; anything else only warns.
+void CheckAlreadyRescaled(const std::string& root, bool in_place, bool force) {
   const ScaleRecord record = ReadScaleRecord(root);
-  if (record.IsRescaled()) {
-    const ScaleRecordEntry& last = record.entries.back();
-    std::ostringstream note;
-    note << "this workspace was already rescaled by dp_scale_estimator ("
-         << record.entries.size() << " time(s), last on " << last.time << " by "
-         << last.scale << ", total " << record.CumulativeScale() << "; see "
-         << ScaleRecordPath(root) << ")";
-    if (in_place && !options.force) {
-      throw InputError(note.str() +
-                       "; pass --force 1 to apply another scale on top");
-    }
-    LOG(WARNING) << note.str();
+  if (!record.IsRescaled()) return;
+  const ScaleRecordEntry& last = record.entries.back();
+  std::ostringstream note;
+  note << "this workspace was already rescaled by dp_scale_estimator ("
+       << record.entries.size() << " time(s), last on " << last.time << " by "
+       << last.scale << ", total " << record.CumulativeScale() << "; see "
+       << ScaleRecordPath(root) << ")";
+  if (in_place && !force) {
+    throw InputError(note.str() +
+                     "; pass --force 1 to apply another scale on top");
   }
+  LOG(WARNING) << note.str();
+}
 
-  if (!options.dry_run) {
-    // What the rescale at the end would refuse, refused now.
-    CheckRescaleIsPossible(
-        root,
-        colmap::CSVToVector<std::string>(options.extra_model_paths),
-        options.output_path);
-  }
-  const WorkspaceReader reader(options, layout);
+// Step 3: what was read: the database cross-check and each view's lens
+// data with its source.
+std::vector<ViewSource> LogInputs(const DPScaleEstimatorOptions& options,
+                                  const WorkspaceReader& reader) {
   if (!options.database_path.empty()) {
     const DatabaseCheck& check = reader.database_check();
     LOG(INFO) << "Database: " << check.num_database_images << " images; "
@@ -298,52 +283,50 @@ ScaleEstimationOutcome RunScaleEstimation(
     }
     LOG(INFO) << line.str();
   }
+  return sources;
+}
 
-  colmap::PrintHeading2("Per-patch DP blur estimation");
-  // The profile: the given one, or (auto) a calibrated one from the
-  // library when every view has the same known camera and lens.
-  std::string psf_model = options.psf_model, psf_path = options.psf_path;
-  std::string psf_source =
-      psf_model == "calibrated" ? "psf_path " + psf_path : psf_model;
-  if (psf_model == "auto" && !sources.empty()) {
-    const std::string& camera = sources[0].lens.camera;
-    const std::string& lens = sources[0].lens.lens_model;
-    bool same = true;
-    for (const ViewSource& source : sources) {
-      same = same && source.lens.camera == camera &&
-             source.lens.lens_model == lens;
-    }
-    const std::string library = options.psf_library.empty()
-                                    ? DefaultProfileLibrary()
-                                    : options.psf_library;
-    const std::string found =
-        same ? FindLibraryProfile(library, camera, lens) : "";
-    if (!found.empty()) {
-      psf_model = "calibrated";
-      psf_path = found;
-      psf_source = "library " + found + " (camera '" + camera + "', lens '" +
-                   lens + "')";
-    } else if (same && !camera.empty() && !lens.empty()) {
-      LOG(INFO) << "DP PSF: no profile for camera '" << camera << "', lens '"
-                << lens << "' in the library " << library;
-    }
+struct ProfileChoice {
+  std::string model, path;
+  std::string source;  // for the log and the report
+};
+
+// Step 4: the DP profile: the given one, or (auto) a calibrated one from
+// the library when every view has the same known camera and lens.
+ProfileChoice ChooseProfile(const DPScaleEstimatorOptions& options,
+                            const std::vector<ViewSource>& sources) {
+  ProfileChoice choice;
+  choice.model = options.psf_model;
+  choice.path = options.psf_path;
+  choice.source =
+      choice.model == "calibrated" ? "psf_path " + choice.path : choice.model;
+  if (choice.model != "auto" || sources.empty()) return choice;
+  const std::string& camera = sources[0].lens.camera;
+  const std::string& lens = sources[0].lens.lens_model;
+  bool same = true;
+  for (const ViewSource& source : sources) {
+    same =
+        same && source.lens.camera == camera && source.lens.lens_model == lens;
   }
-  const DPPsfField psf_field = MakePsfField(psf_model, psf_path, &core_options);
-  LOG(INFO) << "DP PSF: " << psf_source << " (" << psf_field.Name()
-            << (core_options.psf_self_calibration
-                    ? ", self-calibrated from the data before the scale"
-                    : "")
-            << ")";
-  DPScaleEstimator estimator(core_options, psf_field);
-  DPScaleController controller(options.view_budget,
-                               &reader,
-                               &estimator,
-                               !options.report_path.empty(),
-                               options.prefetch_views);
-  ScaleRun run = controller.Run();
-  const DPScaleResult& result = run.result;
-  RunTimings& timings = run.timings;
-  const std::vector<DPViewSummary>& summaries = run.summaries;
+  const std::string library = options.psf_library.empty()
+                                  ? DefaultProfileLibrary()
+                                  : options.psf_library;
+  const std::string found =
+      same ? FindLibraryProfile(library, camera, lens) : "";
+  if (!found.empty()) {
+    choice.model = "calibrated";
+    choice.path = found;
+    choice.source =
+        "library " + found + " (camera '" + camera + "', lens '" + lens + "')";
+  } else if (same && !camera.empty() && !lens.empty()) {
+    LOG(INFO) << "DP PSF: no profile for camera '" << camera << "', lens '"
+              << lens << "' in the library " << library;
+  }
+  return choice;
+}
+
+// Step 6: what the estimate found, per view and overall.
+void LogResult(const DPScaleResult& result) {
   if (!result.psf_status.empty()) {
     LOG(INFO) << "DP PSF: " << result.psf_status << " ("
               << Seconds(result.seconds_psf_fit) << ")";
@@ -359,48 +342,27 @@ ScaleEstimationOutcome RunScaleEstimation(
     LOG(INFO) << "  " << view.name << ": " << (view.used ? "used" : "not used")
               << " (" << view.reason << ")";
   }
-  // Without a rescale to follow, the report is complete now.
-  const bool rescale = result.success && !options.dry_run;
-  timings.total = total_timer.ElapsedSeconds();
-  if (!options.report_path.empty()) {
-    for (const std::string& plot :
-         WriteReportPlots(result,
-                          run.overlay_images,
-                          options.report_path,
-                          summaries.empty() ? 0 : summaries[0].patch_size)) {
-      LOG(INFO) << "Plot: " << plot;
-    }
-  }
-  if (!options.report_path.empty() && !rescale) {
-    nlohmann::json report = ReportWithSource(
-        MakeReport(result, sources, summaries, timings), psf_source);
-    report["view_budget"] = ViewBudgetReport(run, reader);
-    WriteJsonFile(options.report_path, report);
-    LOG(INFO) << "Report: " << options.report_path;
-  }
-  if (!result.success) {
-    return ScaleEstimationOutcome::Failure(
-        "no scale: " + result.failure_reason + "; nothing was changed");
-  }
-  LOG(INFO) << "Linear estimate s* = " << result.scale_initial
-            << ", final s = " << result.scale << " (95% interval "
-            << result.scale_ci_low << " .. " << result.scale_ci_high
-            << "; intensity stage: " << result.intensity_status << ")";
-  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
-            << Seconds(timings.read_wait) << " not overlapped), blur "
-            << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
-            << ", intensity " << Seconds(timings.intensity);
+}
 
-  if (options.dry_run) {
-    LOG(INFO) << "Scale " << result.scale
-              << " metres per model unit (dry run: nothing was changed)";
-    return ScaleEstimationOutcome::Success();
-  }
+// The report: the estimate, the inputs, the profile's source, the view
+// budget, and (after a rescale) what was rescaled.
+nlohmann::json RunReport(const ScaleRun& run,
+                         const std::vector<ViewSource>& sources,
+                         const WorkspaceReader& reader,
+                         const std::string& psf_source) {
+  nlohmann::json report = ReportWithSource(
+      MakeReport(run.result, sources, run.summaries, run.timings), psf_source);
+  report["view_budget"] = ViewBudgetReport(run, reader);
+  return report;
+}
+
+// Step 7: the rescale, in place or into a copy.
+RescaleWorkspaceResult Rescale(const DPScaleEstimatorOptions& options,
+                               const std::string& root,
+                               double scale) {
   colmap::PrintHeading2(options.output_path.empty()
                             ? "Rescaling the workspace in place"
                             : "Writing a rescaled copy");
-  colmap::Timer rescale_timer;
-  rescale_timer.Start();
   RescaleWorkspaceOptions rescale_options;
   rescale_options.extra_model_dirs =
       colmap::CSVToVector<std::string>(options.extra_model_paths);
@@ -415,18 +377,112 @@ ScaleEstimationOutcome RunScaleEstimation(
   }
   const RescaleWorkspaceResult rescaled =
       options.output_path.empty()
-          ? RescaleWorkspaceInPlace(root, result.scale, rescale_options)
+          ? RescaleWorkspaceInPlace(root, scale, rescale_options)
           : WriteRescaledCopy(
-                root, options.output_path, result.scale, rescale_options);
-  timings.rescale = rescale_timer.ElapsedSeconds();
+                root, options.output_path, scale, rescale_options);
   for (const std::string& file : rescaled.rescaled_files) {
     VLOG(1) << "  rescaled " << file;
   }
+  return rescaled;
+}
+
+}  // namespace
+
+ScaleEstimationOutcome RunScaleEstimation(
+    const DPScaleEstimatorOptions& options, DPScaleOptions core_options) {
+  colmap::Timer total_timer;
+  total_timer.Start();
+  colmap::PrintHeading1("DP scale estimation");
+  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+  if (!core_options.Check()) {
+    throw InputError("invalid DPScaleEstimator option: " +
+                     OptionCheckFailure());
+  }
+  LOG(INFO) << "Model: " << layout.model_path << " ("
+            << (layout.dense ? "dense workspace" : "sparse model") << ")";
+
+  // The folder whose metric files are rescaled and which holds the record.
+  const std::string root =
+      layout.dense ? options.workspace_path : options.input_path;
+  const bool in_place = !options.dry_run && options.output_path.empty();
+  if (in_place && FinishInterruptedCommit(root)) {
+    return ScaleEstimationOutcome::Success();
+  }
+  CheckAlreadyRescaled(root, in_place, options.force);
+  if (!options.dry_run) {
+    // What the rescale at the end would refuse, refused now.
+    CheckRescaleIsPossible(
+        root,
+        colmap::CSVToVector<std::string>(options.extra_model_paths),
+        options.output_path);
+  }
+  const WorkspaceReader reader(options, layout);
+  const std::vector<ViewSource> sources = LogInputs(options, reader);
+
+  colmap::PrintHeading2("Per-patch DP blur estimation");
+  const ProfileChoice profile = ChooseProfile(options, sources);
+  const DPPsfField psf_field =
+      MakePsfField(profile.model, profile.path, &core_options);
+  LOG(INFO) << "DP PSF: " << profile.source << " (" << psf_field.Name()
+            << (core_options.psf_self_calibration
+                    ? ", self-calibrated from the data before the scale"
+                    : "")
+            << ")";
+
+  // Step 5: the view loop and the estimate.
+  DPScaleEstimator estimator(core_options, psf_field);
+  DPScaleController controller(options.view_budget,
+                               &reader,
+                               &estimator,
+                               !options.report_path.empty(),
+                               options.prefetch_views);
+  ScaleRun run = controller.Run();
+  const DPScaleResult& result = run.result;
+  RunTimings& timings = run.timings;
+  LogResult(result);
+
+  // Without a rescale to follow, the report is complete now.
+  const bool rescale = result.success && !options.dry_run;
   timings.total = total_timer.ElapsedSeconds();
   if (!options.report_path.empty()) {
-    nlohmann::json report = ReportWithSource(
-        MakeReport(result, sources, summaries, timings), psf_source);
-    report["view_budget"] = ViewBudgetReport(run, reader);
+    for (const std::string& plot : WriteReportPlots(
+             result,
+             run.overlay_images,
+             options.report_path,
+             run.summaries.empty() ? 0 : run.summaries[0].patch_size)) {
+      LOG(INFO) << "Plot: " << plot;
+    }
+  }
+  if (!options.report_path.empty() && !rescale) {
+    WriteJsonFile(options.report_path,
+                  RunReport(run, sources, reader, profile.source));
+    LOG(INFO) << "Report: " << options.report_path;
+  }
+  if (!result.success) {
+    return ScaleEstimationOutcome::Failure(
+        "no scale: " + result.failure_reason + "; nothing was changed");
+  }
+  LOG(INFO) << "Linear estimate s* = " << result.scale_initial
+            << ", final s = " << result.scale << " (95% interval "
+            << result.scale_ci_low << " .. " << result.scale_ci_high
+            << "; intensity stage: " << result.intensity_status << ")";
+  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
+            << Seconds(timings.read_wait) << " not overlapped), blur "
+            << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
+            << ", intensity " << Seconds(timings.intensity);
+  if (options.dry_run) {
+    LOG(INFO) << "Scale " << result.scale
+              << " metres per model unit (dry run: nothing was changed)";
+    return ScaleEstimationOutcome::Success();
+  }
+
+  colmap::Timer rescale_timer;
+  rescale_timer.Start();
+  const RescaleWorkspaceResult rescaled = Rescale(options, root, result.scale);
+  timings.rescale = rescale_timer.ElapsedSeconds();
+  timings.total = total_timer.ElapsedSeconds();
+  if (!options.report_path.empty()) {
+    nlohmann::json report = RunReport(run, sources, reader, profile.source);
     report["rescaled_files"] = rescaled.rescaled_files;
     report["cumulative_scale"] = rescaled.entry.cumulative_scale;
     report["record_path"] = rescaled.record_path;
