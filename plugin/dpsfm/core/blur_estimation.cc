@@ -271,6 +271,301 @@ const BlurEstimationOptions& PatchBlurEstimator::Options() const {
   return tables_->options;
 }
 
+// The coarse global search's curve (windowed, frequency domain): the
+// corrected loss per coarse node, and its local minima, best first (ties
+// prefer small |r|: blurs inside the in-focus threshold are
+// indistinguishable).
+struct PatchBlurEstimator::CoarseCurve {
+  std::vector<double> loss;
+  std::vector<int> minima;  // indices into loss
+  double min = 0, max = 0;
+};
+
+PatchBlurEstimator::CoarseCurve PatchBlurEstimator::CoarseSearch(
+    const cv::Mat& gl, const cv::Mat& gr, double sigma2_hp) const {
+  const Tables& t = *tables_;
+  const int height = t.patch_size.height;
+  const int width = t.patch_size.width;
+  const int num_band = static_cast<int>(t.band_rows.size());
+  Eigen::VectorXf data(4 * num_band);
+  {
+    cv::Mat wl = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    cv::Mat wr = cv::Mat::zeros(t.dft_size, CV_32FC1);
+    for (int y = 0; y < height; ++y) {
+      const float* l = gl.ptr<float>(y);
+      const float* r = gr.ptr<float>(y);
+      float* ol = wl.ptr<float>(y);
+      float* orr = wr.ptr<float>(y);
+      const float wy = t.window_y[y];
+      for (int x = 0; x < width; ++x) {
+        const float w = wy * t.window_x[x];
+        ol[x] = w * l[x];
+        orr[x] = w * r[x];
+      }
+    }
+    cv::Mat fl, fr;
+    cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
+    cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
+    for (int k = 0; k < num_band; ++k) {
+      const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+      const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+      // D = G_l conj(G_r); loss_k = |G_l|^2 |H_r|^2 + |G_r|^2 |H_l|^2
+      //                            - 2 Re(D K).
+      data[4 * k + 0] = a[0] * a[0] + a[1] * a[1];
+      data[4 * k + 1] = b[0] * b[0] + b[1] * b[1];
+      data[4 * k + 2] = -2.f * (a[0] * b[0] + a[1] * b[1]);
+      data[4 * k + 3] = 2.f * (a[1] * b[0] - a[0] * b[1]);
+    }
+  }
+  const Eigen::VectorXf coarse_raw_f = t.coarse_table * data;
+  const int num_coarse = static_cast<int>(t.coarse_nodes.size());
+  std::vector<double> coarse_raw(num_coarse);
+  double sigma2_coarse = sigma2_hp;
+  for (int i = 0; i < num_coarse; ++i) {
+    coarse_raw[i] = std::max(0.0, coarse_raw_f[i] * t.coarse_normaliser);
+    sigma2_coarse =
+        std::min(sigma2_coarse, coarse_raw[i] / t.coarse_noise_gain[i]);
+  }
+  if (!t.options.subtract_noise_floor) sigma2_coarse = 0;
+  CoarseCurve curve;
+  curve.loss.resize(num_coarse);
+  std::vector<double>& coarse = curve.loss;
+  for (int i = 0; i < num_coarse; ++i) {
+    coarse[i] = coarse_raw[i] - sigma2_coarse * t.coarse_noise_gain[i];
+  }
+  for (int i = 0; i < num_coarse; ++i) {
+    const bool left_ok = i == 0 || coarse[i] <= coarse[i - 1];
+    const bool right_ok = i == num_coarse - 1 || coarse[i] <= coarse[i + 1];
+    if (left_ok && right_ok) curve.minima.push_back(i);
+  }
+  std::sort(curve.minima.begin(), curve.minima.end(), [&](int a, int b) {
+    if (coarse[a] != coarse[b]) return coarse[a] < coarse[b];
+    return std::abs(t.Radius(t.coarse_nodes[a])) <
+           std::abs(t.Radius(t.coarse_nodes[b]));
+  });
+  curve.min = coarse[curve.minima.front()];
+  curve.max = *std::max_element(coarse.begin(), coarse.end());
+  return curve;
+}
+
+// The exact refinement (spatial valid-region loss via inverse FFT) of one
+// patch: the views' spectra, the loss at the grid nodes evaluated so far,
+// the noise floor, the closed-form minimum inside grid intervals, the walk
+// downhill from a coarse node, and the second-stage gain equalisation.
+class PatchBlurEstimator::Refinement {
+ public:
+  struct Minimum {
+    double radius = 0;
+    double corrected = kInf;
+    double raw = kInf;
+    int lo = 0, hi = 0;  // evaluated node range
+  };
+
+  // gl, gr: the gain-equalised views minus `offset`.
+  Refinement(const Tables& t,
+             const cv::Mat& gl,
+             const cv::Mat& gr,
+             double offset,
+             double sigma2_hp)
+      : t_(t),
+        options_(t.options),
+        gl_(gl),
+        gr_(gr),
+        offset_(offset),
+        sigma2_hp_(sigma2_hp),
+        inv_m_(1.0 / t.num_interior),
+        evals_(t.num_nodes) {
+    left_positive_ = gl_ + offset_;
+    right_positive_ = gr_ + offset_;
+    TransformViews();
+  }
+
+  const cv::Mat& Left() const { return gl_; }
+  const cv::Mat& Right() const { return gr_; }
+
+  // Residual G_l * H_r - G_r * H_l at node n (once per node).
+  void Evaluate(int n) {
+    NodeEval& e = evals_[n];
+    if (e.done) return;
+    cv::mulSpectrums(spec_left_, t_.grid->RightSpectrum(n), product_left_, 0);
+    cv::mulSpectrums(spec_right_, t_.grid->LeftSpectrum(n), product_right_, 0);
+    product_left_ -= product_right_;
+    cv::dft(product_left_,
+            residual_image_,
+            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
+            t_.interior.y + t_.interior.height);
+    e.residual.resize(t_.num_interior);
+    float* out = e.residual.data();
+    for (int y = 0; y < t_.interior.height; ++y) {
+      const float* row =
+          residual_image_.ptr<float>(t_.interior.y + y) + t_.interior.x;
+      std::copy(row, row + t_.interior.width, out);
+      out += t_.interior.width;
+    }
+    e.energy = Dot(e.residual, e.residual);
+    e.done = true;
+    if (n > 0 && evals_[n - 1].done) {
+      evals_[n - 1].next_dot = Dot(evals_[n - 1].residual, e.residual);
+    }
+    if (n + 1 < t_.num_nodes && evals_[n + 1].done) {
+      e.next_dot = Dot(e.residual, evals_[n + 1].residual);
+    }
+  }
+
+  double RawLoss(int n) const { return evals_[n].energy * inv_m_; }
+
+  // Noise variance: the patch estimate, tightened by the fit: E[L(r)] =
+  // S(r) + sigma^2 a(r) with S >= 0, so every L(r) / a(r) bounds sigma^2
+  // from above (up to noise).
+  double CurrentSigma2() const {
+    if (!options_.subtract_noise_floor) return 0.0;
+    double s2 = sigma2_hp_;
+    for (int n = 0; n < t_.num_nodes; ++n) {
+      if (evals_[n].done) s2 = std::min(s2, RawLoss(n) / t_.noise_gain[n]);
+    }
+    return s2;
+  }
+
+  // Minimum of the corrected loss over the evaluated nodes [lo, hi] with
+  // linearly interpolated kernels inside each interval.
+  Minimum Minimise(int lo, int hi, double sigma2) const {
+    Minimum best;
+    best.lo = lo;
+    best.hi = hi;
+    auto consider = [&](double radius, double corrected, double raw) {
+      const double tol = 1e-9 * std::abs(raw) + 1e-300;
+      if (corrected < best.corrected - tol ||
+          (corrected <= best.corrected + tol &&
+           std::abs(radius) < std::abs(best.radius))) {
+        best.radius = radius;
+        best.corrected = corrected;
+        best.raw = raw;
+      }
+    };
+    for (int n = lo; n <= hi; ++n) {
+      consider(
+          t_.Radius(n), RawLoss(n) - sigma2 * t_.noise_gain[n], RawLoss(n));
+    }
+    for (int n = lo; n < hi; ++n) {
+      // L(t) = alpha (1-t)^2 + 2 beta t (1-t) + gamma t^2 (raw and noise
+      // floor are both quadratic forms in the interpolated kernels).
+      const double ra = RawLoss(n);
+      const double rb = evals_[n].next_dot * inv_m_;
+      const double rc = RawLoss(n + 1);
+      const double alpha = ra - sigma2 * t_.noise_gain[n];
+      const double beta = rb - sigma2 * t_.noise_cross[n];
+      const double gamma = rc - sigma2 * t_.noise_gain[n + 1];
+      const double curvature = alpha - 2 * beta + gamma;
+      if (curvature <= 0) continue;  // minimum at an end node
+      const double s = (alpha - beta) / curvature;
+      if (s <= 0 || s >= 1) continue;
+      const double corrected =
+          alpha * (1 - s) * (1 - s) + 2 * beta * s * (1 - s) + gamma * s * s;
+      const double raw =
+          ra * (1 - s) * (1 - s) + 2 * rb * s * (1 - s) + rc * s * s;
+      consider(t_.Radius(n) + s * t_.step, corrected, raw);
+    }
+    return best;
+  }
+
+  // Walks downhill from a coarse node until the minimum is enclosed.
+  Minimum Refine(int start) {
+    int lo = std::max(0, start - 1);
+    int hi = std::min(t_.num_nodes - 1, start + 1);
+    for (int n = lo; n <= hi; ++n) Evaluate(n);
+    int budget = options_.max_refinement_evaluations - (hi - lo + 1);
+    while (true) {
+      const double sigma2 = CurrentSigma2();
+      const Minimum m = Minimise(lo, hi, sigma2);
+      // Extend while an end node is (tied for) the minimum: the loss may
+      // still fall beyond it, or a plateau (in-focus deltas) may continue.
+      const double tol = 1e-9 * std::abs(m.raw);
+      const bool at_lo =
+          RawLoss(lo) - sigma2 * t_.noise_gain[lo] <= m.corrected + tol;
+      const bool at_hi =
+          RawLoss(hi) - sigma2 * t_.noise_gain[hi] <= m.corrected + tol;
+      if (at_lo && lo > 0 && budget > 0) {
+        Evaluate(--lo);
+        --budget;
+      } else if (at_hi && hi < t_.num_nodes - 1 && budget > 0) {
+        Evaluate(++hi);
+        --budget;
+      } else {
+        return m;
+      }
+    }
+  }
+
+  int NearestNode(double radius) const {
+    return std::max(0,
+                    std::min(t_.num_nodes - 1,
+                             static_cast<int>(std::round(radius / t_.step)) +
+                                 t_.half_nodes));
+  }
+
+  // Gain, second stage. The whole-patch means of the two views differ not
+  // only by gain but also because the views are shifted against each other
+  // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
+  // alone moves the estimate by ~0.2 px. The right comparison is the
+  // interior means of the two blurred cross views at the blur, which agree
+  // exactly for equal gains. Re-transforms the views; evaluations made
+  // before stay (the caller resets them when the gain moved the estimate).
+  void EqualiseGain(double radius) {
+    cv::Mat integral_left, integral_right;
+    cv::integral(left_positive_, integral_left, CV_64F);
+    cv::integral(right_positive_, integral_right, CV_64F);
+    // Interior sums are linear in the kernels: interpolate like them.
+    const double pos = std::max(
+        0.0, std::min(t_.num_nodes - 1.0, radius / t_.step + t_.half_nodes));
+    const int n0 = std::min(t_.num_nodes - 2, static_cast<int>(pos));
+    const double s = pos - n0;
+    double a = 0, b = 0;
+    for (const int n : {n0, n0 + 1}) {
+      const double w = n == n0 ? 1 - s : s;
+      a += w * BlurredSum(integral_left, t_.grid->RightKernel(n), t_.interior);
+      b += w * BlurredSum(integral_right, t_.grid->LeftKernel(n), t_.interior);
+    }
+    if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
+    const double half_log_ratio = 0.5 * std::log(a / b);
+    left_positive_ *= std::exp(-half_log_ratio);
+    right_positive_ *= std::exp(half_log_ratio);
+    left_positive_.convertTo(gl_, CV_32FC1, 1.0, -offset_);
+    right_positive_.convertTo(gr_, CV_32FC1, 1.0, -offset_);
+    TransformViews();
+  }
+
+  void ResetEvaluations() { evals_.assign(t_.num_nodes, NodeEval()); }
+
+ private:
+  struct NodeEval {
+    bool done = false;
+    std::vector<float> residual;
+    double energy = 0;       // |e|^2
+    double next_dot = kInf;  // <e(n), e(n+1)>, once both are known
+  };
+
+  void TransformViews() {
+    const int width = t_.patch_size.width, height = t_.patch_size.height;
+    cv::Mat pl = cv::Mat::zeros(t_.dft_size, CV_32FC1);
+    cv::Mat pr = cv::Mat::zeros(t_.dft_size, CV_32FC1);
+    gl_.copyTo(pl(cv::Rect(0, 0, width, height)));
+    gr_.copyTo(pr(cv::Rect(0, 0, width, height)));
+    cv::dft(pl, spec_left_, 0, height);
+    cv::dft(pr, spec_right_, 0, height);
+  }
+
+  const Tables& t_;
+  const BlurEstimationOptions& options_;
+  cv::Mat gl_, gr_;
+  cv::Mat left_positive_, right_positive_;
+  const double offset_;
+  const double sigma2_hp_;
+  const double inv_m_;
+  cv::Mat spec_left_, spec_right_;
+  std::vector<NodeEval> evals_;
+  cv::Mat product_left_, product_right_, residual_image_;
+};
+
 PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
                                                const cv::Mat& right) const {
   const Tables& t = *tables_;
@@ -330,262 +625,26 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     sigma2_hp = std::min(0.5 * (sl * sl + sr * sr), sd * sd);
   }
 
-  const int height = t.patch_size.height;
-  const int width = t.patch_size.width;
+  const CoarseCurve coarse = CoarseSearch(gl, gr, sigma2_hp);
+  const std::vector<int>& minima = coarse.minima;
 
-  // ---- Coarse global search (windowed, frequency domain). ----
-  const int num_band = static_cast<int>(t.band_rows.size());
-  Eigen::VectorXf data(4 * num_band);
-  {
-    cv::Mat wl = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    cv::Mat wr = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    for (int y = 0; y < height; ++y) {
-      const float* l = gl.ptr<float>(y);
-      const float* r = gr.ptr<float>(y);
-      float* ol = wl.ptr<float>(y);
-      float* orr = wr.ptr<float>(y);
-      const float wy = t.window_y[y];
-      for (int x = 0; x < width; ++x) {
-        const float w = wy * t.window_x[x];
-        ol[x] = w * l[x];
-        orr[x] = w * r[x];
-      }
-    }
-    cv::Mat fl, fr;
-    cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
-    cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
-    for (int k = 0; k < num_band; ++k) {
-      const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
-      const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
-      // D = G_l conj(G_r); loss_k = |G_l|^2 |H_r|^2 + |G_r|^2 |H_l|^2
-      //                            - 2 Re(D K).
-      data[4 * k + 0] = a[0] * a[0] + a[1] * a[1];
-      data[4 * k + 1] = b[0] * b[0] + b[1] * b[1];
-      data[4 * k + 2] = -2.f * (a[0] * b[0] + a[1] * b[1]);
-      data[4 * k + 3] = 2.f * (a[1] * b[0] - a[0] * b[1]);
-    }
-  }
-  const Eigen::VectorXf coarse_raw_f = t.coarse_table * data;
-  const int num_coarse = static_cast<int>(t.coarse_nodes.size());
-  std::vector<double> coarse_raw(num_coarse);
-  double sigma2_coarse = sigma2_hp;
-  for (int i = 0; i < num_coarse; ++i) {
-    coarse_raw[i] = std::max(0.0, coarse_raw_f[i] * t.coarse_normaliser);
-    sigma2_coarse =
-        std::min(sigma2_coarse, coarse_raw[i] / t.coarse_noise_gain[i]);
-  }
-  if (!options.subtract_noise_floor) sigma2_coarse = 0;
-  std::vector<double> coarse(num_coarse);
-  for (int i = 0; i < num_coarse; ++i) {
-    coarse[i] = coarse_raw[i] - sigma2_coarse * t.coarse_noise_gain[i];
-  }
-  // Local minima of the coarse curve, best first; ties prefer small |r|
-  // (blurs inside the in-focus threshold are indistinguishable).
-  std::vector<int> minima;
-  for (int i = 0; i < num_coarse; ++i) {
-    const bool left_ok = i == 0 || coarse[i] <= coarse[i - 1];
-    const bool right_ok = i == num_coarse - 1 || coarse[i] <= coarse[i + 1];
-    if (left_ok && right_ok) minima.push_back(i);
-  }
-  std::sort(minima.begin(), minima.end(), [&](int a, int b) {
-    if (coarse[a] != coarse[b]) return coarse[a] < coarse[b];
-    return std::abs(t.Radius(t.coarse_nodes[a])) <
-           std::abs(t.Radius(t.coarse_nodes[b]));
-  });
-  const double coarse_min = coarse[minima.front()];
-  const double coarse_max = *std::max_element(coarse.begin(), coarse.end());
-
-  // ---- Exact refinement (spatial valid-region loss via inverse FFT). ----
-  cv::Mat spec_left, spec_right;
-  auto transform_views = [&](const cv::Mat& l, const cv::Mat& r) {
-    cv::Mat pl = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    cv::Mat pr = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    l.copyTo(pl(cv::Rect(0, 0, width, height)));
-    r.copyTo(pr(cv::Rect(0, 0, width, height)));
-    cv::dft(pl, spec_left, 0, height);
-    cv::dft(pr, spec_right, 0, height);
-  };
-  transform_views(gl, gr);
-  struct NodeEval {
-    bool done = false;
-    std::vector<float> residual;
-    double energy = 0;       // |e|^2
-    double next_dot = kInf;  // <e(n), e(n+1)>, once both are known
-  };
-  std::vector<NodeEval> evals(t.num_nodes);
-  int num_evaluations = 0;
-  cv::Mat product_left, product_right, residual_image;
-  const double inv_m = 1.0 / t.num_interior;
-  auto evaluate = [&](int n) {
-    NodeEval& e = evals[n];
-    if (e.done) return;
-    ++num_evaluations;
-    // Residual G_l * H_r - G_r * H_l.
-    cv::mulSpectrums(spec_left, t.grid->RightSpectrum(n), product_left, 0);
-    cv::mulSpectrums(spec_right, t.grid->LeftSpectrum(n), product_right, 0);
-    product_left -= product_right;
-    cv::dft(product_left,
-            residual_image,
-            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-            t.interior.y + t.interior.height);
-    e.residual.resize(t.num_interior);
-    float* out = e.residual.data();
-    for (int y = 0; y < t.interior.height; ++y) {
-      const float* row =
-          residual_image.ptr<float>(t.interior.y + y) + t.interior.x;
-      std::copy(row, row + t.interior.width, out);
-      out += t.interior.width;
-    }
-    e.energy = Dot(e.residual, e.residual);
-    e.done = true;
-    if (n > 0 && evals[n - 1].done) {
-      evals[n - 1].next_dot = Dot(evals[n - 1].residual, e.residual);
-    }
-    if (n + 1 < t.num_nodes && evals[n + 1].done) {
-      e.next_dot = Dot(e.residual, evals[n + 1].residual);
-    }
-  };
-  auto raw_loss = [&](int n) { return evals[n].energy * inv_m; };
-
-  // Noise variance: the patch estimate, tightened by the fit: E[L(r)] =
-  // S(r) + sigma^2 a(r) with S >= 0, so every L(r) / a(r) bounds sigma^2
-  // from above (up to noise).
-  auto current_sigma2 = [&]() {
-    if (!options.subtract_noise_floor) return 0.0;
-    double s2 = sigma2_hp;
-    for (int n = 0; n < t.num_nodes; ++n) {
-      if (evals[n].done) s2 = std::min(s2, raw_loss(n) / t.noise_gain[n]);
-    }
-    return s2;
-  };
-
-  struct Minimum {
-    double radius = 0;
-    double corrected = kInf;
-    double raw = kInf;
-    int lo = 0, hi = 0;  // evaluated node range
-  };
-  // Minimum of the corrected loss over the evaluated nodes [lo, hi] with
-  // linearly interpolated kernels inside each interval.
-  auto minimise = [&](int lo, int hi, double sigma2) {
-    Minimum best;
-    best.lo = lo;
-    best.hi = hi;
-    auto consider = [&](double radius, double corrected, double raw) {
-      const double tol = 1e-9 * std::abs(raw) + 1e-300;
-      if (corrected < best.corrected - tol ||
-          (corrected <= best.corrected + tol &&
-           std::abs(radius) < std::abs(best.radius))) {
-        best.radius = radius;
-        best.corrected = corrected;
-        best.raw = raw;
-      }
-    };
-    for (int n = lo; n <= hi; ++n) {
-      consider(
-          t.Radius(n), raw_loss(n) - sigma2 * t.noise_gain[n], raw_loss(n));
-    }
-    for (int n = lo; n < hi; ++n) {
-      // L(t) = alpha (1-t)^2 + 2 beta t (1-t) + gamma t^2 (raw and noise
-      // floor are both quadratic forms in the interpolated kernels).
-      const double ra = raw_loss(n);
-      const double rb = evals[n].next_dot * inv_m;
-      const double rc = raw_loss(n + 1);
-      const double alpha = ra - sigma2 * t.noise_gain[n];
-      const double beta = rb - sigma2 * t.noise_cross[n];
-      const double gamma = rc - sigma2 * t.noise_gain[n + 1];
-      const double curvature = alpha - 2 * beta + gamma;
-      if (curvature <= 0) continue;  // minimum at an end node
-      const double s = (alpha - beta) / curvature;
-      if (s <= 0 || s >= 1) continue;
-      const double corrected =
-          alpha * (1 - s) * (1 - s) + 2 * beta * s * (1 - s) + gamma * s * s;
-      const double raw =
-          ra * (1 - s) * (1 - s) + 2 * rb * s * (1 - s) + rc * s * s;
-      consider(t.Radius(n) + s * t.step, corrected, raw);
-    }
-    return best;
-  };
-
-  // Walks downhill from a coarse node until the minimum is enclosed.
-  auto refine = [&](int start) {
-    int lo = std::max(0, start - 1);
-    int hi = std::min(t.num_nodes - 1, start + 1);
-    for (int n = lo; n <= hi; ++n) evaluate(n);
-    int budget = options.max_refinement_evaluations - (hi - lo + 1);
-    while (true) {
-      const double sigma2 = current_sigma2();
-      const Minimum m = minimise(lo, hi, sigma2);
-      // Extend while an end node is (tied for) the minimum: the loss may
-      // still fall beyond it, or a plateau (in-focus deltas) may continue.
-      const double tol = 1e-9 * std::abs(m.raw);
-      const bool at_lo =
-          raw_loss(lo) - sigma2 * t.noise_gain[lo] <= m.corrected + tol;
-      const bool at_hi =
-          raw_loss(hi) - sigma2 * t.noise_gain[hi] <= m.corrected + tol;
-      if (at_lo && lo > 0 && budget > 0) {
-        evaluate(--lo);
-        --budget;
-      } else if (at_hi && hi < t.num_nodes - 1 && budget > 0) {
-        evaluate(++hi);
-        --budget;
-      } else {
-        return m;
-      }
-    }
-  };
-
-  // Gain, second stage. The whole-patch means of the two views differ not
-  // only by gain but also because the views are shifted against each other
-  // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
-  // alone moves the estimate by ~0.2 px. The right comparison is the
-  // interior means of the two blurred cross views at the blur, which agree
-  // exactly for equal gains; it is evaluated at the coarse estimate (and
-  // again at the refined one if that moved).
-  cv::Mat left_positive = gl + offset;
-  cv::Mat right_positive = gr + offset;
-  auto NearestNode = [&](double radius) {
-    return std::max(
-        0,
-        std::min(t.num_nodes - 1,
-                 static_cast<int>(std::round(radius / t.step)) + t.half_nodes));
-  };
-  auto equalise_gain = [&](double radius) {
-    cv::Mat integral_left, integral_right;
-    cv::integral(left_positive, integral_left, CV_64F);
-    cv::integral(right_positive, integral_right, CV_64F);
-    // Interior sums are linear in the kernels: interpolate like them.
-    const double pos = std::max(
-        0.0, std::min(t.num_nodes - 1.0, radius / t.step + t.half_nodes));
-    const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
-    const double s = pos - n0;
-    double a = 0, b = 0;
-    for (const int n : {n0, n0 + 1}) {
-      const double w = n == n0 ? 1 - s : s;
-      a += w * BlurredSum(integral_left, t.grid->RightKernel(n), t.interior);
-      b += w * BlurredSum(integral_right, t.grid->LeftKernel(n), t.interior);
-    }
-    if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
-    const double half_log_ratio = 0.5 * std::log(a / b);
-    left_positive *= std::exp(-half_log_ratio);
-    right_positive *= std::exp(half_log_ratio);
-    left_positive.convertTo(gl, CV_32FC1, 1.0, -offset);
-    right_positive.convertTo(gr, CV_32FC1, 1.0, -offset);
-    transform_views(gl, gr);
-  };
+  // ---- Exact refinement. ----
+  Refinement refinement(t, gl, gr, offset, sigma2_hp);
+  using Minimum = Refinement::Minimum;
   double gain_radius = t.Radius(t.coarse_nodes[minima.front()]);
-  if (options.normalize_gain) equalise_gain(gain_radius);
+  if (options.normalize_gain) refinement.EqualiseGain(gain_radius);
 
-  Minimum best = refine(t.coarse_nodes[minima.front()]);
+  Minimum best = refinement.Refine(t.coarse_nodes[minima.front()]);
   // A second basin of similar coarse loss (e.g. the other sign) is refined
   // too: the windowed coarse loss is only an approximation.
   for (size_t i = 1; i < minima.size() && i < 3; ++i) {
     const double r = t.Radius(t.coarse_nodes[minima[i]]);
     if (r >= t.Radius(best.lo) - 1 && r <= t.Radius(best.hi) + 1) continue;
-    if (coarse[minima[i]] - coarse_min > 0.1 * (coarse_max - coarse_min)) {
+    if (coarse.loss[minima[i]] - coarse.min > 0.1 * (coarse.max - coarse.min)) {
       break;
     }
-    const Minimum other = refine(t.coarse_nodes[minima[i]]);  // same gain
+    const Minimum other =
+        refinement.Refine(t.coarse_nodes[minima[i]]);  // same gain
     if (other.corrected < best.corrected) best = other;
     break;
   }
@@ -595,13 +654,14 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
                       std::abs(best.radius - gain_radius) > 0.1;
        ++round) {
     gain_radius = best.radius;
-    equalise_gain(gain_radius);
-    evals.assign(t.num_nodes, NodeEval());
-    best = refine(NearestNode(gain_radius));
+    refinement.EqualiseGain(gain_radius);
+    refinement.ResetEvaluations();
+    best = refinement.Refine(refinement.NearestNode(gain_radius));
   }
   // Final values with the final noise estimate.
-  const double sigma2 = current_sigma2();
-  best = minimise(best.lo, best.hi, sigma2);
+  const double sigma2 = refinement.CurrentSigma2();
+  best = refinement.Minimise(best.lo, best.hi, sigma2);
+  const double inv_m = 1.0 / t.num_interior;
 
   // In focus unless the data say otherwise. Blurs near focus change the
   // kernels little, so the loss is flat there (exactly flat inside the
@@ -613,8 +673,9 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
   // D = |h_l - h0_l|^2 + |h_r - h0_r|^2.
   if (best.radius != 0 && std::isfinite(sigma2) && sigma2 > 0) {
     const int zero = t.half_nodes;
-    evaluate(zero);
-    const double zero_corrected = raw_loss(zero) - sigma2 * t.noise_gain[zero];
+    refinement.Evaluate(zero);
+    const double zero_corrected =
+        refinement.RawLoss(zero) - sigma2 * t.noise_gain[zero];
     const double pos = best.radius / t.step + t.half_nodes;
     const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
     const double s = pos - n0;
@@ -631,13 +692,14 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
     if (zero_corrected - best.corrected <= threshold) {
       best.radius = 0;
       best.corrected = zero_corrected;
-      best.raw = raw_loss(zero);
+      best.raw = refinement.RawLoss(zero);
     }
   }
 
   {
     // Signal power of the interior: gain-equalised variances minus noise.
-    const cv::Mat il = gl(t.interior), ir = gr(t.interior);
+    const cv::Mat il = refinement.Left()(t.interior),
+                  ir = refinement.Right()(t.interior);
     cv::Scalar ml, sl, mr, sr;
     cv::meanStdDev(il, ml, sl);
     cv::meanStdDev(ir, mr, sr);
@@ -661,20 +723,21 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
   for (const int side : {-1, 1}) {
     const int n = static_cast<int>(std::round(node_pos)) + side * offset_nodes;
     if (n < 0 || n >= t.num_nodes) continue;
-    evaluate(n);
-    rise =
-        std::min(rise, raw_loss(n) - sigma2 * t.noise_gain[n] - best.corrected);
+    refinement.Evaluate(n);
+    rise = std::min(
+        rise,
+        refinement.RawLoss(n) - sigma2 * t.noise_gain[n] - best.corrected);
   }
   // Sign ambiguity: the best coarse loss on the other sign, against the
   // coarse loss at the estimate.
   if (best.radius != 0) {
     double opposite = kInf;
     double here = kInf;
-    for (int i = 0; i < num_coarse; ++i) {
+    for (size_t i = 0; i < coarse.loss.size(); ++i) {
       const double r = t.Radius(t.coarse_nodes[i]);
-      if (r * best.radius < 0) opposite = std::min(opposite, coarse[i]);
+      if (r * best.radius < 0) opposite = std::min(opposite, coarse.loss[i]);
       if (std::abs(r - best.radius) <= 0.5 * options.coarse_step_px + 1e-9) {
-        here = std::min(here, coarse[i]);
+        here = std::min(here, coarse.loss[i]);
       }
     }
     result.opposite_sign_loss = opposite;

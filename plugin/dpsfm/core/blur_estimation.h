@@ -158,6 +158,12 @@ class PatchBlurEstimator {
 
  private:
   struct Tables;
+  struct CoarseCurve;
+  class Refinement;
+  // The coarse global search on the gain-equalised views.
+  CoarseCurve CoarseSearch(const cv::Mat& gl,
+                           const cv::Mat& gr,
+                           double sigma2_hp) const;
   std::unique_ptr<const Tables> tables_;
 };
 

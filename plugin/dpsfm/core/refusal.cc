@@ -31,8 +31,9 @@ PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views) {
     }
   }
   if (!rejections.empty()) {
-    account.rejections = CountsToString(std::vector<std::pair<std::string, int>>(
-        rejections.begin(), rejections.end()));
+    account.rejections =
+        CountsToString(std::vector<std::pair<std::string, int>>(
+            rejections.begin(), rejections.end()));
   }
   const int weak = rejections[kTextureTooWeak];
   if (weak > 0 && weak >= 0.5 * account.tried) {
@@ -64,17 +65,13 @@ std::string PatchAccount::TypicalCauses() const {
   return s.str();
 }
 
-std::string UndeterminedScaleReason(double scale,
-                                    double ci_low,
-                                    double ci_high,
-                                    double width,
-                                    double limit) {
+std::string UndeterminedScaleReason(
+    double scale, double ci_low, double ci_high, double width, double limit) {
   std::ostringstream s;
-  s << "the data do not determine the scale: its bootstrap interval ["
-    << ci_low << ", " << ci_high << "] spans " << std::fixed
-    << std::setprecision(0) << 100 * width << " % of the estimate "
-    << std::setprecision(4) << scale << " (limit " << std::setprecision(0)
-    << 100 * limit << " %)";
+  s << "the data do not determine the scale: its bootstrap interval [" << ci_low
+    << ", " << ci_high << "] spans " << std::fixed << std::setprecision(0)
+    << 100 * width << " % of the estimate " << std::setprecision(4) << scale
+    << " (limit " << std::setprecision(0) << 100 * limit << " %)";
   return s.str();
 }
 
@@ -104,8 +101,8 @@ std::string UnknownProfileReason(const std::string& fit_reason,
   // The whole frame's fit in short (the report has every band's).
   s << "the sensor's DP profile is unknown: "
     << (fit_reason.empty() ? "" : "self-calibration: " + fit_reason + "; ")
-    << "profiles consistent with the data give scales from " << ci_low
-    << " to " << ci_high << " (estimate " << scale
+    << "profiles consistent with the data give scales from " << ci_low << " to "
+    << ci_high << " (estimate " << scale
     << " with the profile used). Calibrate the camera's DP profile "
        "once with colmap dp_psf_calibrator (a textured plane at two or "
        "more distances) and run with --DPScaleEstimator.psf_model "

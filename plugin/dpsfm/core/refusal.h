@@ -41,11 +41,8 @@ PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views);
 
 // Why the interval leaves the scale open (the bootstrap interval spans
 // `width` of the estimate, over the limit).
-std::string UndeterminedScaleReason(double scale,
-                                    double ci_low,
-                                    double ci_high,
-                                    double width,
-                                    double limit);
+std::string UndeterminedScaleReason(
+    double scale, double ci_low, double ci_high, double width, double limit);
 
 // The DP profile's own uncertainty leaves the scale open: a calibrated
 // profile's (+-relative_uncertainty), or, with self-calibration, an unknown
