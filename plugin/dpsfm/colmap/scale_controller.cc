@@ -429,13 +429,15 @@ ScaleEstimationOutcome RunScaleEstimation(
                     : "")
             << ")";
 
-  // Step 5: the view loop and the estimate.
+  // Step 5: the view loop and the estimate. One thread asked for means no
+  // reading thread either.
   DPScaleEstimator estimator(core_options, psf_field);
-  DPScaleController controller(options.view_budget,
-                               &reader,
-                               &estimator,
-                               !options.report_path.empty(),
-                               options.prefetch_views);
+  DPScaleController controller(
+      options.view_budget,
+      &reader,
+      &estimator,
+      !options.report_path.empty(),
+      options.num_threads == 1 ? 0 : options.prefetch_views);
   ScaleRun run = controller.Run();
   const DPScaleResult& result = run.result;
   RunTimings& timings = run.timings;

@@ -73,8 +73,9 @@ struct DPScaleEstimatorOptions {
   // Threads of the COLMAP layer's own loops (-1: all cores); the command
   // sets it from --DPScaleEstimator.num_threads.
   int num_threads = -1;
-  // Views read ahead of the blur search (0: read each when it is needed).
-  // Each one waiting costs a view's frames and depth map in memory.
+  // Views read ahead of the blur search on as many worker threads (0: read
+  // each when it is needed; num_threads 1 reads in place too). Each one
+  // waiting costs a view's frames and depth map in memory.
   int prefetch_views = 1;
 
   // False at the first invalid option; OptionCheckFailure() (core/check.h)

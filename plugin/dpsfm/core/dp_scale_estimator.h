@@ -81,9 +81,9 @@ struct DPScaleOptions {
   // different subset and disagreed with the linear stage by up to 0.8 % on
   // the example scenes (worse than linear on average); with all selected
   // patches it is better than linear on average. 16 MB hold ~680 crops of
-  // 45 px (1200x800 frames) or ~57 of 153 px (halved DSLR frames), counted
-  // with the blur stage's border (self-calibration's wider crops take
-  // ~1.6x that).
+  // 45 px (1200x800 frames) or ~57 of 153 px (DSLR frames at the
+  // reference's resize 0.5), counted with the blur stage's border
+  // (self-calibration's wider crops take ~1.6x that).
   int max_stored_patches_per_view = 256;
   double max_stored_megabytes_per_view = 16;
   // A patch needs depth on this fraction of its pixels (dense mode)...
