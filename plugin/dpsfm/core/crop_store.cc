@@ -4,6 +4,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "dpsfm/core/patch_grid.h"
+
 namespace dpsfm {
 namespace {
 
@@ -42,12 +44,8 @@ std::vector<StoredCrop> StoreCrops(
   }
   for (const auto& sample_interior : sample_interiors) {
     const cv::Rect& interior = sample_interior.second;
-    // In padded coordinates the interior moved by pad: its crop starts at
-    // interior - border.
-    const cv::Rect r(interior.x - border,
-                     interior.y - border,
-                     interior.width + 2 * store_border,
-                     interior.height + 2 * store_border);
+    // In padded coordinates the interior moved by pad.
+    const cv::Rect r = PatchCrop(interior + cv::Point(pad, pad), store_border);
     StoredCrop crop;
     crop.sample = sample_interior.first;
     crop.left = ToU16(padded_left(r));

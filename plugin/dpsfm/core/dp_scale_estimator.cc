@@ -287,7 +287,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     for (int k = 0; k < num; ++k) {
       if (!search[k]) continue;
       const cv::Rect& interior = candidates[k].interior;
-      const cv::Rect r(interior.x - border, interior.y - border, crop, crop);
+      const cv::Rect r = PatchCrop(interior, border);
       try {
         estimates[k] = estimators[band_of(interior)]->Estimate(
             gray_left(r).clone(), gray_right(r).clone());

@@ -36,6 +36,15 @@ struct PatchCandidate {
   std::string reject;  // why it was dropped before screening; "" = kept
 };
 
+// The interior with `border` px on every side: the crop the screening, the
+// blur search and the crop store read around a patch.
+inline cv::Rect PatchCrop(const cv::Rect& interior, int border) {
+  return cv::Rect(interior.x - border,
+                  interior.y - border,
+                  interior.width + 2 * border,
+                  interior.height + 2 * border);
+}
+
 // Interiors of `patch` px every `stride` px, each with `border` px of frame
 // around it, over a working frame of `size`.
 std::vector<PatchCandidate> MakePatchGrid(const cv::Size& size,

@@ -36,11 +36,7 @@ ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
 #endif
   for (int k = 0; k < num; ++k) {
     if (!candidates[k].reject.empty()) continue;
-    const cv::Rect& interior = candidates[k].interior;
-    const cv::Rect r(interior.x - crop_border,
-                     interior.y - crop_border,
-                     interior.width + 2 * crop_border,
-                     interior.height + 2 * crop_border);
+    const cv::Rect r = PatchCrop(candidates[k].interior, crop_border);
     PatchBlurEstimate& e = (*estimates)[k];
     e.texture = screening.Texture(r);
     e.noise_sigma = screening.NoiseSigma(r);
