@@ -7,6 +7,18 @@
 #include "colmap/util/timer.h"
 
 namespace dpsfm {
+namespace {
+
+ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader, int index) {
+  colmap::Timer timer;
+  timer.Start();
+  ViewPrefetcher::Read read;
+  read.view = reader->LoadView(index);
+  read.seconds = timer.ElapsedSeconds();
+  return read;
+}
+
+}  // namespace
 
 ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
                                std::vector<int> order,
@@ -33,14 +45,8 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
-  in_flight_.push_back(pool_->AddTask([reader, index]() {
-    colmap::Timer timer;
-    timer.Start();
-    Read read;
-    read.view = reader->LoadView(index);
-    read.seconds = timer.ElapsedSeconds();
-    return read;
-  }));
+  in_flight_.push_back(
+      pool_->AddTask([reader, index]() { return TimedRead(reader, index); }));
 }
 
 ViewPrefetcher::Read ViewPrefetcher::Next() {
@@ -51,8 +57,7 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     if (launched_ >= order_.size()) {
       throw std::out_of_range("no more views to read");
     }
-    read.view = reader_->LoadView(order_[launched_++]);
-    read.seconds = timer.ElapsedSeconds();
+    read = TimedRead(reader_, order_[launched_++]);
   } else {
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
     std::future<Read> next = std::move(in_flight_.front());

@@ -76,11 +76,6 @@ void SetOptionCheckFailure(const std::string& failure);
 void PrefixOptionCheckFailure(const char* field);
 [[noreturn]] void ThrowInvalidOptions(const char* name);
 
-inline bool CheckOption(bool ok, const char* condition) {
-  if (!ok) SetOptionCheckFailure(condition);
-  return ok;
-}
-
 template <typename T>
 bool CheckOptionValue(bool ok, const char* condition, const T& value) {
   if (!ok) {
@@ -94,10 +89,6 @@ bool CheckOptionValue(bool ok, const char* condition, const T& value) {
 }  // namespace internal
 }  // namespace dpsfm
 
-#define DPSFM_CHECK_OPTION(condition)                             \
-  if (!::dpsfm::internal::CheckOption((condition), #condition)) { \
-    return false;                                                 \
-  }
 #define DPSFM_CHECK_OPTION_VALUE(condition, value) \
   if (!::dpsfm::internal::CheckOptionValue(        \
           (condition), #condition, (value))) {     \
