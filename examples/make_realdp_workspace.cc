@@ -8,6 +8,12 @@
 //   dpsfm_make_realdp_workspace --capture_path CAPTURE --output_path OUT
 //       [--true_scale 0.37] [--focal_length_mm 49.57] [--f_number 4]
 //       [--pixel_pitch_um 46.875] [--name scene] [--recorded_focus_m 1.0]
+//       [--linear16 1] [--frames_only 1]
+//
+// --linear16 writes the DP views as 16-bit linear light (the sRGB decoding
+// curve applied to the 8-bit files, as DPRSplit output would be) instead of
+// copying them; --frames_only writes only dp/left and dp/right (calibration
+// captures have no depth).
 //
 // Depth files: 16-bit single channel = millimetres (0 = none); 8-bit RGB(A)
 // = metres x 255 / 10 in the first channel (the DP119 "box" scenes), at any
@@ -26,6 +32,7 @@
 
 #include "colmap/mvs/depth_map.h"
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/core/encoding.h"
 
 namespace fs = boost::filesystem;
 namespace po = boost::program_options;
@@ -71,6 +78,7 @@ int main(int argc, char** argv) {
   std::string capture, output, name = "view";
   double true_scale = 0.37, focal_mm = 49.57, f_number = 4, pitch_um = 46.875;
   double recorded_focus_m = 0;
+  bool linear16 = false, frames_only = false;
   po::options_description desc("dpsfm_make_realdp_workspace");
   desc.add_options()("capture_path",
                      po::value(&capture)->required(),
@@ -83,7 +91,13 @@ int main(int argc, char** argv) {
       "name", po::value(&name), "image name (without extension)")(
       "recorded_focus_m",
       po::value(&recorded_focus_m),
-      "focus distance the camera recorded (lens.csv; 0: none)");
+      "focus distance the camera recorded (lens.csv; 0: none)")(
+      "linear16",
+      po::value(&linear16),
+      "write the DP views as 16-bit linear light (the inverse sRGB of the "
+      "8-bit files)")("frames_only",
+                      po::value(&frames_only),
+                      "write only dp/left and dp/right");
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -98,18 +112,34 @@ int main(int argc, char** argv) {
       throw std::runtime_error("cannot read l.png / r.png of equal size in " +
                                capture);
     }
+    const std::string image_name = name + ".png";
+    fs::create_directories(out / "dp/left");
+    fs::create_directories(out / "dp/right");
+    auto write_view = [&](const cv::Mat& view, const char* side) {
+      const std::string path = (out / "dp" / side / image_name).string();
+      if (!linear16) {
+        cv::imwrite(path, view);
+        return;
+      }
+      if (view.depth() != CV_8U) {
+        throw std::runtime_error("--linear16 needs 8-bit sRGB views");
+      }
+      cv::Mat light;
+      view.convertTo(light, CV_32F, 1.0 / 255);
+      dpsfm::DecodeToLinearLight(dpsfm::DPEncoding::kSrgb, &light);
+      cv::Mat u16;
+      light.convertTo(u16, CV_16U, 65535.0);
+      cv::imwrite(path, u16);
+    };
+    write_view(left, "left");
+    write_view(right, "right");
+    if (frames_only) return 0;
     const cv::Mat metres =
         ReadDepthMetres((in / "d.png").string(), left.size());
-    const std::string image_name = name + ".png";
-    for (const char* dir : {"dense/sparse",
-                            "dense/images",
-                            "dense/stereo/depth_maps",
-                            "dp/left",
-                            "dp/right"}) {
+    for (const char* dir :
+         {"dense/sparse", "dense/images", "dense/stereo/depth_maps"}) {
       fs::create_directories(out / dir);
     }
-    cv::imwrite((out / "dp/left" / image_name).string(), left);
-    cv::imwrite((out / "dp/right" / image_name).string(), right);
     cv::Mat sum;
     cv::addWeighted(left, 0.5, right, 0.5, 0, sum);
     cv::imwrite((out / "dense/images" / image_name).string(), sum);

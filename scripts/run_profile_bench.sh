@@ -57,7 +57,8 @@ for entry in "${profiles[@]}"; do
     calibrated_args=()
     if "$colmap" dp_psf_calibrator --dp_image_path "$dir/calibration/dp" \
         --targets_path "$dir/calibration/targets.csv" \
-        --output_path "$dir/camera.dpsf" >"$dir.calibrate.log" 2>&1; then
+        --output_path "$dir/camera.dpsf" \
+        --DPPsfCalibrator.transfer_uncertainty 0 >"$dir.calibrate.log" 2>&1; then
       calibrated_args=(--DPScaleEstimator.psf_path "$dir/camera.dpsf")
     fi
     for mode in "${modes[@]}"; do

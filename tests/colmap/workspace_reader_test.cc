@@ -138,6 +138,37 @@ std::string PngWithExif(const std::string& tiff) {
   return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
 }
 
+// An image encoded as PNG with one more chunk (type, data) after IHDR, its
+// CRC-32 computed bit by bit (PNG's polynomial 0xEDB88320).
+std::string PngWithChunk(const cv::Mat& image,
+                         const std::string& type,
+                         const std::string& data) {
+  std::vector<uchar> png;
+  cv::imencode(".png", image, png);
+  const std::string bytes(png.begin(), png.end());
+  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
+  std::string chunk;
+  const uint32_t n = static_cast<uint32_t>(data.size());
+  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
+  uint32_t crc = 0xFFFFFFFFu;
+  for (const char c : type + data) {
+    crc ^= static_cast<uint8_t>(c);
+    for (int k = 0; k < 8; ++k)
+      crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  chunk += type + data;
+  for (int i = 3; i >= 0; --i)
+    chunk.push_back(static_cast<char>(crc >> (8 * i)));
+  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
+}
+
+std::string BigEndian(uint32_t v) {
+  std::string s;
+  for (int i = 3; i >= 0; --i) s.push_back(static_cast<char>(v >> (8 * i)));
+  return s;
+}
+
 TEST(ExifLens, ReadsExactRationals) {
   TempDir dir;
   const std::string path = dir / "IMG_1.JPG";
@@ -182,8 +213,25 @@ TEST(ExifLens, CameraLensAndFocusDistance) {
       EXPECT_DOUBLE_EQ(exif.f_number, 4);
       EXPECT_DOUBLE_EQ(exif.focal_length_mm, 50);
       EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 960);
+      // The window [940, 980] mm is +-20 mm around 960: 4 / 192.
+      EXPECT_DOUBLE_EQ(exif.focus_bracket, 4.0 / 192);
       EXPECT_EQ(exif.focus_source, "Canon maker note");
     }
+    // A window of a factor 3 is still a distance (its middle, +-50 %)...
+    shot[19] = 150;
+    shot[20] = 50;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    ExifLens wide = ParseExifLens(tiff.Bytes());
+    EXPECT_DOUBLE_EQ(wide.focus_distance_mm, 1000);
+    EXPECT_DOUBLE_EQ(wide.focus_bracket, 0.5);
+    // ...a wider one is not.
+    shot[19] = 151;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    wide = ParseExifLens(tiff.Bytes());
+    EXPECT_EQ(wide.focus_source, "SubjectDistance");
+    EXPECT_EQ(wide.focus_bracket, 0);
+    shot[19] = 98;
+    shot[20] = 94;
     // An open window (infinity as upper) is no distance: SubjectDistance.
     shot[19] = 65535;
     tiff.maker_note = {tiff.Shorts(0x0004, shot)};
@@ -380,6 +428,90 @@ TEST(LoadDPFrames, SixteenBitSumFrameAndSwap) {
   EXPECT_THROW(LoadDPFrames(paths, false), InputError);
 }
 
+// What a file says about its encoding: PNG sRGB / iCCP / gAMA chunks and
+// EXIF ColorSpace; nothing said = kAuto.
+TEST(DeclaredEncoding, ChunksAndExif) {
+  const cv::Mat image(4, 4, CV_16UC1, cv::Scalar(1000));
+  auto declared = [](const std::string& bytes) {
+    return ParseDeclaredEncoding(bytes).encoding;
+  };
+  EXPECT_EQ(declared(PngWithChunk(image, "tEXt", std::string("a\0b", 3))),
+            DPEncoding::kAuto);
+  EXPECT_EQ(declared(PngWithChunk(image, "sRGB", std::string(1, '\0'))),
+            DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(100000))),
+            DPEncoding::kLinear);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(45455))),
+            DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(70000))),
+            DPEncoding::kAuto);
+  EXPECT_EQ(declared(PngWithChunk(
+                image, "iCCP", std::string("Linear Rec2020\0\0x", 17))),
+            DPEncoding::kLinear);
+  EXPECT_EQ(
+      declared(PngWithChunk(image, "iCCP", std::string("Display P3\0\0x", 13))),
+      DPEncoding::kSrgb);
+  TiffWriter tiff(false);
+  tiff.exif = {tiff.Shorts(0xA001, {1})};
+  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kSrgb);
+  EXPECT_EQ(declared(JpegWithExif(tiff.Bytes())), DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithExif(tiff.Bytes())), DPEncoding::kSrgb);
+  tiff.exif = {tiff.Shorts(0xA001, {0xFFFF})};  // uncalibrated
+  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kAuto);
+}
+
+// Frames reach the core in linear light: 8-bit code 128 is sRGB by default
+// (0.2158605 by the standard's curve), 16-bit files are linear, a gAMA 1.0
+// chunk makes an 8-bit file linear, the flag overrides the file, a sum
+// frame is subtracted in linear light, and two views that encode light
+// differently are refused.
+TEST(LoadDPFrames, BroughtToLinearLight) {
+  TempDir dir;
+  const cv::Mat grey8(6, 6, CV_8UC1, cv::Scalar(128));
+  cv::imwrite(dir / "l8.png", grey8);
+  cv::imwrite(dir / "r8.png", grey8);
+  DPFramePaths paths;
+  paths.left = dir / "l8.png";
+  paths.right = dir / "r8.png";
+  DPFrames frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kSrgb);
+  EXPECT_EQ(frames.encoding_reason, "8-bit file");
+  EXPECT_EQ(frames.bits, 8);
+  EXPECT_FALSE(frames.lossy);
+  EXPECT_NEAR(frames.left.at<float>(2, 2), 0.2158605, 1e-6);
+  frames = LoadDPFrames(paths, false, DPEncoding::kLinear);
+  EXPECT_NEAR(frames.right.at<float>(2, 2), 128 / 255.0, 1e-6);
+  EXPECT_EQ(frames.encoding_reason, "--DPScaleEstimator.dp_encoding");
+
+  const cv::Mat grey16(6, 6, CV_16UC1, cv::Scalar(32768));
+  cv::imwrite(dir / "l16.png", grey16);
+  cv::imwrite(dir / "r16.png", grey16);
+  paths.left = dir / "l16.png";
+  paths.right = dir / "r16.png";
+  frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kLinear);
+  EXPECT_NEAR(frames.left.at<float>(0, 0), 32768 / 65535.0, 1e-6);
+
+  WriteTextFile(dir / "g8.png", PngWithChunk(grey8, "gAMA", BigEndian(100000)));
+  paths.left = dir / "g8.png";
+  paths.right = dir / "r8.png";
+  EXPECT_THROW(LoadDPFrames(paths, false), InputError);  // linear vs sRGB
+  paths.right = dir / "g8.png";
+  frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kLinear);
+  EXPECT_EQ(frames.encoding_reason, "PNG gAMA 1");
+  EXPECT_NEAR(frames.left.at<float>(1, 1), 128 / 255.0, 1e-6);
+
+  // A + B = code 200, A = code 128, both sRGB: B = lin(200) - lin(128)
+  // = 0.5775804 - 0.2158605.
+  cv::imwrite(dir / "sum8.png", cv::Mat(6, 6, CV_8UC1, cv::Scalar(200)));
+  DPFramePaths sum_paths;
+  sum_paths.left = dir / "l8.png";
+  sum_paths.sum = dir / "sum8.png";
+  frames = LoadDPFrames(sum_paths, false);
+  EXPECT_NEAR(frames.right.at<float>(3, 3), 0.5775804 - 0.2158605, 1e-6);
+}
+
 TEST(LoadDPFrames, EightBitColour) {
   TempDir dir;
   cv::imwrite(dir / "l.jpg", cv::Mat(8, 8, CV_8UC3, cv::Scalar(255, 0, 51)));
@@ -390,6 +522,8 @@ TEST(LoadDPFrames, EightBitColour) {
   const DPFrames frames = LoadDPFrames(paths, false);
   ASSERT_EQ(frames.left.type(), CV_32FC3);
   EXPECT_NEAR(frames.right.at<cv::Vec3f>(2, 2)[1], 1.0, 1e-6);
+  EXPECT_TRUE(frames.lossy);
+  EXPECT_EQ(frames.encoding, DPEncoding::kSrgb);
 }
 
 // Sparse mode with DP frames of half the model's size: a triangulated

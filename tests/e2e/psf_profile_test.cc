@@ -95,7 +95,11 @@ CommandResult RunCalibrator(const std::string& root,
                      "--DPPsfCalibrator.stride",
                      "30",
                      "--DPPsfCalibrator.max_radius_px",
-                     "12"});
+                     "12",
+                     // A simulated camera: its scenes come from the
+                     // renderer of its calibration captures.
+                     "--DPPsfCalibrator.transfer_uncertainty",
+                     "0"});
 }
 
 double CentroidOf(double exponent) {

@@ -1,12 +1,15 @@
 #include "dpsfm/colmap/dp_images.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
 #include <boost/filesystem.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "dpsfm/colmap/exif.h"
 
 namespace dpsfm {
 namespace {
@@ -83,7 +86,7 @@ DPFramePaths DPImageIndex::Find(const std::string& image_name) const {
   return paths;
 }
 
-cv::Mat ReadImageAsFloat(const std::string& path) {
+DPFrameFile ReadDPFrameFile(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
   }
@@ -93,17 +96,23 @@ cv::Mat ReadImageAsFloat(const std::string& path) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
   }
+  DPFrameFile file;
   double unit;
   switch (raw.depth()) {
     case CV_8U:
       unit = 255.0;
+      file.bits = 8;
       break;
     case CV_16U:
       unit = 65535.0;
+      file.bits = 16;
       break;
     default:
       throw InputError("DP view is neither 8- nor 16-bit: " + path);
   }
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(c));
+  file.lossy = extension == ".jpg" || extension == ".jpeg";
   cv::Mat image;
   switch (raw.channels()) {
     case 1:
@@ -120,30 +129,67 @@ cv::Mat ReadImageAsFloat(const std::string& path) {
     default:
       throw InputError("DP view has an unsupported channel count: " + path);
   }
-  cv::Mat result;
   image.convertTo(
-      result, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
-  return result;
+      file.values, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
+  return file;
 }
 
-DPFrames LoadDPFrames(const DPFramePaths& paths, bool swap_views) {
-  DPFrames frames;
-  frames.left = ReadImageAsFloat(paths.left);
-  const std::string& other = paths.right.empty() ? paths.sum : paths.right;
-  cv::Mat second = ReadImageAsFloat(other);
-  if (second.size() != frames.left.size() ||
-      second.channels() != frames.left.channels()) {
+DPEncoding DecideEncoding(DPEncoding requested,
+                          const std::string& path,
+                          int bits,
+                          std::string* reason) {
+  if (requested != DPEncoding::kAuto) {
+    *reason = "--DPScaleEstimator.dp_encoding";
+    return requested;
+  }
+  const DeclaredEncoding declared = ReadDeclaredEncoding(path);
+  if (declared.encoding != DPEncoding::kAuto) {
+    *reason = declared.evidence;
+    return declared.encoding;
+  }
+  *reason = std::to_string(bits) + "-bit file";
+  return bits <= 8 ? DPEncoding::kSrgb : DPEncoding::kLinear;
+}
+
+DPFrames LoadDPFrames(const DPFramePaths& paths,
+                      bool swap_views,
+                      DPEncoding encoding) {
+  const std::string& other_path = paths.right.empty() ? paths.sum : paths.right;
+  DPFrameFile first = ReadDPFrameFile(paths.left);
+  DPFrameFile second = ReadDPFrameFile(other_path);
+  if (second.values.size() != first.values.size() ||
+      second.values.channels() != first.values.channels()) {
     std::ostringstream message;
     message << "DP views differ in size or channels: " << paths.left << " is "
-            << frames.left.cols << "x" << frames.left.rows << "x"
-            << frames.left.channels() << ", " << other << " is " << second.cols
-            << "x" << second.rows << "x" << second.channels();
+            << first.values.cols << "x" << first.values.rows << "x"
+            << first.values.channels() << ", " << other_path << " is "
+            << second.values.cols << "x" << second.values.rows << "x"
+            << second.values.channels();
     throw InputError(message.str());
   }
+  DPFrames frames;
+  std::string other_reason;
+  frames.encoding =
+      DecideEncoding(encoding, paths.left, first.bits, &frames.encoding_reason);
+  const DPEncoding other_encoding =
+      DecideEncoding(encoding, other_path, second.bits, &other_reason);
+  if (other_encoding != frames.encoding) {
+    throw InputError("DP views encode light differently: " + paths.left +
+                     " is " + DPEncodingName(frames.encoding) + " (" +
+                     frames.encoding_reason + "), " + other_path + " is " +
+                     DPEncodingName(other_encoding) + " (" + other_reason +
+                     "); export both views the same way, or set "
+                     "--DPScaleEstimator.dp_encoding");
+  }
+  frames.bits = std::min(first.bits, second.bits);
+  frames.lossy = first.lossy || second.lossy;
+  DecodeToLinearLight(frames.encoding, &first.values);
+  DecodeToLinearLight(frames.encoding, &second.values);
+  frames.left = first.values;
   if (paths.right.empty()) {
     // right = sum - left. A "sum" frame darker than the left view means the
     // files are not A and A+B.
-    frames.right = second - frames.left;
+    frames.right = second.values - frames.left;
     const double mean_right = cv::mean(frames.right)[0];
     if (mean_right < 0.05 * cv::mean(frames.left)[0]) {
       throw InputError("sum frame " + paths.sum +
@@ -152,7 +198,7 @@ DPFrames LoadDPFrames(const DPFramePaths& paths, bool swap_views) {
     }
     cv::max(frames.right, 0.0, frames.right);
   } else {
-    frames.right = second;
+    frames.right = second.values;
   }
   if (swap_views) {
     std::swap(frames.left, frames.right);

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "dpsfm/colmap/workspace.h"
+#include "dpsfm/core/encoding.h"
 
 namespace dpsfm {
 
@@ -50,20 +51,46 @@ class DPImageIndex {
   bool has_right_ = false;
 };
 
-// Reads an 8- or 16-bit grey or colour PNG/TIFF/JPEG as CV_32FC1 or CV_32FC3
-// in [0, 1] (16-bit divided by 65535, 8-bit by 255). Throws InputError for a
-// missing, unreadable or unsupported file.
-cv::Mat ReadImageAsFloat(const std::string& path);
+// One DP frame file as encoded: CV_32FC1 or CV_32FC3 in [0, 1] (16-bit
+// divided by 65535, 8-bit by 255). Throws InputError for a missing,
+// unreadable or unsupported file.
+struct DPFrameFile {
+  cv::Mat values;
+  int bits = 0;        // 8 or 16 per channel
+  bool lossy = false;  // JPEG
+};
+DPFrameFile ReadDPFrameFile(const std::string& path);
+
+// How a frame's values encode light (docs/user-guide.md, "DP frames"): the
+// requested encoding when it is not kAuto; otherwise what the file declares
+// (ReadDeclaredEncoding: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace sRGB),
+// else its bit depth: 8-bit files are sRGB (exports, phone captures),
+// 16-bit ones linear (DPRSplit output, raw). `reason` says which rule
+// decided.
+DPEncoding DecideEncoding(DPEncoding requested,
+                          const std::string& path,
+                          int bits,
+                          std::string* reason);
 
 struct DPFrames {
+  // Linear light, [0, 1].
   cv::Mat left;
   cv::Mat right;
+  // What the files were, and why.
+  DPEncoding encoding = DPEncoding::kLinear;
+  std::string encoding_reason;
+  int bits = 0;
+  bool lossy = false;
 };
 
-// Loads one image's DP views. With a sum frame, right = sum - left (Canon's
-// DPRSplit gives A and A+B in the same units). `swap_views` exchanges left and
-// right for sensors with the opposite naming.
-DPFrames LoadDPFrames(const DPFramePaths& paths, bool swap_views);
+// Loads one image's DP views and brings them to linear light. With a sum
+// frame, right = sum - left in linear light (Canon's DPRSplit gives A and
+// A+B in the same units). `swap_views` exchanges left and right for sensors
+// with the opposite naming. Throws InputError when the two files differ in
+// size, channels or encoding.
+DPFrames LoadDPFrames(const DPFramePaths& paths,
+                      bool swap_views,
+                      DPEncoding encoding = DPEncoding::kAuto);
 
 // The integer factor k with frame size = camera size / k (phones give half
 // size DP frames), or throws InputError naming the image and both sizes.

@@ -1,9 +1,11 @@
 #include "dpsfm/colmap/exif.h"
 
+#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "dpsfm/colmap/text.h"
 
@@ -23,6 +25,7 @@ enum Tag : uint16_t {
   kFocalLength = 0x920A,
   kMakerNote = 0x927C,
   kLensModel = 0xA434,
+  kColorSpace = 0xA001,
   kCanonShotInfo = 0x0004,
 };
 
@@ -167,7 +170,9 @@ class Tiff {
 // [20] lower, in cm, 65535 for infinity and 0 when unknown (the layout
 // ExifTool and Exiv2 document). Canon maker notes are a plain IFD whose
 // offsets count from the TIFF header, in the TIFF's byte order.
-double CanonFocusDistanceMm(const Tiff& tiff, uint32_t exif_ifd) {
+double CanonFocusDistanceMm(const Tiff& tiff,
+                            uint32_t exif_ifd,
+                            double* bracket) {
   const Tiff::Entry note = tiff.Find(exif_ifd, kMakerNote);
   if (!note.ok) return 0;
   const Tiff::Entry shot =
@@ -176,8 +181,10 @@ double CanonFocusDistanceMm(const Tiff& tiff, uint32_t exif_ifd) {
   const double upper = tiff.U16(shot.value_offset + 2 * 19);
   const double lower = tiff.U16(shot.value_offset + 2 * 20);
   if (lower <= 0 || upper <= 0 || upper >= 65535 || lower >= 65535) return 0;
-  // A wide window (a lens reporting coarse steps) is not a distance.
-  if (upper < lower || upper > 1.5 * lower) return 0;
+  // A window is a distance as uncertain as its half-width; one wider than
+  // a factor 3 (a lens reporting coarse steps) says too little to use.
+  if (upper < lower || upper > 3 * lower) return 0;
+  *bracket = (upper - lower) / (upper + lower);
   return 10.0 * 0.5 * (upper + lower);
 }
 
@@ -196,7 +203,8 @@ ExifLens ParseTiff(const std::string& bytes) {
   exif.lens = tiff.Ascii(exif_ifd, kLensModel);
 
   if (make.compare(0, 5, "Canon") == 0) {
-    exif.focus_distance_mm = CanonFocusDistanceMm(tiff, exif_ifd);
+    exif.focus_distance_mm =
+        CanonFocusDistanceMm(tiff, exif_ifd, &exif.focus_bracket);
     if (exif.focus_distance_mm > 0) exif.focus_source = "Canon maker note";
   }
   if (exif.focus_distance_mm <= 0) {
@@ -255,7 +263,98 @@ std::string PngExif(const std::string& s) {
   return "";
 }
 
+// The file's first kMaxBytes, empty if it cannot be read (no EXIF then).
+std::string ReadHead(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return "";
+  std::string bytes(static_cast<size_t>(kMaxBytes), '\0');
+  file.read(&bytes[0], kMaxBytes);
+  bytes.resize(static_cast<size_t>(file.gcount()));
+  return bytes;
+}
+
+// EXIF ColorSpace (1 = sRGB) of a TIFF block, 0 if absent.
+int ExifColorSpace(const std::string& tiff_bytes) {
+  const Tiff tiff(tiff_bytes);
+  if (!tiff.Valid()) return 0;
+  const uint32_t exif_ifd = tiff.Offset(tiff.FirstIfd(), kExifIfd);
+  if (exif_ifd == 0) return 0;
+  const Tiff::Entry e = tiff.Find(exif_ifd, kColorSpace);
+  if (!e.ok || e.type != kShort) return 0;
+  return tiff.U16(e.value_offset);
+}
+
+DeclaredEncoding FromExifColorSpace(const std::string& tiff_bytes) {
+  DeclaredEncoding declared;
+  if (ExifColorSpace(tiff_bytes) == 1) {
+    declared.encoding = DPEncoding::kSrgb;
+    declared.evidence = "EXIF ColorSpace sRGB";
+  }
+  return declared;
+}
+
+// The PNG chunks before the pixels that name a transfer curve.
+DeclaredEncoding PngDeclaredEncoding(const std::string& s) {
+  size_t at = 8;
+  while (at + 12 <= s.size()) {
+    const uint32_t length = BigEndian32(s, at);
+    if (length > s.size() - at - 12) break;
+    const std::string type = s.substr(at + 4, 4);
+    const std::string data = s.substr(at + 8, length);
+    DeclaredEncoding declared;
+    if (type == "sRGB") {
+      declared.encoding = DPEncoding::kSrgb;
+      declared.evidence = "PNG sRGB chunk";
+      return declared;
+    }
+    if (type == "iCCP") {
+      std::string name = data.substr(0, data.find('\0'));
+      std::string lower = name;
+      for (char& c : lower) c = static_cast<char>(std::tolower(c));
+      declared.encoding = lower.find("linear") != std::string::npos
+                              ? DPEncoding::kLinear
+                              : DPEncoding::kSrgb;
+      declared.evidence = "PNG ICC profile '" + name + "'";
+      return declared;
+    }
+    if (type == "gAMA" && length == 4) {
+      // The file's gamma x 100000: 100000 is linear, 45455 is 1/2.2.
+      const double gamma = BigEndian32(s, at + 8) / 100000.0;
+      if (gamma > 0.9 && gamma < 1.1) {
+        declared.encoding = DPEncoding::kLinear;
+      } else if (gamma > 0.4 && gamma < 0.5) {
+        declared.encoding = DPEncoding::kSrgb;
+      }
+      if (declared.encoding != DPEncoding::kAuto) {
+        std::ostringstream evidence;
+        evidence << "PNG gAMA " << gamma;
+        declared.evidence = evidence.str();
+        return declared;
+      }
+    }
+    if (type == "eXIf") return FromExifColorSpace(data);
+    if (type == "IDAT" || type == "IEND") break;
+    at += 12 + static_cast<size_t>(length);
+  }
+  return DeclaredEncoding();
+}
+
 }  // namespace
+
+DeclaredEncoding ParseDeclaredEncoding(const std::string& bytes) {
+  if (bytes.size() >= 4 && static_cast<unsigned char>(bytes[0]) == 0xFF &&
+      static_cast<unsigned char>(bytes[1]) == 0xD8) {
+    return FromExifColorSpace(JpegExif(bytes));
+  }
+  if (bytes.size() >= 8 && bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0) {
+    return PngDeclaredEncoding(bytes);
+  }
+  return FromExifColorSpace(bytes);
+}
+
+DeclaredEncoding ReadDeclaredEncoding(const std::string& path) {
+  return ParseDeclaredEncoding(ReadHead(path));
+}
 
 ExifLens ParseExifLens(const std::string& bytes) {
   if (bytes.size() >= 4 && static_cast<unsigned char>(bytes[0]) == 0xFF &&
@@ -269,12 +368,7 @@ ExifLens ParseExifLens(const std::string& bytes) {
 }
 
 ExifLens ReadExifLens(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) return ExifLens();
-  std::string bytes(static_cast<size_t>(kMaxBytes), '\0');
-  file.read(&bytes[0], kMaxBytes);
-  bytes.resize(static_cast<size_t>(file.gcount()));
-  return ParseExifLens(bytes);
+  return ParseExifLens(ReadHead(path));
 }
 
 }  // namespace dpsfm

@@ -10,6 +10,8 @@
 
 #include <string>
 
+#include "dpsfm/core/encoding.h"
+
 namespace dpsfm {
 
 struct ExifLens {
@@ -17,10 +19,13 @@ struct ExifLens {
   double f_number = 0;         // FNumber
   std::string camera;          // "Make / Model", empty if absent
   std::string lens;            // LensModel
-  // The recorded focus distance in mm, 0 if none: Canon's maker-note
-  // FocusDistanceLower/Upper (ShotInfo 19/20, cm), their mean when both are
-  // finite and within a factor 1.5, else EXIF SubjectDistance (m).
+  // The recorded focus distance in mm, 0 if none: the middle of Canon's
+  // maker-note window FocusDistanceLower/Upper (ShotInfo 19/20, cm) when
+  // both are finite and within a factor 3, else EXIF SubjectDistance (m).
   double focus_distance_mm = 0;
+  // The window's relative half-width, (upper - lower) / (upper + lower);
+  // 0 for a single distance.
+  double focus_bracket = 0;
   std::string focus_source;  // "Canon maker note", "SubjectDistance"
 };
 
@@ -31,5 +36,17 @@ ExifLens ReadExifLens(const std::string& path);
 
 // The same on bytes already in memory (a whole file), for tests.
 ExifLens ParseExifLens(const std::string& file_bytes);
+
+// What a file itself says about how its values encode light: a PNG's sRGB
+// or iCCP chunk (sRGB; an ICC profile whose name says "linear": linear), its
+// gAMA chunk (1.0: linear; 1/2.2: sRGB), or EXIF ColorSpace = 1 (sRGB) in
+// JPEG, TIFF or a PNG's eXIf chunk. kAuto with empty evidence when it says
+// nothing.
+struct DeclaredEncoding {
+  DPEncoding encoding = DPEncoding::kAuto;
+  std::string evidence;  // e.g. "PNG gAMA 1.0", "EXIF ColorSpace sRGB"
+};
+DeclaredEncoding ReadDeclaredEncoding(const std::string& path);
+DeclaredEncoding ParseDeclaredEncoding(const std::string& file_bytes);
 
 }  // namespace dpsfm

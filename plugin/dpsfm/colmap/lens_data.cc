@@ -149,6 +149,7 @@ ResolvedLens ResolveLens(const std::string& image_name,
     resolved.focus_source = "lens.csv";
   } else if (exif && exif->focus_distance_mm > 0) {
     resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
+    resolved.lens.recorded_focus_bracket = exif->focus_bracket;
     resolved.focus_source = "EXIF " + exif->focus_source;
   }
   resolved.camera = csv_row && !csv_row->camera.empty()

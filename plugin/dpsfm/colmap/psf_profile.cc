@@ -110,7 +110,8 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                                        "right",
                                        "camera",
                                        "lens",
-                                       "uncertainty"};
+                                       "uncertainty",
+                                       "light"};
   while (std::getline(file, line)) {
     ++number;
     const std::string where = path + ":" + std::to_string(number);
@@ -143,6 +144,14 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                      "write one with colmap dp_psf_calibrator)");
   }
   profile.camera = values["camera"];
+  if (values.count("light")) {
+    profile.light = values["light"];
+    if (profile.light != "linear" && profile.light != "srgb") {
+      throw InputError(where("light") +
+                       ": 'light' must be linear or srgb, got '" +
+                       profile.light + "'");
+    }
+  }
   profile.lens = values["lens"];
   if (values.count("uncertainty")) {
     profile.uncertainty =
@@ -321,6 +330,10 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
   if (!profile.camera.empty()) file << "camera " << profile.camera << "\n";
   if (!profile.lens.empty()) file << "lens " << profile.lens << "\n";
   file << std::setprecision(6);
+  if (!profile.light.empty()) {
+    file << "light " << profile.light
+         << "  # the light the kernels were measured in\n";
+  }
   if (profile.uncertainty > 0) {
     file << "uncertainty " << profile.uncertainty
          << "  # relative (95 %) uncertainty of the profile's strength\n";
@@ -372,6 +385,28 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
   if (!file) throw InputError("cannot write DP PSF profile " + path);
 }
 
+void CheckProfileLight(const PsfProfileFile& profile, const std::string& path) {
+  // The estimator reads blur in linear light; a profile measured on
+  // sRGB-encoded values reads it differently (the encoding bends blurred
+  // edges), so it is never applied silently.
+  if (profile.light == "srgb") {
+    throw InputError(
+        "DP PSF profile " + path +
+        " was measured on sRGB-encoded values ('light srgb'), but frames are "
+        "brought to linear light before the blur search; re-run colmap "
+        "dp_psf_calibrator on the calibration captures to measure it in "
+        "linear light");
+  }
+  if (profile.light.empty() && !profile.fit_info.empty()) {
+    throw InputError(
+        "DP PSF profile " + path +
+        " was written by a dp_psf_calibrator that read the frames as "
+        "encoded (it records no 'light'), and the estimator now reads blur "
+        "in linear light; re-run colmap dp_psf_calibrator on the "
+        "calibration captures");
+  }
+}
+
 DPPsfField MakePsfField(const std::string& psf_model,
                         const std::string& psf_path,
                         DPScaleOptions* core) {
@@ -394,6 +429,7 @@ DPPsfField MakePsfField(const std::string& psf_model,
     }
     core->psf_self_calibration = false;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
+    CheckProfileLight(profile, psf_path);
     core->profile_relative_uncertainty = profile.uncertainty;
     // The blur the profile was measured at bounds the automatic search
     // from below (a profile calibrated at 10 px on a camera whose frames

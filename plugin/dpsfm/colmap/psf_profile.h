@@ -27,7 +27,8 @@
 // (docs/cli-contract.md, "DP profiles": published calibrations import as
 // they are). Both may carry
 //   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
-// for the profile library, uncertainty <relative 95 % of the strength>, and
+// for the profile library, uncertainty <relative 95 % of the strength>,
+// light <linear|srgb> (what the kernels were measured in), and
 // fit_<anything> lines (how it was made; kept for people, ignored by the
 // estimator).
 #pragma once
@@ -61,6 +62,12 @@ struct PsfProfileFile {
   // interval): the scale inherits it (DPScaleOptions::
   // profile_relative_uncertainty). 0 = not given.
   double uncertainty = 0;
+  // The light the profile was measured in: "linear" (dp_psf_calibrator
+  // brings frames to linear light, as the estimator does), "srgb" (measured
+  // on sRGB-encoded values), or "" when the file does not say (hand-written
+  // or imported kernels; profiles written before frames were linearised
+  // carry fit_ lines but no `light`, and are refused).
+  std::string light;
   // The fit_* lines, in file order.
   std::vector<std::pair<std::string, std::string>> fit_info;
 
@@ -73,6 +80,11 @@ struct PsfProfileFile {
 PsfProfileFile ReadPsfProfile(const std::string& path);
 // measured_kernels writes <stem>_left.npy and <stem>_right.npy beside it.
 void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
+
+// Throws InputError (naming `path` and the fix) for a profile measured in
+// other than linear light: `light srgb`, or a calibrator's profile that
+// records no light (written before frames were linearised).
+void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
 
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
 // model), "calibrated" (the profile in psf_path: a split profile from

@@ -121,12 +121,33 @@ nlohmann::json MakeReport(const DPScaleResult& result,
         {"agrees", result.focus_agrees},
         {"status", result.focus_check}};
   }
-  // Where the scale itself came from: the DP data, or (the profile having
-  // left it open) the recorded focus distances.
+  // Where the scale itself came from: the DP data, the recorded focus
+  // distances, or both (core/scale_cues.h), and the two cues themselves.
   report["scale_source"] =
-      result.scale_from_recorded_focus ? "recorded_focus" : "dual_pixel";
-  if (result.scale_from_recorded_focus) {
+      result.scale_source == "DP data and recorded focus"
+          ? "dual_pixel+recorded_focus"
+          : (result.scale_from_recorded_focus ? "recorded_focus"
+                                              : "dual_pixel");
+  if (result.scale_from_cues) {
     report["pinned_profile_strength"] = Number(result.pinned_profile_strength);
+  }
+  auto cue = [](const ScaleCue& c) {
+    nlohmann::json j = {{"valid", c.valid}};
+    j["scale"] = c.valid ? Number(c.scale) : nullptr;
+    j["ci"] = c.valid ? Interval(c.ci_low, c.ci_high) : nullptr;
+    return j;
+  };
+  report["cues"] = {
+      {"dual_pixel", cue(result.dp_cue)},
+      {"recorded_focus", cue(result.focus_cue)},
+      {"agreement",
+       result.cue_agreement == CueAgreement::kAgree
+           ? "agree"
+           : (result.cue_agreement == CueAgreement::kDisagree ? "disagree"
+                                                              : "one cue")},
+      {"how", result.combination}};
+  if (result.focus_cue.valid) {
+    report["cues"]["recorded_focus"]["views"] = result.focus_cue.num_views;
   }
   report["lens_geometry_uncertainty"] =
       Number(result.lens_geometry_uncertainty);
@@ -154,6 +175,10 @@ nlohmann::json MakeReport(const DPScaleResult& result,
       entry["recorded_focus_distance_m"] = view.recorded_focus_m;
       entry["scale_from_recorded_focus"] = Number(view.focus_scale);
     }
+    entry["frames"] = {{"encoding", DPEncodingName(view.frames.encoding)},
+                       {"decided_by", view.frames.encoding_reason},
+                       {"bits", view.frames.bits},
+                       {"lossy", view.frames.lossy}};
     entry["focus_distance_model"] = Number(view.focus_distance_model);
     entry["single_view_scale"] = Number(view.single_view_scale);
     entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);

@@ -338,10 +338,41 @@ void LogResult(const DPScaleResult& result) {
       LOG(WARNING) << "Recorded focus: " << result.focus_check;
     }
   }
+  int eight_bit = 0, lossy = 0;
+  std::string encodings;
   for (const DPViewResult& view : result.views) {
     LOG(INFO) << "  " << view.name << ": " << (view.used ? "used" : "not used")
-              << " (" << view.reason << ")";
+              << (view.reason.empty() || view.reason == "used"
+                      ? std::string()
+                      : " (" + view.reason + ")")
+              << "; DP frames " << DPEncodingName(view.frames.encoding) << " ("
+              << view.frames.encoding_reason << ")";
+    eight_bit += view.frames.bits <= 8;
+    lossy += view.frames.lossy;
   }
+  if (eight_bit > 0) {
+    LOG(WARNING) << eight_bit << " view(s) have 8-bit DP frames: they are "
+                 << "decoded to linear light, where 8 bits leave the darker "
+                 << "patches coarsely quantised (their texture reads as noise "
+                 << "and fewer patches qualify). 16-bit frames (DPRSplit "
+                 << "output) keep it.";
+  }
+  if (lossy > 0) {
+    LOG(WARNING) << lossy << " view(s) have lossy (JPEG) DP frames: "
+                 << "compression removes fine texture and rings at edges, "
+                 << "which biases small blur estimates; export PNG or TIFF.";
+  }
+}
+
+// "Scale S metres per model unit (95 % interval [lo, hi], from <source>)".
+std::string ScaleLine(const DPScaleResult& result) {
+  std::ostringstream line;
+  line << "Scale " << result.scale << " metres per model unit (95 % interval ["
+       << result.scale_ci_low << ", " << result.scale_ci_high << "], from the "
+       << (result.scale_source.empty() ? std::string("DP data")
+                                       : result.scale_source)
+       << ")";
+  return line.str();
 }
 
 // The report: the estimate, the inputs, the profile's source, the view
@@ -473,8 +504,7 @@ ScaleEstimationOutcome RunScaleEstimation(
             << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
             << ", intensity " << Seconds(timings.intensity);
   if (options.dry_run) {
-    LOG(INFO) << "Scale " << result.scale
-              << " metres per model unit (dry run: nothing was changed)";
+    LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed";
     return ScaleEstimationOutcome::Success();
   }
 
@@ -491,8 +521,7 @@ ScaleEstimationOutcome RunScaleEstimation(
     WriteJsonFile(options.report_path, report);
     LOG(INFO) << "Report: " << options.report_path;
   }
-  LOG(INFO) << "Scale " << result.scale
-            << " metres per model unit: " << rescaled.rescaled_files.size()
+  LOG(INFO) << ScaleLine(result) << ": " << rescaled.rescaled_files.size()
             << " files rescaled "
             << (options.output_path.empty() ? "in place in " + root
                                             : "into " + options.output_path)

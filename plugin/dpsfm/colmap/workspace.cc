@@ -66,6 +66,10 @@ bool DPScaleEstimatorOptions::Check() const {
   DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(pixel_pitch_um),
                              NotPositive("pixel_pitch_um", pixel_pitch_um));
   DPSFM_CHECK_OPTION_MESSAGE(
+      dp_encoding == "auto" || dp_encoding == "linear" || dp_encoding == "srgb",
+      "--DPScaleEstimator.dp_encoding must be auto, linear or srgb, got '" +
+          dp_encoding + "'");
+  DPSFM_CHECK_OPTION_MESSAGE(
       prefetch_views >= 0 && prefetch_views <= 8,
       "--DPScaleEstimator.prefetch_views must be in [0, 8], got " +
           std::to_string(prefetch_views));

@@ -57,6 +57,10 @@ struct DPScaleEstimatorOptions {
   double f_number = 0.0;
   double pixel_pitch_um = 0.0;
   bool swap_dp_views = false;
+  // How the DP frames encode light: "auto" (colmap/dp_images.h,
+  // DecideEncoding), "linear" or "srgb". Frames are brought to linear
+  // light before the blur search either way.
+  std::string dp_encoding = "auto";
   // The DP PSF profile: translating_disk, calibrated (psf_path) or auto
   // (self-calibrated from the data; the default since the profile benchmark
   // showed it equal to translating_disk on translating-disk data and far

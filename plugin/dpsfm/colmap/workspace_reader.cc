@@ -308,7 +308,8 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   const colmap::Image& image = reconstruction_.Image(source.image_id);
   const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
 
-  const DPFrames frames = LoadDPFrames(source.dp, options_.swap_dp_views);
+  const DPFrames frames = LoadDPFrames(
+      source.dp, options_.swap_dp_views, ParseDPEncoding(options_.dp_encoding));
   // A dense workspace's model is undistorted; the DP frames keep the
   // geometry of the original images. With the original camera known (from
   // the database) and different, depths are mapped through both cameras.
@@ -349,6 +350,10 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   view.name = source.image_name;
   view.left = frames.left;
   view.right = frames.right;
+  view.frames.encoding = frames.encoding;
+  view.frames.encoding_reason = frames.encoding_reason;
+  view.frames.bits = frames.bits;
+  view.frames.lossy = frames.lossy;
   view.lens = source.lens.lens;
   // A DP-frame pixel covers k x k model camera pixels.
   view.lens.pixel_pitch_um *= k;

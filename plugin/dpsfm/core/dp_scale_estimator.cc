@@ -167,6 +167,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   std::unique_ptr<ViewData> data(new ViewData);
   DPViewSummary& summary = data->summary;
   summary.name = name;
+  summary.frames = view.frames;
   summary.index = static_cast<int>(views_.size());
   summary.frame_size = view.left.size();
   data->lens = view.lens;
@@ -665,6 +666,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     const LinearViewResult& lv = linear.views[i];
     DPViewResult& out = result.views[i];
     out.name = v.summary.name;
+    out.frames = v.summary.frames;
     out.lens = v.lens;
     out.used = lv.used;
     out.reason = lv.reason;
@@ -752,6 +754,12 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   const double statistical_ci_low = linear.scale_ci_low;
   const double statistical_ci_high = linear.scale_ci_high;
   terms.ApplyProfile(&linear.scale_ci_low, &linear.scale_ci_high);
+  // The recorded-focus cue (profile-free); used in the answer when
+  // pin_to_recorded_focus allows it, reported as evidence either way.
+  result.focus_cue = RecordedFocusCue(linear, lens_geometry);
+  const bool use_focus =
+      options_.pin_to_recorded_focus && result.focus_cue.valid;
+  result.dp_cue = DPCue(linear);
   {
     const double width =
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
@@ -782,19 +790,11 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                                        linear.scale_ci_low,
                                        linear.scale_ci_high,
                                        options_.max_scale_ci_relative_width);
-      if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
-        result.failure_reason = s.str();
-        return result;
-      }
     } else if (profile_open) {
       s << UnknownProfileReason(result.psf_fit.reason,
                                 linear.scale,
                                 linear.scale_ci_low,
                                 linear.scale_ci_high);
-      if (!PinToRecordedFocus(linear, lens_geometry, &result, &s)) {
-        result.failure_reason = s.str();
-        return result;
-      }
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
       s << UndeterminedScaleReason(linear.scale,
                                    linear.scale_ci_low,
@@ -802,17 +802,28 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                                    width,
                                    options_.max_scale_ci_relative_width);
     }
-    if (!s.str().empty() && !result.scale_from_recorded_focus) {
-      s << account.TypicalCauses();
-      result.failure_reason = s.str();
-      return result;
+    if (!s.str().empty()) {
+      // The DP data alone give no answer; with the recorded focus they may.
+      if (linear.num_rows < options_.min_total_patches) {
+        result.dp_cue.valid = false;
+      }
+      if (use_focus && AdoptCombinedCues(linear, &result, &s)) {
+        // Answered from the recorded focus (and the DP data if they agree).
+      } else {
+        if (options_.pin_to_recorded_focus && !result.focus_cue.valid) {
+          s << RecordedFocusMissingHint(linear);
+        }
+        s << account.TypicalCauses();
+        result.failure_reason = s.str();
+        return result;
+      }
     }
   }
   result.scale_initial = linear.scale;
   result.scale_initial_ci_low = linear.scale_ci_low;
   result.scale_initial_ci_high = linear.scale_ci_high;
   result.linear_median_abs_residual_px = linear.median_abs_residual_px;
-  if (!result.scale_from_recorded_focus) {
+  if (!result.scale_from_cues) {
     result.scale = linear.scale;
     result.scale_ci_low = linear.scale_ci_low;
     result.scale_ci_high = linear.scale_ci_high;
@@ -824,6 +835,27 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   const auto start_intensity = std::chrono::steady_clock::now();
   IntensityStage(linear, samples, field, terms, &result);
   result.seconds_intensity = SecondsSince(start_intensity);
+  if (!result.scale_from_cues) {
+    // The DP data answered on their own; the recorded focus joins them.
+    result.dp_cue.valid = true;
+    result.dp_cue.scale = result.scale;
+    result.dp_cue.ci_low = result.scale_ci_low;
+    result.dp_cue.ci_high = result.scale_ci_high;
+    if (use_focus) {
+      std::ostringstream s;
+      if (!AdoptCombinedCues(linear, &result, &s)) {
+        result.failure_reason = s.str();
+        return result;
+      }
+    } else {
+      result.scale_source = "DP data";
+      result.combination =
+          result.focus_cue.valid
+              ? "the DP data alone (the recorded focus is evidence only: "
+                "pin_to_recorded_focus 0)"
+              : "the DP data alone (no recorded focus)";
+    }
+  }
 
   // Focus distances and predicted blur under the final scale. g_i' is the
   // linear stage's (the intensity stage keeps it fixed), so the focus in
@@ -859,11 +891,12 @@ void DPScaleEstimator::IntensityStage(
   const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
   const bool banded = field.cells.size() > 1;
   result->intensity_loss = IntensityLossName(options_.intensity.loss);
-  if (result->scale_from_recorded_focus) {
-    // It compares the frames against blur rendered with the profile, the
-    // very thing that is unknown here.
+  if (result->scale_from_cues) {
+    // The DP data alone left the scale open: the intensity stage reads the
+    // same profile, the very thing that is uncertain here.
     result->intensity_status =
-        "skipped: the scale comes from the recorded focus distances";
+        "skipped: the DP data alone leave the scale open; it comes from "
+        "the recorded focus";
   } else if (!options_.intensity_refinement) {
     result->intensity_status = "disabled; linear estimate kept";
   } else {
@@ -976,15 +1009,24 @@ void DPScaleEstimator::IntensityStage(
   }
 }
 
-bool DPScaleEstimator::PinToRecordedFocus(const LinearEstimate& linear,
-                                          double lens_geometry,
-                                          DPScaleResult* result,
-                                          std::ostringstream* refusal) const {
-  if (!options_.pin_to_recorded_focus) return false;
+ScaleCue DPScaleEstimator::DPCue(const LinearEstimate& linear) const {
+  ScaleCue cue;
+  cue.scale = linear.scale;
+  cue.ci_low = linear.scale_ci_low;
+  cue.ci_high = linear.scale_ci_high;
+  cue.valid = linear.scale > 0 && cue.ci_low > 0 &&
+              std::isfinite(cue.ci_high) && cue.ci_high >= cue.ci_low;
+  return cue;
+}
+
+ScaleCue DPScaleEstimator::RecordedFocusCue(const LinearEstimate& linear,
+                                            double lens_geometry) const {
+  ScaleCue cue;
   // The views that carry the cue: used, with a recorded focus and a fitted
   // focal plane g' (where the disparity changes sign, whatever the profile).
   std::vector<int> views;
   std::vector<double> object_m;
+  std::vector<double> brackets;
   for (int i : linear.selected_views) {
     const DPLensData& lens = views_[i]->lens;
     if (!std::isfinite(lens.recorded_focus_mm) ||
@@ -996,11 +1038,14 @@ bool DPScaleEstimator::PinToRecordedFocus(const LinearEstimate& linear,
           FocusObjectDistanceMm(lens.recorded_focus_mm, lens.focal_length_mm) /
           1000);
       views.push_back(i);
+      brackets.push_back(std::isfinite(lens.recorded_focus_bracket)
+                             ? lens.recorded_focus_bracket
+                             : 0.0);
     } catch (const std::invalid_argument&) {
       // Nearer than the lens can focus: no evidence.
     }
   }
-  if (views.empty()) return false;
+  if (views.empty()) return cue;
   auto scale_of = [&](auto focus_model_of) {
     std::vector<double> scales;
     for (size_t k = 0; k < views.size(); ++k) {
@@ -1021,47 +1066,77 @@ bool DPScaleEstimator::PinToRecordedFocus(const LinearEstimate& linear,
     });
     if (std::isfinite(sb)) resampled.push_back(sb);
   }
-  std::ostringstream s;
-  s << std::setprecision(4);
-  if (resampled.size() < 10) {
-    *refusal << "; the recorded focus distances cannot stand in for it: "
-                "their scale's interval could not be measured";
-    return false;
-  }
+  if (resampled.size() < 10 || !(scale > 0)) return cue;
   const double alpha = 0.5 * (1.0 - options_.linear.confidence_level);
   double lo = std::min(scale, Percentile(resampled, alpha));
   double hi = std::max(scale, Percentile(resampled, 1 - alpha));
-  // The recorded distance's own accuracy, the estimator's systematic term
-  // and the lens geometry's, in quadrature with the bootstrap's halves.
+  // The record's own accuracy (the tolerance, and the window a camera
+  // records as its focus: Canon's maker note gives a bracket, not a
+  // distance), the estimator's systematic term and the lens geometry's, in
+  // quadrature with the bootstrap's halves.
+  const double bracket = Percentile(brackets, 0.5);
   const double sys =
       scale * std::sqrt(std::pow(options_.recorded_focus_tolerance, 2) +
+                        bracket * bracket +
                         std::pow(options_.scale_systematic_uncertainty, 2) +
                         lens_geometry * lens_geometry);
-  lo = scale - std::hypot(scale - lo, sys);
-  hi = scale + std::hypot(hi - scale, sys);
-  const double width = (hi - lo) / scale;
-  if (!(width <= options_.max_scale_ci_relative_width) || !(lo > 0)) {
-    *refusal << std::setprecision(4) << "; the recorded focus distances of "
-             << views.size() << " view(s) give " << scale << " in [" << lo
-             << ", " << hi << "], also wider than the limit";
+  cue.scale = scale;
+  cue.ci_low = scale - std::hypot(scale - lo, sys);
+  cue.ci_high = scale + std::hypot(hi - scale, sys);
+  cue.num_views = static_cast<int>(views.size());
+  cue.valid = cue.ci_low > 0 && std::isfinite(cue.ci_high);
+  return cue;
+}
+
+std::string DPScaleEstimator::RecordedFocusMissingHint(
+    const LinearEstimate& linear) const {
+  for (int i : linear.selected_views) {
+    if (std::isfinite(views_[i]->lens.recorded_focus_mm)) return "";
+  }
+  return "; a recorded focus distance (lens.csv's focus_distance_m, or the "
+         "camera's EXIF) would give the scale without the DP profile";
+}
+
+bool DPScaleEstimator::AdoptCombinedCues(const LinearEstimate& linear,
+                                         DPScaleResult* result,
+                                         std::ostringstream* refusal) const {
+  const CombinedScale combined =
+      CombineScaleCues(result->dp_cue, result->focus_cue);
+  const double width = (combined.ci_high - combined.ci_low) / combined.scale;
+  result->cue_agreement = combined.agreement;
+  std::ostringstream s;
+  s << std::setprecision(4);
+  if (!(width <= options_.max_scale_ci_relative_width) ||
+      !(combined.ci_low > 0)) {
+    if (combined.agreement == CueAgreement::kDisagree) {
+      *refusal << (refusal->str().empty() ? "" : "; ")
+               << "the two cues to the scale disagree: "
+               << DisagreementAdvice(result->dp_cue,
+                                     result->focus_cue,
+                                     width,
+                                     options_.max_scale_ci_relative_width,
+                                     !options_.psf_self_calibration);
+    } else {
+      *refusal << "; with the recorded focus of " << result->focus_cue.num_views
+               << " view(s): " << combined.how << ", " << std::fixed
+               << std::setprecision(1) << 100 * width
+               << " % wide, also over the limit of "
+               << 100 * options_.max_scale_ci_relative_width << " %";
+    }
     return false;
   }
-  // The DP scale goes with the profile's strength (its centroid offset):
-  // the DP data give this scale under a profile stronger by their ratio,
-  // the strength the focus pins.
-  result->scale_from_recorded_focus = true;
-  result->pinned_profile_strength = scale / linear.scale;
-  result->scale = scale;
-  result->scale_ci_low = lo;
-  result->scale_ci_high = hi;
-  s << "the DP profile leaves the scale open (" << linear.scale_ci_low << " to "
-    << linear.scale_ci_high << "), so it is taken from the recorded focus "
-    << "distances of " << views.size()
-    << " used view(s) and the fitted focal planes: " << scale << " in [" << lo
-    << ", " << hi << "] (recorded focus taken as accurate to "
-    << std::setprecision(0) << std::fixed
-    << 100 * options_.recorded_focus_tolerance << " %); it pins the profile's "
-    << "strength at " << std::setprecision(2) << result->pinned_profile_strength
+  result->scale_from_cues = true;
+  result->scale_from_recorded_focus =
+      combined.agreement == CueAgreement::kOneCue;
+  result->pinned_profile_strength = result->focus_cue.scale / linear.scale;
+  result->scale = combined.scale;
+  result->scale_ci_low = combined.ci_low;
+  result->scale_ci_high = combined.ci_high;
+  result->scale_source = combined.source;
+  result->combination = combined.how;
+  s << "the scale comes from " << combined.source << ": " << combined.how
+    << "; the recorded focus pins the profile's strength at "
+    << std::setprecision(2) << result->pinned_profile_strength
     << " x the one used";
   result->psf_status += (result->psf_status.empty() ? "" : "; ") + s.str();
   return true;
@@ -1093,33 +1168,37 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
   }
   if (scales.empty()) return;
   result->focus_scale = Percentile(scales, 0.5);
-  result->focus_scale_ratio = result->scale / result->focus_scale;
-  if (result->scale_from_recorded_focus) {
-    result->focus_agrees = true;
-    result->focus_check =
-        "the scale is the recorded focus distances' (the DP profile left "
-        "it open); nothing independent to check it against";
-    return;
-  }
-  const double tol = options_.recorded_focus_tolerance;
-  result->focus_agrees =
-      result->focus_scale >= result->scale_ci_low * (1 - tol) &&
-      result->focus_scale <= result->scale_ci_high * (1 + tol);
+  result->focus_scale_ratio = result->dp_cue.scale / result->focus_scale;
   std::ostringstream s;
   s << std::setprecision(4) << "the recorded focus distances of "
-    << scales.size() << " used view(s) give a scale of " << result->focus_scale
-    << " (profile-free); the DP estimate " << result->scale << " is "
-    << std::showpos << std::fixed << std::setprecision(1)
-    << 100 * (result->focus_scale_ratio - 1) << std::noshowpos << " % off it";
-  if (result->focus_agrees) {
-    s << ": consistent within the interval and the recorded focus's "
-      << std::setprecision(0) << 100 * tol << " %";
+    << scales.size() << " used view(s) give a scale of " << result->focus_scale;
+  if (result->focus_cue.valid) {
+    s << " in [" << result->focus_cue.ci_low << ", "
+      << result->focus_cue.ci_high << "] (profile-free)";
+  }
+  if (result->dp_cue.valid) {
+    s << "; the DP data alone give " << result->dp_cue.scale << " in ["
+      << result->dp_cue.ci_low << ", " << result->dp_cue.ci_high << "], "
+      << std::showpos << std::fixed << std::setprecision(1)
+      << 100 * (result->focus_scale_ratio - 1) << std::noshowpos << " % off it";
+    result->focus_agrees =
+        result->focus_cue.valid &&
+        CombineScaleCues(result->dp_cue, result->focus_cue).agreement ==
+            CueAgreement::kAgree;
+    if (result->focus_agrees) {
+      s << ": they agree (core/scale_cues.h)";
+    } else {
+      s << ": they DISAGREE (an estimate outside the other's interval); a "
+           "DP profile "
+        << std::setprecision(2) << result->focus_scale_ratio
+        << " x as strong as the one used would reconcile them";
+    }
   } else {
-    s << ": they DISAGREE beyond the interval and the recorded focus's "
-      << std::setprecision(0) << 100 * tol << " %; a DP profile "
-      << std::setprecision(2) << 1 / result->focus_scale_ratio
-      << " x as strong as the one used would reconcile them. Check the "
-         "profile (calibrate it) and the recorded focus";
+    result->focus_agrees = true;
+    s << "; the DP data alone leave the scale open";
+  }
+  if (!result->combination.empty()) {
+    s << ". The answer: " << result->combination;
   }
   result->focus_check = s.str();
 }

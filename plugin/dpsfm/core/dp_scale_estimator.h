@@ -16,19 +16,32 @@
 
 #include "dpsfm/core/blur_estimation.h"
 #include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/encoding.h"
 #include "dpsfm/core/intensity_search.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/linear_estimator.h"
 #include "dpsfm/core/patch_grid.h"
 #include "dpsfm/core/psf_calibration.h"
+#include "dpsfm/core/scale_cues.h"
 
 namespace dpsfm {
 
+// What the DP frames were before they reached the core in linear light:
+// reported with the view, and what an 8-bit or lossy file costs is said.
+struct DPFrameInfo {
+  DPEncoding encoding = DPEncoding::kLinear;
+  std::string encoding_reason;  // which rule decided it
+  int bits = 16;
+  bool lossy = false;
+};
+
 struct DPView {
   std::string name;
-  // Same size, CV_32FC1 or CV_32FC3, intensities in [0, 1]. Left/right follow
-  // docs/cli-contract.md (a nearer point lies towards +x in the left view).
+  // Same size, CV_32FC1 or CV_32FC3, linear light in [0, 1] (core/encoding.h).
+  // Left/right follow the CLI contract (a nearer point lies towards +x in the
+  // left view).
   cv::Mat left, right;
+  DPFrameInfo frames;
   DPLensData lens;
   // Dense mode: CV_32FC1 z' covering the same field as the frame at any
   // resolution: frame pixel (x, y) <-> depth pixel (x * dw / W, y * dh / H);
@@ -157,14 +170,17 @@ struct DPScaleOptions {
   // the term above). 0 disables it (a thin-lens camera, e.g. renders).
   double lens_geometry_uncertainty = 1;
   // Recorded focus distances (DPLensData::recorded_focus_mm) are taken as
-  // accurate to this fraction: cameras record focus coarsely (steps of the
-  // focus encoder), users measure it to a few cm.
-  double recorded_focus_tolerance = 0.1;
-  // When the DP profile leaves the scale open (unknown, or a calibration
-  // too uncertain for max_scale_ci_relative_width), take the scale from the
-  // used views' recorded focus distances and fitted focal planes instead of
-  // refusing (their bootstrap interval, widened by
-  // recorded_focus_tolerance). Off: such runs refuse.
+  // accurate to this fraction (95 %), in quadrature with the window the
+  // record itself gives (DPLensData::recorded_focus_bracket): a camera's
+  // focus encoder reports steps, a lens's distance scale and a tape from
+  // the lens front are centimetres off the focal-plane mark
+  // (docs/psf-profiles.md, "The recorded focus").
+  double recorded_focus_tolerance = 0.15;
+  // Use the recorded focus as a second cue to the scale (core/scale_cues.h):
+  // the answer combines it with the DP data (their intersection when they
+  // agree, an interval covering both when they do not), and stands in for
+  // the DP data when the profile leaves the scale open. Off: the recorded
+  // focus is evidence only (the report's focus_check), and such runs refuse.
   bool pin_to_recorded_focus = true;
 
   // DP PSF self-calibration (the `auto` profile, issue 7): before the
@@ -205,6 +221,7 @@ struct DPScaleOptions {
 // What AddView did with one view.
 struct DPViewSummary {
   std::string name;
+  DPFrameInfo frames;
   int index = -1;
   cv::Size frame_size;
   cv::Size working_size;
@@ -243,6 +260,7 @@ struct PatchSample {
 
 struct DPViewResult {
   std::string name;
+  DPFrameInfo frames;
   bool used = false;
   std::string reason;
   double focus_distance_model = 0;  // g' (model units); NaN if unknown
@@ -313,6 +331,14 @@ struct DPScaleResult {
   // the one used.
   bool scale_from_recorded_focus = false;
   double pinned_profile_strength = 0;
+  // The two cues (core/scale_cues.h) and how the answer was formed from
+  // them: dp_cue is the DP data's own estimate and interval (valid = false
+  // when they give none), focus_cue the recorded focus's.
+  ScaleCue dp_cue, focus_cue;
+  CueAgreement cue_agreement = CueAgreement::kOneCue;
+  bool scale_from_cues = false;  // the answer came through CombineScaleCues
+  std::string scale_source;      // "DP data", "recorded focus", or both
+  std::string combination;       // how, for people
   bool focus_agrees = true;
   std::string focus_check;
   // The relative systematic term of the lens geometry (see
@@ -365,12 +391,22 @@ class DPScaleEstimator {
                         DPScaleResult* result) const;
   // Fills the focus_* fields of the result (recorded focus as evidence).
   void CheckAgainstRecordedFocus(DPScaleResult* result) const;
-  // See DPScaleOptions::pin_to_recorded_focus: fills the result's scale
-  // and interval and returns true, or appends why not to `refusal`.
-  bool PinToRecordedFocus(const LinearEstimate& linear,
-                          double lens_geometry,
-                          DPScaleResult* result,
-                          std::ostringstream* refusal) const;
+  // The DP data's cue from the linear stage.
+  ScaleCue DPCue(const LinearEstimate& linear) const;
+  // The recorded focus's cue: the used views' recorded focus distances over
+  // their fitted focal planes g' (median), with the bootstrap's interval
+  // widened by the record's tolerance and bracket (DPScaleOptions::
+  // recorded_focus_tolerance); invalid without a recorded focus.
+  ScaleCue RecordedFocusCue(const LinearEstimate& linear,
+                            double lens_geometry) const;
+  // "; a recorded focus ... would give the scale" when no used view has one.
+  std::string RecordedFocusMissingHint(const LinearEstimate& linear) const;
+  // Forms the answer from result->dp_cue and result->focus_cue
+  // (CombineScaleCues) and returns true, or appends why not to `refusal`
+  // (too wide, or the cues disagree: which to trust).
+  bool AdoptCombinedCues(const LinearEstimate& linear,
+                         DPScaleResult* result,
+                         std::ostringstream* refusal) const;
   // See DPScaleResult::profile_scale_factor_low.
   void ProfileScaleFactors(const DPPsfField& field,
                            const DPScaleResult& result,

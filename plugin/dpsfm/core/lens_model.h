@@ -27,6 +27,11 @@ struct DPLensData {
   // only: the estimate checks itself against it (DPScaleResult::
   // focus_check), it never replaces the fitted focus.
   double recorded_focus_mm = std::numeric_limits<double>::quiet_NaN();
+  // The relative half-width of the window the record itself gives (Canon's
+  // maker note records a focus bracket [lower, upper]: (upper - lower) /
+  // (upper + lower) around its middle, recorded_focus_mm); 0 or NaN for a
+  // single distance.
+  double recorded_focus_bracket = 0;
 
   bool Check() const;
   double ApertureDiameterMm() const { return focal_length_mm / f_number; }

@@ -110,4 +110,32 @@ std::string UnknownProfileReason(const std::string& fit_reason,
   return s.str();
 }
 
+std::string DisagreementAdvice(const ScaleCue& dp,
+                               const ScaleCue& focus,
+                               double width,
+                               double limit,
+                               bool calibrated) {
+  std::ostringstream s;
+  s << std::setprecision(4) << "the DP data give " << dp.scale << " in ["
+    << dp.ci_low << ", " << dp.ci_high << "], the recorded focus "
+    << focus.scale << " in [" << focus.ci_low << ", " << focus.ci_high
+    << "]; an interval covering both spans " << std::fixed
+    << std::setprecision(1) << 100 * width << " % of the scale (limit "
+    << 100 * limit << " %). Trust the recorded focus if it was measured "
+    << "(a tape to the focal-plane mark): set "
+       "--DPScaleEstimator.recorded_focus_tolerance to its accuracy. Trust "
+       "the DP data if ";
+  if (calibrated) {
+    s << "the profile was calibrated for this camera, lens and aperture and "
+         "the recorded focus is the camera's own (a bracket, not a "
+         "measurement): run with --DPScaleEstimator.pin_to_recorded_focus 0";
+  } else {
+    s << "the recorded focus is the camera's own (a bracket, not a "
+         "measurement) and you calibrate the DP profile (colmap "
+         "dp_psf_calibrator); then run with "
+         "--DPScaleEstimator.pin_to_recorded_focus 0";
+  }
+  return s.str();
+}
+
 }  // namespace dpsfm

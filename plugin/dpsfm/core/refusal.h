@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "dpsfm/core/scale_cues.h"
+
 namespace dpsfm {
 
 // "3 without depth, 12 across a depth edge" from (reason, count) pairs.
@@ -56,5 +58,14 @@ std::string UnknownProfileReason(const std::string& fit_reason,
                                  double scale,
                                  double ci_low,
                                  double ci_high);
+
+// The DP data and the recorded focus disagree and an interval covering
+// both is `width` of the scale, over `limit`: both cues, and which to trust
+// when (`calibrated`: the DP profile was given, not fitted to these data).
+std::string DisagreementAdvice(const ScaleCue& dp,
+                               const ScaleCue& focus,
+                               double width,
+                               double limit,
+                               bool calibrated);
 
 }  // namespace dpsfm

@@ -430,33 +430,39 @@ TargetCalibration CalibrateFromTargets(
   }
 
   // The profile used is the cells' (the whole frame's where a cell has too
-  // few patches): each must be determined. (The whole frame's own interval
-  // is wide when the profile changes across the frame, its patches then
-  // being a mixture.)
+  // few patches). The overall strength is what the scale inherits, so it
+  // must be determined to the limit; a cell only reads its own patches,
+  // which a scene spreads over all cells, so a cell may be up to twice as
+  // uncertain (linear light leaves the darker cells of 8-bit captures
+  // noisier: the R6 II planes' edge cells are 11 % uncertain there, 6 % as
+  // encoded). (The whole frame's own interval is wide when the profile
+  // changes across the frame, its patches then being a mixture.)
   auto relative = [](double value, double lo, double hi) {
     return std::max(value - lo, hi - value) / value;
   };
-  double worst_side = 0;
+  double worst_cell = 0;
   bool any_own = false;
   for (int c = 0; c < out.layout.NumCells(); ++c) {
     if (!out.cell_own[c]) continue;
     any_own = true;
-    worst_side = std::max(worst_side,
+    worst_cell = std::max(worst_cell,
                           relative(out.cell_centroid_offsets[c],
                                    out.cell_ci_low[c],
                                    out.cell_ci_high[c]));
   }
   if (!any_own || options.num_bootstrap == 0) {
-    worst_side = relative(out.centroid_offset,
+    worst_cell = relative(out.centroid_offset,
                           out.centroid_offset_ci_low,
                           out.centroid_offset_ci_high);
   }
-  // The overall strength is what the scale inherits: it must be bounded.
+  out.worst_cell_uncertainty = worst_cell;
   const double strength_side =
       relative(out.strength, out.strength_ci_low, out.strength_ci_high);
-  worst_side = std::isfinite(strength_side)
-                   ? std::max(worst_side, strength_side)
-                   : std::numeric_limits<double>::infinity();
+  // As a fraction of the limit: the strength's side against 1 x, the worst
+  // cell's against 2 x.
+  double worst_side = std::isfinite(strength_side)
+                          ? std::max(worst_cell / 2, strength_side)
+                          : std::numeric_limits<double>::infinity();
   if (options.num_bootstrap == 0) worst_side = kNaN;
   std::ostringstream s;
   s << std::setprecision(4) << "centroid offset " << out.centroid_offset
@@ -481,11 +487,18 @@ TargetCalibration CalibrateFromTargets(
       << ", " << out.cell_ci_high[c] << "]" << (out.cell_own[c] ? "" : "*");
   }
   if (!(worst_side <= options.max_relative_uncertainty)) {
-    s << ": not determined (a centroid offset is uncertain by "
+    const bool strength_worse = !(strength_side <= worst_cell / 2);
+    s << ": not determined ("
+      << (strength_worse ? "the strength" : "a cell's centroid offset")
+      << " is uncertain by "
       << (std::isfinite(worst_side)
-              ? std::to_string(std::lround(100 * worst_side)) + " %"
+              ? std::to_string(std::lround(
+                    100 * (strength_worse ? strength_side : worst_cell))) +
+                    " %"
               : std::string("an unbounded amount"))
-      << ", limit " << std::lround(100 * options.max_relative_uncertainty)
+      << ", limit "
+      << std::lround(100 * options.max_relative_uncertainty *
+                     (strength_worse ? 1 : 2))
       << " %)";
     out.reason = s.str();
     return finish();

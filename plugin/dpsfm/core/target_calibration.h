@@ -65,8 +65,9 @@ struct TargetCalibrationOptions {
   double min_focus_mm = 250;
   double max_focus_mm = 100000;
   int num_focus_steps = 4000;
-  // The calibration is refused when the 95 % interval of the whole frame's
-  // kappa is wider than this fraction of it (each side).
+  // The calibration is refused when the 95 % interval of the overall
+  // strength is wider than this fraction of it (each side), or a cell's
+  // centroid offset's than twice this.
   double max_relative_uncertainty = 0.1;
   int num_bootstrap = 200;
   int num_threads = -1;
@@ -76,6 +77,9 @@ struct TargetCalibrationOptions {
 
 struct TargetCalibration {
   bool determined = false;
+  // The largest relative (95 %, one side) uncertainty of a cell's centroid
+  // offset (of the whole frame's when no cell has its own).
+  double worst_cell_uncertainty = 0;
   std::string reason;  // why not, or a summary
   // The focus (sensor distance, mm) used: given, or fitted with its 95 %
   // interval.

@@ -1,10 +1,12 @@
 #include "dpsfm/exe/dp_psf_calibrator.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <ctime>
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include <boost/filesystem.hpp>
@@ -40,6 +42,15 @@ struct CalibratorOptions {
   std::string targets_path;
   std::string output_path;
   bool swap_dp_views = false;
+  // auto, linear or srgb (colmap/dp_images.h, DecideEncoding).
+  std::string dp_encoding = "auto";
+  // How far a profile calibrated on planes transfers to scenes (relative,
+  // 95 %), added in quadrature to the fit's own uncertainty in the
+  // profile's `uncertainty`: a profile fits its planes to ~4 % but reads
+  // real scenes up to 22 % off (the Canon R6 II scenes of ../shared/realdp,
+  // leave-one-scene-out; docs/psf-profiles.md, "Transfer"). 0 for a
+  // simulated camera whose scenes come from the same renderer.
+  double transfer_uncertainty = 0.22;
   // Patch geometry on the working frame; 0 = DefaultPatchGeometry.
   int patch_size = 0;
   int stride = 0;
@@ -66,6 +77,12 @@ struct CalibratorOptions {
   // False at the first invalid option; OptionCheckFailure() names it and
   // its value.
   bool Check() const {
+    DPSFM_CHECK_OPTION_VALUE(dp_encoding == "auto" || dp_encoding == "linear" ||
+                                 dp_encoding == "srgb",
+                             dp_encoding);
+    DPSFM_CHECK_OPTION_VALUE(
+        transfer_uncertainty >= 0 && transfer_uncertainty < 1,
+        transfer_uncertainty);
     DPSFM_CHECK_OPTION_GE(patch_size, 0);  // 0: auto
     DPSFM_CHECK_OPTION_GE(stride, 0);
     DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
@@ -177,6 +194,18 @@ int RunDPPsfCalibrator(int argc, char** argv) {
   manager.AddDefaultOption("DPPsfCalibrator.swap_dp_views",
                            &options.swap_dp_views,
                            "swap left and right DP views");
+  manager.AddDefaultOption(
+      "DPPsfCalibrator.dp_encoding",
+      &options.dp_encoding,
+      "how the DP frames encode light: auto (PNG/EXIF colour tags, else "
+      "8-bit = srgb, 16-bit = linear), linear or srgb; the profile is "
+      "measured in linear light either way");
+  manager.AddDefaultOption(
+      "DPPsfCalibrator.transfer_uncertainty",
+      &options.transfer_uncertainty,
+      "how far a plane calibration transfers to scenes (relative, 95 %), "
+      "added to the fit's own uncertainty in the profile (0.22: measured on "
+      "real Canon R6 II scenes; 0 for simulated cameras)");
   manager.AddDefaultOption("DPPsfCalibrator.patch_size",
                            &options.patch_size,
                            "patch side in px of the working frame (0: auto)");
@@ -249,9 +278,14 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     cv::Size frame_size;
     PatchGeometry geometry{};
     int border = 0;
+    const DPEncoding requested_encoding = ParseDPEncoding(options.dp_encoding);
+    // What the captures were given in (every capture alike, or said).
+    std::set<std::string> frame_encodings;
     for (const CalibrationTarget& target : targets) {
-      const DPFrames frames =
-          LoadDPFrames(index.Find(target.name), options.swap_dp_views);
+      const DPFrames frames = LoadDPFrames(
+          index.Find(target.name), options.swap_dp_views, requested_encoding);
+      frame_encodings.insert(std::string(DPEncodingName(frames.encoding)) +
+                             " (" + frames.encoding_reason + ")");
       if (frame_size.area() == 0) {
         frame_size = frames.left.size();
         geometry = DefaultPatchGeometry(frame_size);
@@ -393,7 +427,10 @@ int RunDPPsfCalibrator(int argc, char** argv) {
         profile.right_kernels.push_back(k.right);
       }
     }
+    const double own_uncertainty = uncertainty;
+    uncertainty = std::hypot(own_uncertainty, options.transfer_uncertainty);
     profile.uncertainty = uncertainty;
+    profile.light = "linear";
     auto add = [&](const std::string& key, const std::string& value) {
       profile.fit_info.emplace_back("fit_" + key, value);
     };
@@ -401,6 +438,11 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     v << std::setprecision(4);
     add("summary", calibration.reason);
     add("captures", std::to_string(targets.size()));
+    v << own_uncertainty << " from the captures, "
+      << options.transfer_uncertainty
+      << " for the transfer to scenes (in quadrature: " << uncertainty << ")";
+    add("uncertainty_terms", v.str());
+    v.str("");
     v << calibration.focus_distance_mm / 1000 << " m from the focal-plane mark"
       << (calibration.focus_fitted ? " (fitted; 95 % interval " : " (given")
       << (calibration.focus_fitted
@@ -423,6 +465,13 @@ int RunDPPsfCalibrator(int argc, char** argv) {
             : "the split family's at the fitted strength" +
                   (shape.reason.empty() ? std::string()
                                         : " (" + shape.reason + ")"));
+    {
+      std::string encodings;
+      for (const std::string& e : frame_encodings) {
+        encodings += (encodings.empty() ? "" : ", ") + e;
+      }
+      add("frames_encoding", encodings + ", brought to linear light");
+    }
     add("frame_size",
         std::to_string(frame_size.width) + "x" +
             std::to_string(frame_size.height));
@@ -437,9 +486,11 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     LOG(INFO) << "Profile: " << options.output_path << " ("
               << calibration.layout.ToString() << " of measured kernels at "
               << profile.reference_radius_px << " px, uncertainty "
-              << std::setprecision(1) << 100 * uncertainty << " %; "
-              << std::fixed << std::setprecision(1) << timer.ElapsedSeconds()
-              << " s)";
+              << std::fixed << std::setprecision(1) << 100 * uncertainty
+              << " % = " << 100 * own_uncertainty << " % from the captures and "
+              << 100 * options.transfer_uncertainty
+              << " % for the transfer to scenes; " << std::fixed
+              << std::setprecision(1) << timer.ElapsedSeconds() << " s)";
     return EXIT_SUCCESS;
   } catch (const InputError& error) {
     return Fail(error.what());

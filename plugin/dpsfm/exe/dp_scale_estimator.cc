@@ -75,6 +75,12 @@ void AddCommandOptions(colmap::OptionManager* manager,
       &options->swap_dp_views,
       "swap left and right DP views (sensor with the opposite convention)");
   manager->AddDefaultOption(
+      "DPScaleEstimator.dp_encoding",
+      &options->dp_encoding,
+      "how the DP frames encode light: auto (PNG/EXIF colour tags, else "
+      "8-bit = srgb, 16-bit = linear), linear or srgb; frames are brought "
+      "to linear light before the blur search");
+  manager->AddDefaultOption(
       "DPScaleEstimator.psf_model",
       &options->psf_model,
       "DP PSF profile: translating_disk (the paper's), calibrated (the file "
