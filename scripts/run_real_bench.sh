@@ -1,18 +1,22 @@
 #!/usr/bin/env bash
 # Real dual-pixel captures benchmark (`make real`): the Canon EOS R6 Mark II
 # + RF 50 mm f/4 captures with measured depth in ../shared/realdp (read in
-# place, never copied into the repository). Each scene becomes a
-# single-view dense workspace whose depth is the measured depth divided by
-# a known factor (dpsfm_make_realdp_workspace); the camera's DP profile is
+# place, never copied into the repository). Each of the seven scenes
+# becomes a single-view dense workspace whose depth is the measured depth
+# divided by a known factor (dpsfm_make_realdp_workspace), in two
+# encodings: the 8-bit sRGB files as given, and 16-bit linear light (their
+# inverse sRGB, as DPRSplit output would be). The camera's DP profile is
 # calibrated from the flat-plane captures (0.6 m and 1.5 m at f/4 and f/20,
-# focus unknown) with `colmap dp_psf_calibrator`; `colmap
-# dp_scale_estimator` then runs per scene with the defaults (auto; lens.csv
-# records the nominal 1 m focus, which the scale is pinned to when the DP
-# profile leaves it open), with the defaults but that pin off, with the
-# paper's translating disk, and with the calibrated profile. Prints
-# r_s = s_est / s_true, its 95 % interval and the focus distance per scene
-# and mode, and per mode the answers, e_s over them and how many intervals
-# hold the truth. Prints tables; gates nothing.
+# focus unknown) in each encoding with `colmap dp_psf_calibrator`, with
+# and without its transfer term. `colmap dp_scale_estimator` then runs per
+# scene and mode: the defaults (auto profile) without and with the
+# recorded "1 m" focus in lens.csv, the calibrated profile without and
+# with it, the paper's translating disk, and the planes' own profile
+# (no transfer term). Prints per run r_s = s_est / s_true, its 95 %
+# interval, and the two cues; per encoding and mode the answers, how many
+# are within 10 %, how many intervals hold the truth, the confidently
+# wrong ones and e_s; and the transfer table: the planes' own profile on
+# every scene, left out in turn. Gates nothing.
 #
 # Environment: DPSFM_REALDP_DIR (default ../shared/realdp next to the
 # clone, then /work/shared/realdp), DPSFM_REAL_DIR (output, default
@@ -63,12 +67,18 @@ calibrate() {  # encoding
     || { tail -n 3 "$cal/log" >&2; log "calibration ($enc) failed"; return 0; }
   log "calibration ($enc): $(grep -o 'centroid offset [0-9.]* R (95.*' "$cal/log" | tail -n 1)"
   log "  $(grep -o 'Profile: .*' "$cal/log" | tail -n 1)"
+  # The planes' own profile, without the transfer term: how far it carries
+  # to the scenes is what this benchmark measures (the transfer table).
+  "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
+    --targets_path "$cal/targets.csv" --output_path "$cal/planes_only.dpsf" \
+    --DPPsfCalibrator.transfer_uncertainty 0 >"$cal/planes_only.log" 2>&1 || true
 }
 for enc in "${encodings[@]}"; do calibrate "$enc"; done
 
 scenes=(casual/orbbec/001 casual/orbbec/002 casual/orbbec/003
         casual/iphone/001 casual/iphone/002 box/001 box/002)
-modes=(defaults defaults_focus calibrated calibrated_focus translating_disk)
+modes=(defaults defaults_focus calibrated calibrated_focus translating_disk
+       translating_disk_focus planes_only)
 results="$out/results.tsv"
 : >"$results"
 for enc in "${encodings[@]}"; do
@@ -87,13 +97,17 @@ for enc in "${encodings[@]}"; do
       case "$mode" in
         defaults_focus) args=(--lens_path "$ws/lens.csv") ;;
         translating_disk) args+=(--DPScaleEstimator.psf_model translating_disk) ;;
+        translating_disk_focus) args=(--lens_path "$ws/lens.csv"
+                                      --DPScaleEstimator.psf_model translating_disk) ;;
         calibrated) args+=(--DPScaleEstimator.psf_model calibrated
                            --DPScaleEstimator.psf_path "$profile") ;;
         calibrated_focus) args=(--lens_path "$ws/lens.csv"
                                 --DPScaleEstimator.psf_model calibrated
                                 --DPScaleEstimator.psf_path "$profile") ;;
+        planes_only) args+=(--DPScaleEstimator.psf_model calibrated
+                            --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_only.dpsf") ;;
       esac
-      if [[ "$mode" == calibrated* && ! -f "$profile" ]]; then
+      if [[ "$mode" == calibrated* || "$mode" == planes_only ]] && [ ! -f "$profile" ]; then
         printf '%s\t%s\t%s\t\t\t\t\tno profile (calibration refused)\t\t\t\t\n' "$enc" "$name" "$mode" >>"$results"
         continue
       fi
@@ -143,7 +157,7 @@ for enc, name, mode, rs, lo, hi, g, why, dp, fc, agree, source in rows:
 print("\n| encoding | mode | answered | within 10 % | intervals holding the truth | confidently wrong | e_s over answers |")
 print("|---|---|---|---|---|---|---|")
 for enc in ["srgb8", "linear16"]:
-    for mode in ["defaults", "defaults_focus", "calibrated", "calibrated_focus", "translating_disk"]:
+    for mode in ["defaults", "defaults_focus", "calibrated", "calibrated_focus", "translating_disk", "translating_disk_focus", "planes_only"]:
         mine = [r for r in rows if r[0] == enc and r[2] == mode]
         ans = [r for r in mine if r[3]]
         es = sum(abs(1 - float(r[3])) for r in ans) / len(ans) if ans else float("nan")
@@ -151,5 +165,73 @@ for enc in ["srgb8", "linear16"]:
         near = sum(1 for r in ans if abs(1 - float(r[3])) <= 0.10)
         wrong = sum(1 for r in ans if abs(1 - float(r[3])) > 0.10 and not float(r[4]) <= 1 <= float(r[5]))
         print("| %s | %s | %d of %d | %d | %d of %d | %d | %s |" % (enc, mode, len(ans), len(mine), near, hold, len(ans), wrong, "%.3f" % es if ans else "-"))
+PY
+# Transfer: the planes' own profile (no transfer term) predicting each
+# scene. Its DP cue is in the report whether or not the run answered.
+# Leave one scene out: the transfer term from the other six (their largest
+# |ln r_s|, as the calibrator's default was chosen from all seven) in
+# quadrature with the profile's own uncertainty, applied to the held-out
+# scene's DP interval as the estimator applies a profile's uncertainty.
+# The blur ratio: per scene, the blur the profile reads over the blur the
+# thin lens predicts from the measured depth (focus fitted, L1), by true
+# |r| (px): a profile that did not transfer would show it at every blur,
+# a kernel that changes shape at small blur only below ~2 px.
+python3 - "$out" "$truth" <<'PY'
+import glob, json, math, os, re, sys
+out, truth = sys.argv[1], float(sys.argv[2])
+f_mm, f_number, pitch = 49.57, 4.0, 0.046875
+aperture = f_mm / f_number
+def r_true(z, g):
+    return aperture * f_mm / (1 - f_mm / g) * (1 / g - 1 / z) / (2 * pitch)
+def median(v):
+    v = sorted(v); n = len(v)
+    return float("nan") if n == 0 else (v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2]))
+for enc in ["srgb8", "linear16"]:
+    prof = os.path.join(out, "calibration", enc, "planes_only.dpsf")
+    if not os.path.exists(prof):
+        continue
+    own = float(re.search(r"^uncertainty ([0-9.eE+-]+)", open(prof).read(), re.M).group(1))
+    rows = {}
+    for fn in sorted(glob.glob(os.path.join(out, enc, "*.planes_only.json"))):
+        name = os.path.basename(fn).split(".")[0]
+        r = json.load(open(fn))
+        c = r.get("cues", {}).get("dual_pixel", {})
+        if not c.get("valid"):
+            continue
+        s, lo, hi = c["scale"] / truth, c["ci"][0] / truth, c["ci"][1] / truth
+        patches = [p for p in r.get("patches", []) if p.get("used") or p.get("selected")]
+        zs = [1000 * truth * p["depth_model"] for p in patches]
+        rs = [p["radius_px"] for p in patches]
+        best = None
+        for g in range(600, 1600, 5):
+            for k in [x / 100 for x in range(40, 200)]:
+                e = sum(abs(y - k * r_true(z, g)) for z, y in zip(zs, rs))
+                if best is None or e < best[0]:
+                    best = (e, g, k)
+        _, g, k = best
+        bins = {}
+        for z, y in zip(zs, rs):
+            t = r_true(z, g)
+            if abs(t) >= 0.3:
+                bins.setdefault(min(int(abs(t)), 3), []).append(y / t)
+        rows[name] = (s, lo, hi, g, k, bins)
+    print("\n%s: the planes' own profile (uncertainty %.1f %%) on each scene, and left out in turn" % (enc, 100 * own))
+    print("| scene | r_s (planes only) | its interval | focus fitted with the truth (m) | blur read / thin lens | by true blur 0-1 / 1-2 / 2-3 / 3+ px | transfer term from the other six | interval with it | holds |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    held = 0
+    for name, (s, lo, hi, g, k, bins) in rows.items():
+        others = [rows[m][0] for m in rows if m != name]
+        t = max(abs(math.log(x)) for x in others)
+        u = math.hypot(own, t)
+        lo2, hi2 = lo / (1 - own) * (1 - u), hi / (1 + own) * (1 + u)
+        ok = lo2 <= 1 <= hi2
+        held += ok
+        by = " / ".join("%.2f" % median(bins.get(b, [])) if bins.get(b) else "-" for b in range(4))
+        print("| %s | %.3f | [%.3f, %.3f] | %.3f | %.2f | %s | %.3f | [%.3f, %.3f] | %s |" % (
+            name, s, lo, hi, g / 1000, k, by, t, lo2, hi2, "yes" if ok else "NO"))
+    if rows:
+        errs = [abs(math.log(v[0])) for v in rows.values()]
+        print("%s: held-out intervals holding the truth %d of %d; |ln r_s| median %.3f, largest %.3f" % (
+            enc, held, len(rows), median(errs), max(errs)))
 PY
 log "total $((SECONDS - start)) s; reports, logs and the profiles in $out"
