@@ -83,12 +83,14 @@ std::string CalibratedProfileOpenReason(double relative_uncertainty,
   std::ostringstream s;
   s << "the DP profile's own uncertainty (+-" << std::fixed
     << std::setprecision(1) << 100 * relative_uncertainty
-    << " % from its calibration) and the data's leave the scale between "
+    << " %: its calibration's and how far a calibration transfers to "
+       "scenes) and the data's leave the scale between "
     << std::setprecision(4) << ci_low << " and " << ci_high << " (estimate "
     << scale << "), wider than the limit of " << std::setprecision(0)
     << 100 * limit
-    << " %. Calibrate from more captures of the target (more distances, "
-       "finer texture), or allow a wider interval with "
+    << " %. Record the focus distance (lens.csv focus_distance_m, or the "
+       "camera's EXIF) so that the profile-free cue joins the DP data, add "
+       "views with more depth range, or allow a wider interval with "
        "--DPScaleEstimator.max_scale_ci_relative_width";
   return s.str();
 }
