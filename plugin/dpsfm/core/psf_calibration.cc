@@ -385,7 +385,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
     << fit.centroid_offset_ci_low << " - " << fit.centroid_offset_ci_high
     << "; " << fit.params.ToString() << "; translating disk "
     << fit.translating_disk_centroid_offset << " R) from " << fit.num_patches
-    << " patches";
+    << " patches, residual " << criterion(at_fit, usable);
   if (worst_side > options.max_relative_uncertainty) {
     s << ": not determined (the centroid offset is uncertain by "
       << std::lround(100 * worst_side) << " %, limit "
@@ -393,6 +393,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
     fit.reason = s.str();
     return finish();
   }
+  fit.criterion_at_fit = criterion(at_fit, usable);
   fit.determined = true;
   if (fit.translating_disk) {
     s << "; the translating disk fits about as well (residual "
