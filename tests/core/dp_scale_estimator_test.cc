@@ -292,6 +292,21 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   DPScaleOptions self = plain;
   self.psf_self_calibration = true;
   const RunOutput disk = RunPipeline(views, plain);
+  // With the defaults a fitted profile carries +-20 % for shapes outside
+  // the family: a single answer from it would be over 40 % wide, so the run
+  // refuses and says why, though the fit itself is right (below).
+  const RunOutput owned = RunPipeline(views, self);
+  EXPECT_FALSE(owned.result.success);
+  EXPECT_NE(owned.result.failure_reason.find("beyond the fit"),
+            std::string::npos)
+      << owned.result.failure_reason;
+  EXPECT_TRUE(owned.result.psf_self_calibrated);
+  EXPECT_NEAR(owned.result.profile_scale_factor_high /
+                  owned.result.profile_scale_factor_low,
+              1.2 / 0.8,
+              0.1);
+  // Trusting the family (this sensor is a member), the fit recovers it.
+  self.self_calibration_shape_uncertainty = 0;
   const RunOutput fitted = RunPipeline(views, self);
   ASSERT_TRUE(fitted.result.success) << fitted.result.failure_reason;
   Print("sharper split, translating disk", disk.result, scale);

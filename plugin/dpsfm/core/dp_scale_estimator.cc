@@ -73,6 +73,9 @@ bool DPScaleOptions::Check() const {
   DPSFM_CHECK_OPTION_GT(max_intensity_ci_relative_width, 0);
   DPSFM_CHECK_OPTION_GT(max_scale_ci_relative_width, 0);
   DPSFM_CHECK_OPTION_GE(recorded_focus_tolerance, 0);
+  DPSFM_CHECK_OPTION_VALUE(self_calibration_shape_uncertainty >= 0 &&
+                               self_calibration_shape_uncertainty < 1,
+                           self_calibration_shape_uncertainty);
   DPSFM_CHECK_OPTION_GE(min_total_patches, 0);
   DPSFM_CHECK_OPTION_GE(scale_systematic_uncertainty, 0);
   DPSFM_CHECK_OPTION_GE(lens_geometry_uncertainty, 0);
@@ -741,6 +744,13 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                         result,
                         &result.profile_scale_factor_low,
                         &result.profile_scale_factor_high);
+    if (result.psf_self_calibrated) {
+      // A fitted profile's shape: another kernel pair can satisfy the
+      // cross-view identity as well as the family member that was fitted.
+      const double u = options_.self_calibration_shape_uncertainty;
+      result.profile_scale_factor_low *= 1 - u;
+      result.profile_scale_factor_high *= 1 + u;
+    }
   } else {
     result.profile_scale_factor_low = 1 - options_.profile_relative_uncertainty;
     result.profile_scale_factor_high =
@@ -791,10 +801,19 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                                        linear.scale_ci_high,
                                        options_.max_scale_ci_relative_width);
     } else if (profile_open) {
-      s << UnknownProfileReason(result.psf_fit.reason,
-                                linear.scale,
-                                linear.scale_ci_low,
-                                linear.scale_ci_high);
+      s << UnknownProfileReason(
+          result.psf_fit.reason +
+              (result.psf_self_calibrated
+                   ? "; a fitted profile's strength is uncertain by +-" +
+                         std::to_string(std::lround(
+                             100 *
+                             options_.self_calibration_shape_uncertainty)) +
+                         " % beyond the fit, for kernel shapes outside the "
+                         "family that fit the patches as well"
+                   : ""),
+          linear.scale,
+          linear.scale_ci_low,
+          linear.scale_ci_high);
     } else if (!(width <= options_.max_scale_ci_relative_width)) {
       s << UndeterminedScaleReason(linear.scale,
                                    linear.scale_ci_low,

@@ -210,6 +210,14 @@ struct DPScaleOptions {
   // fitted p ~1.1 instead of 2.2).
   double psf_fit_radius_factor = 2;
   int psf_fit_bands = 3;
+  // Relative (95 %) uncertainty of a self-calibrated profile's strength
+  // beyond its fit, applied when a fitted profile replaces the translating
+  // disk: the cross-view identity G_l * H_r = G_r * H_l holds for any pair
+  // sharing a common factor with the true one, so a family member can fit
+  // a sensor outside the family perfectly at the wrong strength (an
+  // apodized soft split: residual 0, centroid offset 0.164 R for 0.132 R,
+  // scale 18 % off; psf_profile_bench). 0 trusts the family.
+  double self_calibration_shape_uncertainty = 0.2;
 
   // OpenMP threads for blur estimation and the intensity search; -1 = all.
   int num_threads = -1;
