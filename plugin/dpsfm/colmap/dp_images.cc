@@ -1,15 +1,16 @@
 #include "dpsfm/colmap/dp_images.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <boost/filesystem.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "dpsfm/colmap/exif.h"
+#include "colmap/util/string.h"
 
 namespace dpsfm {
 namespace {
@@ -90,13 +91,24 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
   }
+  // Read once: the pixels and what the file declares about its encoding
+  // come from the same bytes.
+  std::ifstream stream(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(stream)),
+                          std::istreambuf_iterator<char>());
   const cv::Mat raw =
-      cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+      bytes.empty() ? cv::Mat()
+                    : cv::imdecode(cv::Mat(1,
+                                           static_cast<int>(bytes.size()),
+                                           CV_8UC1,
+                                           const_cast<char*>(bytes.data())),
+                                   cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   if (raw.empty()) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
   }
   DPFrameFile file;
+  file.declared = ParseDeclaredEncoding(bytes);
   double unit;
   switch (raw.depth()) {
     case CV_8U:
@@ -111,7 +123,7 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
       throw InputError("DP view is neither 8- nor 16-bit: " + path);
   }
   std::string extension = fs::path(path).extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(c));
+  colmap::StringToLower(&extension);
   file.lossy = extension == ".jpg" || extension == ".jpeg";
   cv::Mat image;
   switch (raw.channels()) {
@@ -135,20 +147,18 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
 }
 
 DPEncoding DecideEncoding(DPEncoding requested,
-                          const std::string& path,
-                          int bits,
+                          const DPFrameFile& file,
                           std::string* reason) {
   if (requested != DPEncoding::kAuto) {
     *reason = "--DPScaleEstimator.dp_encoding";
     return requested;
   }
-  const DeclaredEncoding declared = ReadDeclaredEncoding(path);
-  if (declared.encoding != DPEncoding::kAuto) {
-    *reason = declared.evidence;
-    return declared.encoding;
+  if (file.declared.encoding != DPEncoding::kAuto) {
+    *reason = file.declared.evidence;
+    return file.declared.encoding;
   }
-  *reason = std::to_string(bits) + "-bit file";
-  return bits <= 8 ? DPEncoding::kSrgb : DPEncoding::kLinear;
+  *reason = std::to_string(file.bits) + "-bit file";
+  return file.bits <= 8 ? DPEncoding::kSrgb : DPEncoding::kLinear;
 }
 
 DPFrames LoadDPFrames(const DPFramePaths& paths,
@@ -169,10 +179,9 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   }
   DPFrames frames;
   std::string other_reason;
-  frames.encoding =
-      DecideEncoding(encoding, paths.left, first.bits, &frames.encoding_reason);
+  frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
   const DPEncoding other_encoding =
-      DecideEncoding(encoding, other_path, second.bits, &other_reason);
+      DecideEncoding(encoding, second, &other_reason);
   if (other_encoding != frames.encoding) {
     throw InputError("DP views encode light differently: " + paths.left +
                      " is " + DPEncodingName(frames.encoding) + " (" +

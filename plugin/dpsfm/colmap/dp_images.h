@@ -7,6 +7,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "dpsfm/colmap/exif.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/core/encoding.h"
 
@@ -56,20 +57,20 @@ class DPImageIndex {
 // unreadable or unsupported file.
 struct DPFrameFile {
   cv::Mat values;
-  int bits = 0;        // 8 or 16 per channel
-  bool lossy = false;  // JPEG
+  int bits = 0;               // 8 or 16 per channel
+  bool lossy = false;         // JPEG
+  DeclaredEncoding declared;  // ParseDeclaredEncoding of the same bytes
 };
 DPFrameFile ReadDPFrameFile(const std::string& path);
 
 // How a frame's values encode light (docs/user-guide.md, "DP frames"): the
 // requested encoding when it is not kAuto; otherwise what the file declares
-// (ReadDeclaredEncoding: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace sRGB),
-// else its bit depth: 8-bit files are sRGB (exports, phone captures),
-// 16-bit ones linear (DPRSplit output, raw). `reason` says which rule
-// decided.
+// (DPFrameFile::declared: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace
+// sRGB), else its bit depth: 8-bit files are sRGB (exports, phone
+// captures), 16-bit ones linear (DPRSplit output, raw). `reason` says which
+// rule decided.
 DPEncoding DecideEncoding(DPEncoding requested,
-                          const std::string& path,
-                          int bits,
+                          const DPFrameFile& file,
                           std::string* reason);
 
 struct DPFrames {

@@ -1,12 +1,12 @@
 #include "dpsfm/colmap/exif.h"
 
-#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
 
+#include "colmap/util/string.h"
 #include "dpsfm/colmap/text.h"
 
 namespace dpsfm {
@@ -310,7 +310,7 @@ DeclaredEncoding PngDeclaredEncoding(const std::string& s) {
     if (type == "iCCP") {
       std::string name = data.substr(0, data.find('\0'));
       std::string lower = name;
-      for (char& c : lower) c = static_cast<char>(std::tolower(c));
+      colmap::StringToLower(&lower);
       declared.encoding = lower.find("linear") != std::string::npos
                               ? DPEncoding::kLinear
                               : DPEncoding::kSrgb;
@@ -350,10 +350,6 @@ DeclaredEncoding ParseDeclaredEncoding(const std::string& bytes) {
     return PngDeclaredEncoding(bytes);
   }
   return FromExifColorSpace(bytes);
-}
-
-DeclaredEncoding ReadDeclaredEncoding(const std::string& path) {
-  return ParseDeclaredEncoding(ReadHead(path));
 }
 
 ExifLens ParseExifLens(const std::string& bytes) {

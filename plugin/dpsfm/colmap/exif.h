@@ -46,7 +46,7 @@ struct DeclaredEncoding {
   DPEncoding encoding = DPEncoding::kAuto;
   std::string evidence;  // e.g. "PNG gAMA 1.0", "EXIF ColorSpace sRGB"
 };
-DeclaredEncoding ReadDeclaredEncoding(const std::string& path);
+// On a whole file's bytes (DP frames are read once, colmap/dp_images.h).
 DeclaredEncoding ParseDeclaredEncoding(const std::string& file_bytes);
 
 }  // namespace dpsfm

@@ -1,7 +1,6 @@
 #include "dpsfm/colmap/psf_profile.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -13,6 +12,7 @@
 
 #include <boost/filesystem.hpp>
 
+#include "colmap/util/string.h"
 #include "dpsfm/colmap/npy.h"
 #include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
@@ -448,9 +448,7 @@ namespace {
 
 std::string Key(const std::string& text) {
   std::string key = Trim(text);
-  std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) {
-    return static_cast<char>(std::tolower(c));
-  });
+  colmap::StringToLower(&key);
   return key;
 }
 

@@ -124,7 +124,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   // Where the scale itself came from: the DP data, the recorded focus
   // distances, or both (core/scale_cues.h), and the two cues themselves.
   report["scale_source"] =
-      result.scale_source == "DP data and recorded focus"
+      result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue
           ? "dual_pixel+recorded_focus"
           : (result.scale_from_recorded_focus ? "recorded_focus"
                                               : "dual_pixel");

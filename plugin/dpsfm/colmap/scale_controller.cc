@@ -339,7 +339,6 @@ void LogResult(const DPScaleResult& result) {
     }
   }
   int eight_bit = 0, lossy = 0;
-  std::string encodings;
   for (const DPViewResult& view : result.views) {
     LOG(INFO) << "  " << view.name << ": " << (view.used ? "used" : "not used")
               << (view.reason.empty() || view.reason == "used"

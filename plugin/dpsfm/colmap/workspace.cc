@@ -6,6 +6,7 @@
 #include <boost/filesystem.hpp>
 
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/encoding.h"
 
 namespace dpsfm {
 namespace {
@@ -66,7 +67,7 @@ bool DPScaleEstimatorOptions::Check() const {
   DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(pixel_pitch_um),
                              NotPositive("pixel_pitch_um", pixel_pitch_um));
   DPSFM_CHECK_OPTION_MESSAGE(
-      dp_encoding == "auto" || dp_encoding == "linear" || dp_encoding == "srgb",
+      IsDPEncodingName(dp_encoding),
       "--DPScaleEstimator.dp_encoding must be auto, linear or srgb, got '" +
           dp_encoding + "'");
   DPSFM_CHECK_OPTION_MESSAGE(

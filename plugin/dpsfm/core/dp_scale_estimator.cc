@@ -823,9 +823,6 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     }
     if (!s.str().empty()) {
       // The DP data alone give no answer; with the recorded focus they may.
-      if (linear.num_rows < options_.min_total_patches) {
-        result.dp_cue.valid = false;
-      }
       if (use_focus && AdoptCombinedCues(linear, &result, &s)) {
         // Answered from the recorded focus (and the DP data if they agree).
       } else {
@@ -1033,7 +1030,8 @@ ScaleCue DPScaleEstimator::DPCue(const LinearEstimate& linear) const {
   cue.scale = linear.scale;
   cue.ci_low = linear.scale_ci_low;
   cue.ci_high = linear.scale_ci_high;
-  cue.valid = linear.scale > 0 && cue.ci_low > 0 &&
+  cue.valid = linear.num_rows >= options_.min_total_patches &&
+              linear.scale > 0 && cue.ci_low > 0 &&
               std::isfinite(cue.ci_high) && cue.ci_high >= cue.ci_low;
   return cue;
 }
@@ -1207,8 +1205,7 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
     if (result->focus_agrees) {
       s << ": they agree (core/scale_cues.h)";
     } else {
-      s << ": they DISAGREE (an estimate outside the other's interval); a "
-           "DP profile "
+      s << ": they DISAGREE (core/scale_cues.h); a DP profile "
         << std::setprecision(2) << result->focus_scale_ratio
         << " x as strong as the one used would reconcile them";
     }

@@ -177,8 +177,9 @@ struct DPScaleOptions {
   // (docs/psf-profiles.md, "The recorded focus").
   double recorded_focus_tolerance = 0.15;
   // Use the recorded focus as a second cue to the scale (core/scale_cues.h):
-  // the answer combines it with the DP data (their intersection when they
-  // agree, an interval covering both when they do not), and stands in for
+  // the answer combines it with the DP data (their inverse-variance mean
+  // when they agree, an interval covering both when they do not; see
+  // CombineScaleCues), and stands in for
   // the DP data when the profile leaves the scale open. Off: the recorded
   // focus is evidence only (the report's focus_check), and such runs refuse.
   bool pin_to_recorded_focus = true;
@@ -399,7 +400,8 @@ class DPScaleEstimator {
                         DPScaleResult* result) const;
   // Fills the focus_* fields of the result (recorded focus as evidence).
   void CheckAgainstRecordedFocus(DPScaleResult* result) const;
-  // The DP data's cue from the linear stage.
+  // The DP data's cue from the linear stage (invalid with too few patches
+  // or no finite positive interval).
   ScaleCue DPCue(const LinearEstimate& linear) const;
   // The recorded focus's cue: the used views' recorded focus distances over
   // their fitted focal planes g' (median), with the bootstrap's interval

@@ -14,6 +14,10 @@ DPEncoding ParseDPEncoding(const std::string& name) {
                               "' (expected auto, linear or srgb)");
 }
 
+bool IsDPEncodingName(const std::string& name) {
+  return name == "auto" || name == "linear" || name == "srgb";
+}
+
 const char* DPEncodingName(DPEncoding encoding) {
   switch (encoding) {
     case DPEncoding::kAuto:

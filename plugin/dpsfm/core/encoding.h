@@ -21,6 +21,7 @@ enum class DPEncoding {
 
 // "auto", "linear", "srgb"; throws std::invalid_argument for anything else.
 DPEncoding ParseDPEncoding(const std::string& name);
+bool IsDPEncodingName(const std::string& name);
 const char* DPEncodingName(DPEncoding encoding);
 
 // The sRGB decoding curve (IEC 61966-2-1) of a value in [0, 1]:

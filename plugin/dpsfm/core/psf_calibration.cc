@@ -380,12 +380,13 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
       std::max(fit.centroid_offset - fit.centroid_offset_ci_low,
                fit.centroid_offset_ci_high - fit.centroid_offset) /
       fit.centroid_offset;
+  const double residual_at_fit = criterion(at_fit, usable);
   std::ostringstream s;
   s << "centroid offset " << fit.centroid_offset << " R (95 % interval "
     << fit.centroid_offset_ci_low << " - " << fit.centroid_offset_ci_high
     << "; " << fit.params.ToString() << "; translating disk "
     << fit.translating_disk_centroid_offset << " R) from " << fit.num_patches
-    << " patches, residual " << criterion(at_fit, usable);
+    << " patches, residual " << residual_at_fit;
   if (worst_side > options.max_relative_uncertainty) {
     s << ": not determined (the centroid offset is uncertain by "
       << std::lround(100 * worst_side) << " %, limit "
@@ -393,11 +394,10 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
     fit.reason = s.str();
     return finish();
   }
-  fit.criterion_at_fit = criterion(at_fit, usable);
   fit.determined = true;
   if (fit.translating_disk) {
     s << "; the translating disk fits about as well (residual "
-      << fit.translating_disk_criterion << " vs " << criterion(at_fit, usable)
+      << fit.translating_disk_criterion << " vs " << residual_at_fit
       << ") and is kept";
     fit.params = SplitProfileParams();
     fit.centroid_offset = fit.translating_disk_centroid_offset;

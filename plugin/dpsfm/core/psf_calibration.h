@@ -128,9 +128,6 @@ struct SplitProfileFit {
   // Mean relative residual of the patches at the fitted profile, and median
   // |r_recovered / r_known - 1| (calibration only, else NaN).
   double mean_relative_residual = 0;
-  // The criterion at the fitted profile (self-calibration: the trimmed mean
-  // relative residual; calibration: the median radius error).
-  double criterion_at_fit = 0;
   double median_radius_error = std::numeric_limits<double>::quiet_NaN();
   // The criterion over the evaluated centroid offsets (sorted).
   std::vector<double> centroid_offsets, criterion;

@@ -20,7 +20,6 @@ struct ScaleCue {
   double ci_low = 0, ci_high = 0;
   int num_views = 0;  // views that carry it (recorded focus)
 
-  double RelativeWidth() const { return (ci_high - ci_low) / scale; }
   bool Contains(double s) const { return s >= ci_low && s <= ci_high; }
 };
 

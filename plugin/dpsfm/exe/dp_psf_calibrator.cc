@@ -21,6 +21,7 @@
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/core/blur_estimation.h"
 #include "dpsfm/core/check.h"
+#include "dpsfm/core/encoding.h"
 #include "dpsfm/core/kernel_grid.h"
 #include "dpsfm/core/lens_model.h"
 #include "dpsfm/core/psf_calibration.h"
@@ -77,9 +78,7 @@ struct CalibratorOptions {
   // False at the first invalid option; OptionCheckFailure() names it and
   // its value.
   bool Check() const {
-    DPSFM_CHECK_OPTION_VALUE(dp_encoding == "auto" || dp_encoding == "linear" ||
-                                 dp_encoding == "srgb",
-                             dp_encoding);
+    DPSFM_CHECK_OPTION_VALUE(IsDPEncodingName(dp_encoding), dp_encoding);
     DPSFM_CHECK_OPTION_VALUE(
         transfer_uncertainty >= 0 && transfer_uncertainty < 1,
         transfer_uncertainty);
