@@ -1,5 +1,6 @@
 # The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench accuracy profiles real large clean-cache
+.PHONY: example test build bench accuracy profiles real large clean-cache \
+        test-3.10 check-colmap-main
 
 example:
 	bash scripts/run_example.sh
@@ -9,6 +10,16 @@ test:
 
 build:
 	bash scripts/build.sh
+
+# The whole suite on the COLMAP 3.10 build (the default build is COLMAP 4.1.1;
+# DPSFM_COLMAP_VERSION=3.10 works with every target).
+test-3.10:
+	DPSFM_COLMAP_VERSION=3.10 bash scripts/run_tests.sh
+
+# dp-sfm's sources compiled against COLMAP's main branch (4.2.0.dev0) from
+# ../shared/sources: a compile check, nothing is linked or run.
+check-colmap-main:
+	bash scripts/check_colmap_main.sh
 
 bench:
 	bash scripts/run_bench.sh

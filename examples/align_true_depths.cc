@@ -15,20 +15,22 @@
 //       --workspace_path PIPELINE_DENSE --ground_truth_output FILE.json
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
-#include <boost/filesystem.hpp>
 #include <nlohmann/json.hpp>
 
 #include "colmap/mvs/depth_map.h"
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/colmap_compat.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -83,9 +85,12 @@ colmap::mvs::DepthMap TransferDepthMap(const colmap::Image& image,
       static_cast<double>(truth_depth.GetWidth()) / truth_camera.width;
   const double sy =
       static_cast<double>(truth_depth.GetHeight()) / truth_camera.height;
+  const colmap::Rigid3d cam_from_world = image.CamFromWorld();
   const Eigen::Matrix3d world_from_cam =
-      image.CamFromWorld().rotation.toRotationMatrix().transpose();
-  const colmap::Rigid3d& truth_cam_from_world = truth_image.CamFromWorld();
+      dpsfm::RotationOf(cam_from_world).toRotationMatrix().transpose();
+  const colmap::Rigid3d truth_cam_from_world = truth_image.CamFromWorld();
+  const Eigen::Quaterniond truth_rotation =
+      dpsfm::RotationOf(truth_cam_from_world);
   const colmap::Rigid3d truth_world_from_cam =
       colmap::Inverse(truth_cam_from_world);
   std::vector<float> depths(static_cast<size_t>(width) * height, 0.0f);
@@ -94,16 +99,17 @@ colmap::mvs::DepthMap TransferDepthMap(const colmap::Image& image,
     for (int x = 0; x < width; ++x) {
       // The workspace camera's ray, as a direction in the truth frame, then
       // in the true camera (the centres agree up to the alignment error).
-      const Eigen::Vector3d ray =
-          camera.CamFromImg(Eigen::Vector2d(x + 0.5, y + 0.5)).homogeneous();
+      const std::optional<Eigen::Vector2d> cam =
+          dpsfm::CamFromImg(camera, Eigen::Vector2d(x + 0.5, y + 0.5));
+      if (!cam) continue;
       const Eigen::Vector3d truth_ray =
-          truth_cam_from_world.rotation *
-          (similarity.rotation * (world_from_cam * ray));
-      if (truth_ray.z() <= 0) continue;
-      const Eigen::Vector2d uv =
-          truth_camera.ImgFromCam(truth_ray.hnormalized());
-      const int col = static_cast<int>(std::floor(uv.x() * sx));
-      const int row = static_cast<int>(std::floor(uv.y() * sy));
+          truth_rotation *
+          (similarity.rotation * (world_from_cam * cam->homogeneous()));
+      const std::optional<Eigen::Vector2d> uv =
+          dpsfm::ImgFromCam(truth_camera, truth_ray);
+      if (!uv) continue;
+      const int col = static_cast<int>(std::floor(uv->x() * sx));
+      const int row = static_cast<int>(std::floor(uv->y() * sy));
       if (col < 0 || row < 0 ||
           col >= static_cast<int>(truth_depth.GetWidth()) ||
           row >= static_cast<int>(truth_depth.GetHeight())) {
@@ -111,14 +117,16 @@ colmap::mvs::DepthMap TransferDepthMap(const colmap::Image& image,
       }
       const float truth_z = truth_depth.Get(row, col);
       if (!(truth_z > 0)) continue;
+      const std::optional<Eigen::Vector2d> truth_cam =
+          dpsfm::CamFromImg(truth_camera, *uv);
+      if (!truth_cam) continue;
       const Eigen::Vector3d point_truth =
-          truth_world_from_cam *
-          (Eigen::Vector3d(truth_camera.CamFromImg(uv).homogeneous()) *
-           static_cast<double>(truth_z));
+          truth_world_from_cam * (Eigen::Vector3d(truth_cam->homogeneous()) *
+                                  static_cast<double>(truth_z));
       const Eigen::Vector3d point = similarity.rotation.transpose() *
                                     (point_truth - similarity.translation) /
                                     similarity.scale;
-      const double z = (image.CamFromWorld() * point).z();
+      const double z = (cam_from_world * point).z();
       if (z > 0) depths[static_cast<size_t>(y) * width + x] = z;
     }
   }

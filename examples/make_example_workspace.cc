@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -29,7 +30,6 @@
 #include <string>
 #include <vector>
 
-#include <boost/filesystem.hpp>
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -39,13 +39,14 @@
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "colmap/util/ply.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/core/blur_estimation.h"
 #include "dpsfm/core/dp_psf.h"
 #include "dpsfm/core/dp_renderer.h"
 #include "dpsfm/core/lens_model.h"
 #include "synthetic_scene.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 using dpsfm::examples::PinholeView;
 using dpsfm::examples::RenderedView;
 using dpsfm::examples::SyntheticScene;
@@ -695,8 +696,9 @@ int Run(const GeneratorOptions& options) {
   }
 
   colmap::Reconstruction reconstruction;
-  reconstruction.AddCamera(colmap::Camera::CreateFromModelName(
-      1, "PINHOLE", focal_px, options.width, options.height));
+  dpsfm::AddCamera(&reconstruction,
+                   colmap::Camera::CreateFromModelName(
+                       1, "PINHOLE", focal_px, options.width, options.height));
   for (int i = 0; i < options.num_views; ++i) {
     for (int a = 0; a < num_apertures; ++a) {
       const int index = i * num_apertures + a;
@@ -704,12 +706,12 @@ int Run(const GeneratorOptions& options) {
       image.SetImageId(index + 1);
       image.SetName(names[i][a] + ".jpg");
       image.SetCameraId(1);
-      image.CamFromWorld() =
-          colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
-                          views[i].translation / true_scale);
       image.SetPoints2D(points2D[index]);
-      reconstruction.AddImage(image);
-      reconstruction.RegisterImage(index + 1);
+      dpsfm::AddRegisteredImage(
+          &reconstruction,
+          image,
+          colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
+                          views[i].translation / true_scale));
     }
   }
   for (const Track3D& track : tracks) {
@@ -736,13 +738,14 @@ int Run(const GeneratorOptions& options) {
   {
     // The project database, as feature extraction leaves it (cameras and
     // images; no features are needed here).
-    colmap::Database database((out / "database.db").string());
-    database.WriteCamera(original, /*use_camera_id=*/true);
+    const std::shared_ptr<colmap::Database> database =
+        dpsfm::OpenDatabase((out / "database.db").string());
+    database->WriteCamera(original, /*use_camera_id=*/true);
     for (int index = 0; index < num_images; ++index) {
       colmap::Image image;
       image.SetName(reconstruction.Image(index + 1).Name());
       image.SetCameraId(1);
-      database.WriteImage(image);
+      database->WriteImage(image);
     }
   }
   WriteFusedPly(views, renders, true_scale, (out / "dense/fused.ply").string());

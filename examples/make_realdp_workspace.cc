@@ -20,11 +20,11 @@
 // resolution (area-resized to the frame; patches straddling depth edges are
 // the estimator's to reject).
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
 
-#include <boost/filesystem.hpp>
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -32,9 +32,10 @@
 
 #include "colmap/mvs/depth_map.h"
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/core/encoding.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 namespace po = boost::program_options;
 
 namespace {
@@ -173,15 +174,14 @@ int main(int argc, char** argv) {
 
     const double focal_px = focal_mm / (pitch_um * 1e-3);
     colmap::Reconstruction reconstruction;
-    reconstruction.AddCamera(colmap::Camera::CreateFromModelName(
-        1, "PINHOLE", focal_px, left.cols, left.rows));
+    dpsfm::AddCamera(&reconstruction,
+                     colmap::Camera::CreateFromModelName(
+                         1, "PINHOLE", focal_px, left.cols, left.rows));
     colmap::Image image;
     image.SetImageId(1);
     image.SetName(image_name);
     image.SetCameraId(1);
-    image.CamFromWorld() = colmap::Rigid3d();
-    reconstruction.AddImage(image);
-    reconstruction.RegisterImage(1);
+    dpsfm::AddRegisteredImage(&reconstruction, image, colmap::Rigid3d());
     reconstruction.WriteBinary((out / "dense/sparse").string());
 
     std::ofstream lens((out / "lens.csv").string());

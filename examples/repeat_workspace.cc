@@ -7,16 +7,16 @@
 // Usage: dpsfm_repeat_workspace --input_path GENERATED --output_path DIR
 //            --times N
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <string>
 
-#include <boost/filesystem.hpp>
-
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/colmap_compat.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -29,9 +29,9 @@ std::string Repeat(const std::string& name, int r) {
 
 void Link(const fs::path& from, const fs::path& to) {
   fs::create_directories(to.parent_path());
-  boost::system::error_code error;
+  std::error_code error;
   fs::create_hard_link(from, to, error);
-  if (error) fs::copy_file(from, to, fs::copy_option::overwrite_if_exists);
+  if (error) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
 }
 
 }  // namespace
@@ -67,15 +67,13 @@ int main(int argc, char** argv) {
         image.SetImageId(++next_id);
         image.SetName(Repeat(source.Name(), r));
         image.SetCameraId(source.CameraId());
-        image.CamFromWorld() = source.CamFromWorld();
         std::vector<Eigen::Vector2d> points;
         for (const colmap::Point2D& p : source.Points2D()) {
           points.push_back(p.xy);
         }
         image.SetPoints2D(points);
-        image.SetRegistered(true);
         originals[image.Name()] = source.Name();
-        model.AddImage(image);
+        dpsfm::AddRegisteredImage(&model, image, source.CamFromWorld());
       }
     }
     fs::create_directories(out / "dense/sparse");

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds COLMAP 3.10 with the dp-sfm plugin in one CMake tree and prints the
-# build directory. The build directory is cached outside the clone, keyed by
+# Builds COLMAP (DPSFM_COLMAP_VERSION: 4.1.1 by default, or 3.10) with the
+# dp-sfm plugin in one CMake tree and prints the build directory. COLMAP 4's
+# PoseLib is built first, into its own cache entry (build_poselib.sh). The build directory is cached outside the clone, keyed by
 # COLMAP version + patch series + build options, so a fresh clone on the same
 # machine reuses it and COLMAP is not rebuilt. The build tree reaches the
 # clone through a symlink (<build>/.source), so whichever clone runs the
@@ -9,6 +10,15 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 stdout_is_result
 
 stage "install dependencies" "$DPSFM_ROOT/scripts/install_deps.sh"
+
+prefix_path=()
+if [ -n "$POSELIB_REVISION" ]; then
+  start=$SECONDS
+  log "stage 'PoseLib' ..."
+  poselib_prefix="$("$DPSFM_ROOT/scripts/build_poselib.sh")"
+  log "stage 'PoseLib' took $((SECONDS - start)) s ($poselib_prefix)"
+  prefix_path=(-DCMAKE_PREFIX_PATH="$poselib_prefix")
+fi
 
 start=$SECONDS
 log "stage 'fetch COLMAP source' ..."
@@ -34,7 +44,7 @@ configure() {
   cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
     -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" \
     -DCOLMAP_SOURCE_DIR="$colmap_source" \
-    "${DPSFM_COLMAP_OPTIONS[@]}" >"$build_dir/configure.log" 2>&1 \
+    "${DPSFM_COLMAP_OPTIONS[@]}" "${prefix_path[@]}" >"$build_dir/configure.log" 2>&1 \
     || { tail -n 40 "$build_dir/configure.log" >&2; die "CMake configuration failed (log: $build_dir/configure.log)"; }
 }
 if [ ! -f "$build_dir/build.ninja" ]; then

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prints the cache keys of the COLMAP build:
 #   source=<hash>  the patched COLMAP source (version, tarball, patch series)
-#   build=<hash>   the build tree (source key + build options + compiler)
+#   build=<hash>   the build tree (source key + build options + compiler +
+#                  the PoseLib it links, for COLMAP 4)
 # Usage: cache_key.sh [PATCH_DIR] [source|build]
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -19,14 +20,15 @@ patch_series_hash() {
 
 source_key() {
   printf 'colmap=%s tarball=%s patches=%s\n' "$COLMAP_VERSION" \
-    "$COLMAP_TARBALL_SHA256" "$(patch_series_hash)" | sha256sum | cut -c1-16
+    "$COLMAP_ARCHIVE_SHA256" "$(patch_series_hash)" | sha256sum | cut -c1-16
 }
 
 build_key() {
   local compiler
   compiler="$(${CXX:-c++} --version 2>/dev/null | head -n1 || echo unknown)"
-  printf 'source=%s type=%s options=%s compiler=%s\n' "$(source_key)" \
-    "$DPSFM_BUILD_TYPE" "${DPSFM_COLMAP_OPTIONS[*]}" "$compiler" \
+  printf 'source=%s type=%s options=%s compiler=%s poselib=%s\n' \
+    "$(source_key)" "$DPSFM_BUILD_TYPE" "${DPSFM_COLMAP_OPTIONS[*]}" \
+    "$compiler" "${POSELIB_TREE_SHA256:-none}" \
     | sha256sum | cut -c1-16
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages dp-sfm and COLMAP 3.10 need, and the test
+# Installs the Debian 12 packages dp-sfm and COLMAP (4.1.1 and 3.10) need, and the test
 # suite's COLMAP 4 reader (pycolmap 4.2.1 from PyPI, in a virtualenv in the
 # cache: the oracle of the rescaling tests on current-format models). Does
 # nothing (and needs no network) when they are all present. Uses sudo only
@@ -13,6 +13,10 @@ PACKAGES=(
   libboost-filesystem-dev libboost-graph-dev libboost-system-dev
   libsuitesparse-dev libglew-dev libopencv-dev libgtest-dev
   nlohmann-json3-dev python3 python3-venv
+  # COLMAP 4: OpenImageIO replaced FreeImage (its CMake package names
+  # /usr/bin/iconvert, hence the tools), faiss for retrieval; curl for the
+  # sources a machine without ../shared/sources downloads.
+  libopenimageio-dev openimageio-tools libfaiss-dev curl ca-certificates
 )
 
 PYCOLMAP_VERSION="4.2.1"

@@ -7,7 +7,8 @@
 #  2. real pipeline: COLMAP's feature_extractor, exhaustive_matcher and
 #     mapper on the generated images, then `dp_scale_estimator` in sparse
 #     mode on the mapper's model; prints the camera distances of the
-#     rescaled model against the true ones in metres;
+#     rescaled model against the true ones in metres; on COLMAP 4 the same
+#     for global_mapper's model (GLOMAP, merged into COLMAP 4.0);
 #  3. the real pipeline's dense path: image_undistorter on the mapper's
 #     model, the generator's true depth maps moved into the mapper's frame
 #     and units (PatchMatch stereo needs CUDA; the mapper-to-truth
@@ -46,12 +47,15 @@ run_colmap() {
   "$colmap" "$@" >"$logs/$name.log" 2>&1 \
     || { tail -n 5 "$logs/$name.log" >&2; die "colmap $1 failed (log: $logs/$name.log)"; }
 }
+# COLMAP 4 renamed SiftExtraction / SiftMatching to FeatureExtraction /
+# FeatureMatching.
+if [ -n "$POSELIB_REVISION" ]; then features=Feature; else features=Sift; fi
 stage "colmap feature_extractor" run_colmap feature_extractor feature_extractor \
   --database_path "$pipeline/database.db" --image_path "$scene/images" \
   --ImageReader.single_camera 1 --ImageReader.camera_model SIMPLE_RADIAL \
-  --SiftExtraction.use_gpu 0
+  --${features}Extraction.use_gpu 0
 stage "colmap exhaustive_matcher" run_colmap exhaustive_matcher exhaustive_matcher \
-  --database_path "$pipeline/database.db" --SiftMatching.use_gpu 0
+  --database_path "$pipeline/database.db" --${features}Matching.use_gpu 0
 stage "colmap mapper" run_colmap mapper mapper \
   --database_path "$pipeline/database.db" --image_path "$scene/images" \
   --output_path "$pipeline/sparse"
@@ -66,6 +70,18 @@ stage "dp_scale_estimator (mapper's sparse model)" "$colmap" dp_scale_estimator 
   --database_path "$pipeline/database.db" --lens_path "$scene/lens.csv" \
   --report_path "$scene/report_sparse.json" 2>"$logs/sparse.log" \
   || { tail -n 5 "$logs/sparse.log" >&2; die "dp_scale_estimator failed on the mapper's model"; }
+if [ -n "$POSELIB_REVISION" ]; then
+  mkdir -p "$pipeline/global"
+  stage "colmap global_mapper" run_colmap global_mapper global_mapper \
+    --database_path "$pipeline/database.db" --image_path "$scene/images" \
+    --output_path "$pipeline/global"
+  [ -d "$pipeline/global/0" ] || die "global_mapper made no model (log: $logs/global_mapper.log)"
+  stage "dp_scale_estimator (global_mapper's model)" "$colmap" dp_scale_estimator \
+    --input_path "$pipeline/global/0" --dp_image_path "$scene/dp" \
+    --database_path "$pipeline/database.db" --lens_path "$scene/lens.csv" \
+    --report_path "$scene/report_global.json" 2>"$logs/global.log" \
+    || { tail -n 5 "$logs/global.log" >&2; die "dp_scale_estimator failed on global_mapper's model"; }
+fi
 
 # 3. The mapper's dense workspace with the true depths in its units. The DP
 # frames keep the original images' geometry: --original_model_path gives
@@ -92,6 +108,13 @@ echo "== 2. Real COLMAP pipeline (feature_extractor, exhaustive_matcher, mapper)
 grep -E "Linear estimate|files rescaled" "$logs/sparse.log" | sed 's/^.*\] /   /'
 "$examples/dpsfm_compare_to_truth" --ground_truth "$scene/ground_truth.json" \
   --report "$scene/report_sparse.json" --model_path "$pipeline/sparse/0"
+if [ -n "$POSELIB_REVISION" ]; then
+  echo
+  echo "== 2b. The same with COLMAP 4's global_mapper, sparse mode:"
+  grep -E "Linear estimate|files rescaled" "$logs/global.log" | sed 's/^.*\] /   /'
+  "$examples/dpsfm_compare_to_truth" --ground_truth "$scene/ground_truth.json" \
+    --report "$scene/report_global.json" --model_path "$pipeline/global/0"
+fi
 echo
 echo "== 3. Real pipeline, dense: the mapper's model undistorted, true depths in its units:"
 sed 's/^/   /' "$logs/align.log"
@@ -101,5 +124,5 @@ grep -E "Linear estimate|files rescaled" "$logs/pipeline_dense.log" | sed 's/^.*
 "$examples/dpsfm_compare_to_truth" --ground_truth "$pipeline/ground_truth.json" \
   --report "$scene/report_pipeline_dense.json" --model_path "$pipeline/dense/sparse"
 echo
-echo "Reports and plots: $scene/report_{dense,sparse,pipeline_dense}*.{json,png}"
+echo "Reports and plots: $scene/report_{dense,sparse,global,pipeline_dense}*.{json,png}"
 log "total $((SECONDS - total_start)) s"

@@ -5,14 +5,15 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <boost/filesystem.hpp>
 
 namespace dpsfm {
 namespace test {
@@ -47,18 +48,21 @@ inline std::string ShellQuote(const std::string& arg) {
 class TempDir {
  public:
   TempDir() {
-    path_ = (boost::filesystem::temp_directory_path() /
-             boost::filesystem::unique_path("dpsfm-test-%%%%-%%%%-%%%%"))
-                .string();
-    boost::filesystem::create_directories(path_);
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "dpsfm-test-XXXXXX").string();
+    // mkdtemp: std::filesystem has no unique directory maker.
+    if (mkdtemp(pattern.data()) == nullptr) {
+      throw std::runtime_error("mkdtemp failed for " + pattern);
+    }
+    path_ = pattern;
   }
   ~TempDir() {
-    boost::system::error_code ec;
-    boost::filesystem::remove_all(path_, ec);
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
   }
   const std::string& path() const { return path_; }
   std::string operator/(const std::string& name) const {
-    return (boost::filesystem::path(path_) / name).string();
+    return (std::filesystem::path(path_) / name).string();
   }
 
  private:
@@ -101,21 +105,21 @@ inline std::vector<std::string> Lines(const std::string& text) {
 inline std::map<std::string, std::string> SnapshotTree(
     const std::string& root) {
   std::map<std::string, std::string> files;
-  for (boost::filesystem::recursive_directory_iterator it(root), end; it != end;
+  for (std::filesystem::recursive_directory_iterator it(root), end; it != end;
        ++it) {
-    if (boost::filesystem::is_regular_file(it->path())) {
-      files[boost::filesystem::relative(it->path(), root).string()] =
+    if (std::filesystem::is_regular_file(it->path())) {
+      files[std::filesystem::relative(it->path(), root).string()] =
           ReadTextFile(it->path().string());
-    } else if (boost::filesystem::is_directory(it->path())) {
-      files[boost::filesystem::relative(it->path(), root).string() + "/"] = "";
+    } else if (std::filesystem::is_directory(it->path())) {
+      files[std::filesystem::relative(it->path(), root).string() + "/"] = "";
     }
   }
   return files;
 }
 
 inline void WriteTextFile(const std::string& path, const std::string& text) {
-  boost::filesystem::create_directories(
-      boost::filesystem::path(path).parent_path());
+  std::filesystem::create_directories(
+      std::filesystem::path(path).parent_path());
   std::ofstream file(path, std::ios::binary);
   file << text;
 }
@@ -165,11 +169,11 @@ inline CommandResult CheckWithColmap4(const std::string& original,
 
 // Copies the regular files of `from` (not sub-folders) into `to`.
 inline void CopyFolderFiles(const std::string& from, const std::string& to) {
-  boost::filesystem::create_directories(to);
-  for (boost::filesystem::directory_iterator it(from), end; it != end; ++it) {
-    if (boost::filesystem::is_regular_file(it->path())) {
-      boost::filesystem::copy_file(
-          it->path(), boost::filesystem::path(to) / it->path().filename());
+  std::filesystem::create_directories(to);
+  for (std::filesystem::directory_iterator it(from), end; it != end; ++it) {
+    if (std::filesystem::is_regular_file(it->path())) {
+      std::filesystem::copy_file(
+          it->path(), std::filesystem::path(to) / it->path().filename());
     }
   }
 }

@@ -12,12 +12,14 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <colmap/scene/reconstruction.h>
 #include <gtest/gtest.h>
 
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/rescale.h"
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
@@ -27,7 +29,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 class Colmap4Model : public ::testing::Test {
  protected:
@@ -63,7 +65,9 @@ std::map<std::string, double> ImageErrors(const colmap::Reconstruction& r) {
       if (!point.HasPoint3D()) continue;
       const Eigen::Vector3d xyz = r.Point3D(point.point3D_id).xyz;
       const Eigen::Vector3d cam = image.CamFromWorld() * xyz;
-      sum += (camera.ImgFromCam(cam.hnormalized()) - point.xy).norm();
+      const std::optional<Eigen::Vector2d> xy = ImgFromCam(camera, cam);
+      if (!xy) continue;
+      sum += (*xy - point.xy).norm();
       ++n;
     }
     errors[image.Name()] = n ? sum / n : 0;

@@ -141,7 +141,7 @@ TEST(PsfProfileFile, MeasuredKernelsThatAreNoPsfPairAreRefused) {
   // A key of the other model, and a missing file.
   write_profile("split_exponent 1\n");
   EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
-  boost::filesystem::remove(dir / "r.npy");
+  std::filesystem::remove(dir / "r.npy");
   write_profile("");
   EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
 }

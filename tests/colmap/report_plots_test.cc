@@ -5,13 +5,13 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <boost/filesystem.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "dpsfm/core/lens_model.h"
@@ -247,7 +247,7 @@ TEST(ReportPlots, OverlayAcceptsOtherImageTypes) {
   test::TempDir dir;
   EXPECT_FALSE(
       WritePatchOverlay(cv::Mat(), "x", 0, result, 40, dir / "none.png"));
-  EXPECT_FALSE(boost::filesystem::exists(dir / "none.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
 }
 
 TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
@@ -299,7 +299,7 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
     const cv::Mat picture = cv::imread(path);
     EXPECT_GT(PixelStdDev(picture), 5) << path;
     MaybeDump(picture,
-              "failed_" + boost::filesystem::path(path).filename().string());
+              "failed_" + std::filesystem::path(path).filename().string());
   }
 
   // No curve at all (intensity stage skipped).

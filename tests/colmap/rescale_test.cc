@@ -8,19 +8,20 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <boost/filesystem.hpp>
 
 #include "colmap/geometry/sim3.h"
 #include "colmap/math/random.h"
 #include "colmap/mvs/mat.h"
 #include "colmap/scene/reconstruction.h"
 #include "colmap/scene/synthetic.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/transaction.h"
 #include "dpsfm/colmap/workspace.h"
 #include "tests/test_utils.h"
@@ -28,7 +29,7 @@
 namespace dpsfm {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 using test::ReadTextFile;
 using test::SnapshotTree;
 using test::TempDir;
@@ -52,9 +53,7 @@ void AppendRaw(std::string* bytes, T value) {
 colmap::Reconstruction MakeReconstruction(unsigned seed) {
   colmap::SetPRNGSeed(seed);
   std::srand(seed);
-  colmap::SyntheticDatasetOptions options;
-  options.num_cameras = 2;
-  options.num_images = 6;
+  colmap::SyntheticDatasetOptions options = SyntheticOptions(2, 6);
   options.num_points3D = 25;
   options.num_points2D_without_point3D = 3;
   colmap::Reconstruction reconstruction;
@@ -159,11 +158,11 @@ void ExpectScaledReconstruction(const colmap::Reconstruction& unscaled,
     EXPECT_EQ(expected.Name(), image.Name());
     EXPECT_EQ(expected.CameraId(), image.CameraId());
     // Rotations are not touched at all (Transform may round them by an ulp).
-    EXPECT_EQ(unscaled.Image(entry.first).CamFromWorld().rotation.coeffs(),
-              image.CamFromWorld().rotation.coeffs());
+    EXPECT_EQ(RotationOf(unscaled.Image(entry.first).CamFromWorld()).coeffs(),
+              RotationOf(image.CamFromWorld()).coeffs());
     for (int i = 0; i < 3; ++i) {
-      ExpectNear(expected.CamFromWorld().translation(i),
-                 image.CamFromWorld().translation(i));
+      ExpectNear(TranslationOf(expected.CamFromWorld())(i),
+                 TranslationOf(image.CamFromWorld())(i));
     }
     ASSERT_EQ(expected.NumPoints2D(), image.NumPoints2D());
     for (size_t i = 0; i < image.NumPoints2D(); ++i) {
@@ -210,6 +209,10 @@ TEST(RescaleBinaryModel, ScalesTranslationsAndPointsOnly) {
   RescaleFileInPlace(ArtefactType::kImagesBinary, dir / "images.bin", kScale);
   RescaleFileInPlace(
       ArtefactType::kPoints3DBinary, dir / "points3D.bin", kScale);
+  if (kWriterWritesRigsAndFrames) {  // the poses COLMAP 4 reads
+    RescaleFileInPlace(ArtefactType::kRigsBinary, dir / "rigs.bin", kScale);
+    RescaleFileInPlace(ArtefactType::kFramesBinary, dir / "frames.bin", kScale);
+  }
   const std::string images_after = ReadTextFile(dir / "images.bin");
   const std::string points_after = ReadTextFile(dir / "points3D.bin");
 
@@ -451,6 +454,10 @@ TEST(RescaleTextModel, ScalesTranslationsAndPointsOnly) {
 
   RescaleFileInPlace(ArtefactType::kImagesText, dir / "images.txt", kScale);
   RescaleFileInPlace(ArtefactType::kPoints3DText, dir / "points3D.txt", kScale);
+  if (kWriterWritesRigsAndFrames) {  // the poses COLMAP 4 reads
+    RescaleFileInPlace(ArtefactType::kRigsText, dir / "rigs.txt", kScale);
+    RescaleFileInPlace(ArtefactType::kFramesText, dir / "frames.txt", kScale);
+  }
 
   colmap::Reconstruction rescaled;
   rescaled.ReadText(dir.path());
@@ -865,22 +872,33 @@ TEST(ListArtefacts, FindsEveryMetricFileAndNothingElse) {
     listed.push_back(fs::relative(a.path, ws.path()).string() + ":" +
                      ArtefactTypeName(a.type));
   }
-  const std::vector<std::string> expected = {
-      "sparse/images.bin:images.bin",
-      "sparse/points3D.bin:points3D.bin",
-      "sparse/images.txt:images.txt",
-      "sparse/points3D.txt:points3D.txt",
-      "sparse/0/images.txt:images.txt",
-      "sparse/0/points3D.txt:points3D.txt",
-      "other_model/images.bin:images.bin",
-      "other_model/points3D.bin:points3D.bin",
-      "stereo/depth_maps/a.jpg.geometric.bin:depth map",
-      "stereo/depth_maps/a.jpg.photometric.bin:depth map",
-      "stereo/depth_maps/sub/b.jpg.geometric.bin:depth map",
-      "fused.ply:PLY",
-      "meshed-delaunay.ply:PLY",
-      "meshed-poisson.ply:PLY",
+  // Each model as this build's COLMAP wrote it (with rigs and frames on
+  // COLMAP 4).
+  std::vector<std::string> expected;
+  const auto add_model = [&expected](const std::string& dir,
+                                     const std::string& ext) {
+    std::vector<std::string> names = {"images", "points3D"};
+    if (kWriterWritesRigsAndFrames) {
+      names.push_back("rigs");
+      names.push_back("frames");
+    }
+    for (const std::string& name : names) {
+      expected.push_back(dir + "/" + name + ext + ":" + name + ext);
+    }
   };
+  add_model("sparse", ".bin");
+  add_model("sparse", ".txt");
+  add_model("sparse/0", ".txt");
+  add_model("other_model", ".bin");
+  for (const char* file :
+       {"stereo/depth_maps/a.jpg.geometric.bin:depth map",
+        "stereo/depth_maps/a.jpg.photometric.bin:depth map",
+        "stereo/depth_maps/sub/b.jpg.geometric.bin:depth map",
+        "fused.ply:PLY",
+        "meshed-delaunay.ply:PLY",
+        "meshed-poisson.ply:PLY"}) {
+    expected.push_back(file);
+  }
   EXPECT_EQ(expected, listed);
 
   EXPECT_THROW(ListArtefactsToRescale(ws.path(), {ws / "images"}), InputError);
@@ -933,7 +951,11 @@ TEST(RescaleWorkspace, InPlaceScalesMetricFilesAndKeepsTheRest) {
   options.inputs = {"dp/left"};
   const RescaleWorkspaceResult result =
       RescaleWorkspaceInPlace(ws.path(), kScale, options);
-  EXPECT_EQ(4u + 2u * original.NumImages() + 2u, result.rescaled_files.size());
+  // Both model formats (with rigs and frames on COLMAP 4), two depth maps
+  // per image, fused.ply and the mesh.
+  const size_t model_files = kWriterWritesRigsAndFrames ? 8u : 4u;
+  EXPECT_EQ(model_files + 2u * original.NumImages() + 2u,
+            result.rescaled_files.size());
 
   const auto after = SnapshotTree(ws.path());
   std::set<std::string> changed;
@@ -953,6 +975,11 @@ TEST(RescaleWorkspace, InPlaceScalesMetricFilesAndKeepsTheRest) {
                                     "fused.ply",
                                     "meshed-poisson.ply",
                                     kScaleRecordFileName};
+  if (kWriterWritesRigsAndFrames) {
+    // Frames hold each rig's pose; the trivial rigs hold no translation.
+    expected.insert("sparse/frames.bin");
+    expected.insert("sparse/frames.txt");
+  }
   for (const auto& image : original.Images()) {
     expected.insert("stereo/depth_maps/" + image.second.Name() +
                     ".geometric.bin");

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/view_prefetcher.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/colmap/workspace_reader.h"
@@ -22,19 +23,17 @@ namespace {
 // >= 0) has an unreadable right frame.
 void WriteModel(const TempDir& dir, int n, int broken) {
   const std::string model = dir / "sparse";
-  boost::filesystem::create_directories(model);
+  std::filesystem::create_directories(model);
   colmap::Reconstruction reconstruction;
-  reconstruction.AddCamera(
-      colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
+  AddCamera(&reconstruction,
+            colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
   for (int i = 0; i < n; ++i) {
     colmap::Image image;
     image.SetImageId(i + 1);
     image.SetName("v" + std::to_string(i) + ".png");
     image.SetCameraId(1);
-    image.CamFromWorld() = colmap::Rigid3d();
     image.SetPoints2D({Eigen::Vector2d(20.5, 15.5)});
-    reconstruction.AddImage(image);
-    reconstruction.RegisterImage(i + 1);
+    AddRegisteredImage(&reconstruction, image, colmap::Rigid3d());
     colmap::Track track;
     track.AddElement(i + 1, 0);
     reconstruction.AddPoint3D(
@@ -42,7 +41,7 @@ void WriteModel(const TempDir& dir, int n, int broken) {
   }
   reconstruction.WriteBinary(model);
   for (const char* side : {"left", "right"}) {
-    boost::filesystem::create_directories(dir / (std::string("dp/") + side));
+    std::filesystem::create_directories(dir / (std::string("dp/") + side));
     for (int i = 0; i < n; ++i) {
       const std::string path =
           dir / (std::string("dp/") + side + "/v" + std::to_string(i) + ".png");

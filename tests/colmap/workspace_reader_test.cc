@@ -2,12 +2,14 @@
 // precedence (lens.csv > flag > EXIF > derived), and depth maps.
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/dp_images.h"
 #include "dpsfm/colmap/lens_data.h"
 #include "dpsfm/colmap/workspace_reader.h"
@@ -18,7 +20,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 // A TIFF block written byte by byte, in either byte order: IFD0, an Exif
 // IFD (pointed to from IFD0) and optionally a maker-note IFD (the value of
@@ -526,6 +528,66 @@ TEST(LoadDPFrames, EightBitColour) {
   EXPECT_EQ(frames.encoding, DPEncoding::kSrgb);
 }
 
+// Frames are decoded by OpenImageIO (as COLMAP 4 reads images) and come out
+// as OpenCV's decoder gave them: colour in B, G, R order (written here by
+// OpenCV's encoder, an independent library), each 16-bit value exactly.
+TEST(ReadDPFrameFile, ChannelOrderAndSixteenBitValues) {
+  TempDir dir;
+  cv::Mat colour(4, 6, CV_16UC3);
+  for (int y = 0; y < colour.rows; ++y) {
+    for (int x = 0; x < colour.cols; ++x) {
+      colour.at<cv::Vec3w>(y, x) = cv::Vec3w(1000 + x, 30000 + y, 65535 - x);
+    }
+  }
+  for (const std::string name : {"c.png", "c.tif"}) {
+    ASSERT_TRUE(cv::imwrite(dir / name, colour));
+    const DPFrameFile file = ReadDPFrameFile(dir / name);
+    EXPECT_EQ(file.bits, 16) << name;
+    ASSERT_EQ(file.values.type(), CV_32FC3) << name;
+    for (int y = 0; y < colour.rows; ++y) {
+      for (int x = 0; x < colour.cols; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_FLOAT_EQ(file.values.at<cv::Vec3f>(y, x)[c] * 65535.0f,
+                          colour.at<cv::Vec3w>(y, x)[c])
+              << name << " " << x << "," << y << "," << c;
+        }
+      }
+    }
+  }
+}
+
+// Floating-point frames (what COLMAP 4 reads from EXR or float TIFF) are
+// taken as stored, in linear light.
+TEST(ReadDPFrameFile, FloatFramesAreLinear) {
+  TempDir dir;
+  cv::Mat grey(5, 7, CV_32FC1);
+  for (int i = 0; i < grey.rows * grey.cols; ++i) {
+    grey.at<float>(i) = 0.01f * i;
+  }
+  ASSERT_TRUE(cv::imwrite(dir / "f.tif", grey));
+  const DPFrameFile file = ReadDPFrameFile(dir / "f.tif");
+  EXPECT_EQ(file.bits, 32);
+  ASSERT_EQ(file.values.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(file.values.at<float>(3, 4), 0.01f * (3 * 7 + 4));
+  std::string reason;
+  EXPECT_EQ(DecideEncoding(DPEncoding::kAuto, file, &reason),
+            DPEncoding::kLinear);
+  EXPECT_EQ(reason, "32-bit file");
+}
+
+TEST(ReadDPFrameFile, UnreadableFileIsNamed) {
+  TempDir dir;
+  WriteTextFile(dir / "bad.png", "\x89PNG\r\n\x1a\nnot really");
+  try {
+    ReadDPFrameFile(dir / "bad.png");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("cannot read DP view"),
+              std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("bad.png"), std::string::npos);
+  }
+}
+
 // Sparse mode with DP frames of half the model's size: a triangulated
 // point observed at the centre of DP pixel (i, j), model pixel coordinates
 // (2 i + 1, 2 j + 1) with COLMAP's top-left centre at 0.5, lands at exactly
@@ -534,10 +596,10 @@ TEST(LoadDPFrames, EightBitColour) {
 TEST(WorkspaceReader, SparseDepthPointsInHalfSizeFrames) {
   TempDir dir;
   const std::string model = dir / "sparse";
-  boost::filesystem::create_directories(model);
+  std::filesystem::create_directories(model);
   colmap::Reconstruction reconstruction;
-  reconstruction.AddCamera(
-      colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
+  AddCamera(&reconstruction,
+            colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
   const std::vector<std::pair<int, int>> dp_pixels = {{3, 4}, {10, 7}, {0, 0}};
   std::vector<Eigen::Vector2d> points2D;
   for (const auto& ij : dp_pixels) {
@@ -547,10 +609,8 @@ TEST(WorkspaceReader, SparseDepthPointsInHalfSizeFrames) {
   image.SetImageId(1);
   image.SetName("v.png");
   image.SetCameraId(1);
-  image.CamFromWorld() = colmap::Rigid3d();
   image.SetPoints2D(points2D);
-  reconstruction.AddImage(image);
-  reconstruction.RegisterImage(1);
+  AddRegisteredImage(&reconstruction, image, colmap::Rigid3d());
   const double z = 2.5;
   for (size_t i = 0; i < points2D.size(); ++i) {
     colmap::Track track;
@@ -561,7 +621,7 @@ TEST(WorkspaceReader, SparseDepthPointsInHalfSizeFrames) {
   }
   reconstruction.WriteBinary(model);
   for (const char* side : {"left", "right"}) {
-    boost::filesystem::create_directories(dir / (std::string("dp/") + side));
+    std::filesystem::create_directories(dir / (std::string("dp/") + side));
     cv::imwrite(dir / (std::string("dp/") + side + "/v.png"),
                 cv::Mat(15, 20, CV_8UC1, cv::Scalar(100)));
   }
@@ -669,10 +729,14 @@ TEST(ResampleDepthToFrame, FollowsTheDistortion) {
       // Back to the original image through the undistorted camera: it must
       // land on this frame pixel (within the depth map's 2 px cells).
       const Eigen::Vector2d centre((col + 0.5) * 2, (row + 0.5) * 2);
-      const Eigen::Vector2d in_original =
-          original.ImgFromCam(undistorted.CamFromImg(centre));
-      EXPECT_NEAR(in_original.x(), (x + 0.5) * k, 3.0) << x << "," << y;
-      EXPECT_NEAR(in_original.y(), (y + 0.5) * k, 3.0) << x << "," << y;
+      const std::optional<Eigen::Vector2d> ray =
+          CamFromImg(undistorted, centre);
+      ASSERT_TRUE(ray.has_value());
+      const std::optional<Eigen::Vector2d> in_original =
+          ImgFromCam(original, ray->homogeneous());
+      ASSERT_TRUE(in_original.has_value());
+      EXPECT_NEAR(in_original->x(), (x + 0.5) * k, 3.0) << x << "," << y;
+      EXPECT_NEAR(in_original->y(), (y + 0.5) * k, 3.0) << x << "," << y;
       ++checked;
     }
   }

@@ -27,8 +27,11 @@ void ExpectCleanError(const CommandResult& result,
   EXPECT_FALSE(result.signaled) << result.err;
   EXPECT_EQ(result.exit_code, 1) << result.err;
   const std::regex error_line("^(ERROR: |E[0-9]{8} ).*");
+  // COLMAP 4 colours its log lines even off a terminal.
+  const std::regex colour("\x1b\\[[0-9;]*m");
   int num_error_lines = 0;
-  for (const std::string& line : Lines(result.err)) {
+  for (const std::string& coloured : Lines(result.err)) {
+    const std::string line = std::regex_replace(coloured, colour, "");
     if (std::regex_match(line, error_line)) {
       ++num_error_lines;
       EXPECT_NE(line.find(expected), std::string::npos)
@@ -54,7 +57,7 @@ struct WorkspaceFixture {
     for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
       WriteTextFile(workspace + "/sparse/" + name, "# empty model\n");
     }
-    boost::filesystem::create_directories(workspace + "/stereo/depth_maps");
+    std::filesystem::create_directories(workspace + "/stereo/depth_maps");
     WriteTextFile(dp + "/left/a.png", "not an image");
     WriteTextFile(dp + "/right/a.png", "not an image");
   }
@@ -138,7 +141,7 @@ TEST(CommandLine, MissingWorkspace) {
 
 TEST(CommandLine, WorkspaceWithoutModel) {
   WorkspaceFixture fixture;
-  boost::filesystem::remove(fixture.workspace + "/sparse/images.txt");
+  std::filesystem::remove(fixture.workspace + "/sparse/images.txt");
   ExpectCleanError(RunEstimator({"--workspace_path",
                                  fixture.workspace,
                                  "--dp_image_path",
@@ -148,7 +151,7 @@ TEST(CommandLine, WorkspaceWithoutModel) {
 
 TEST(CommandLine, WorkspaceWithoutDepthMaps) {
   WorkspaceFixture fixture;
-  boost::filesystem::remove_all(fixture.workspace + "/stereo");
+  std::filesystem::remove_all(fixture.workspace + "/stereo");
   ExpectCleanError(RunEstimator({"--workspace_path",
                                  fixture.workspace,
                                  "--dp_image_path",
@@ -158,7 +161,7 @@ TEST(CommandLine, WorkspaceWithoutDepthMaps) {
 
 TEST(CommandLine, DPFolderWithoutRightOrSum) {
   WorkspaceFixture fixture;
-  boost::filesystem::remove_all(fixture.dp + "/right");
+  std::filesystem::remove_all(fixture.dp + "/right");
   ExpectCleanError(RunEstimator({"--workspace_path",
                                  fixture.workspace,
                                  "--dp_image_path",
@@ -211,7 +214,7 @@ TEST(CommandLine, MissingDatabaseIsNotCreated) {
                                  "--database_path",
                                  database}),
                    database);
-  EXPECT_FALSE(boost::filesystem::exists(database));
+  EXPECT_FALSE(std::filesystem::exists(database));
 }
 
 TEST(CommandLine, MissingLensFile) {

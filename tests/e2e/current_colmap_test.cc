@@ -2,7 +2,7 @@
 // a dense workspace whose model COLMAP 4.2.1 wrote (rigs.bin, frames.bin;
 // trivial rigs, or a two-camera rig), a model from COLMAP 4.2.1's
 // global_mapper, each rescaled in place and read back by COLMAP 4.2.1
-// (pycolmap); a model
+// (pycolmap) and by this build's own reader; a model
 // folder with a file of unknown treatment; a read-only workspace; a
 // truncated images.bin. Refusals come before the estimation, in one line,
 // with the workspace unchanged.
@@ -10,6 +10,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -21,7 +22,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 // The generated dense workspace with its model written again by COLMAP
 // 4.2.1, as image undistorters of COLMAP 4 leave it: one trivial rig per
@@ -55,6 +56,7 @@ void RescaleColmap4Workspace(bool two_camera_rig) {
   const CommandResult verdict = CheckWithColmap4(original, sparse, scale);
   EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
   std::printf("%s", verdict.out.c_str());
+  ExpectModelScaled(original, sparse, scale);
 }
 
 TEST(CurrentColmap, DenseWorkspaceFromColmap4IsRescaledWhole) {
@@ -97,6 +99,34 @@ TEST(CurrentColmap, GlobalMapperModelIsScaledToMetres) {
       original, model, scale, {"--truth", scene / "ground_truth.json"});
   EXPECT_EQ(verdict.exit_code, 0) << verdict.out << verdict.err;
   std::printf("%s", verdict.out.c_str());
+  ExpectModelScaled(original, model, scale);
+}
+
+// A model as COLMAP 3.x writes it (cameras, images and points, no rigs.bin
+// or frames.bin; COLMAP 4 writes images.bin as 3.x did) is rescaled whole
+// and stays in that layout: on a COLMAP 4 build, its reader makes the
+// trivial rigs and frames itself, and the rescaler adds none to the folder.
+TEST(CurrentColmap, ModelWithoutRigsAndFramesIsRescaledWhole) {
+  SceneCopy scene("dslr");
+  const std::string sparse = scene / "dense/sparse";
+  fs::remove(sparse + "/rigs.bin");
+  fs::remove(sparse + "/frames.bin");
+  const std::string original = scene.temp() / "original_model";
+  CopyFolderFiles(sparse, original);
+  const std::string report = scene.temp() / "report.json";
+  const CommandResult run =
+      RunEstimator(With(DenseArgs(scene), {"--report_path", report}));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const double scale = ReadJson(report).at("scale").get<double>();
+  EXPECT_GT(scale, 0.0);
+  std::set<std::string> files;
+  for (fs::directory_iterator it(sparse), end; it != end; ++it) {
+    files.insert(it->path().filename().string());
+  }
+  EXPECT_EQ(
+      files,
+      (std::set<std::string>{"cameras.bin", "images.bin", "points3D.bin"}));
+  ExpectModelScaled(original, sparse, scale);
 }
 
 TEST(CurrentColmap, UnknownFileInTheModelFolderIsRefusedBeforeEstimating) {

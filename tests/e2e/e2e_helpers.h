@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -18,6 +20,35 @@ namespace test {
 
 const std::string kColmap = DPSFM_COLMAP_EXE;
 const std::string kScenes = DPSFM_E2E_SCENES_DIR;
+
+// The model in after_dir is the one in before_dir scaled by `scale`, as this
+// build's own COLMAP reads both: every image's pose (on COLMAP 4 composed
+// from its frame and its rig's sensor pose, so rigs and frames are checked
+// with it), every 3D point, and nothing else changed in number.
+inline void ExpectModelScaled(const std::string& before_dir,
+                              const std::string& after_dir,
+                              double scale) {
+  colmap::Reconstruction before, after;
+  before.Read(before_dir);
+  after.Read(after_dir);
+  ASSERT_EQ(before.NumRegImages(), after.NumRegImages());
+  for (const auto& image : before.Images()) {
+    const colmap::Image& scaled = after.Image(image.first);
+    EXPECT_EQ(scaled.Name(), image.second.Name());
+    EXPECT_TRUE(
+        dpsfm::RotationOf(scaled.CamFromWorld())
+            .isApprox(dpsfm::RotationOf(image.second.CamFromWorld()), 1e-15));
+    EXPECT_TRUE(
+        dpsfm::TranslationOf(scaled.CamFromWorld())
+            .isApprox(scale * dpsfm::TranslationOf(image.second.CamFromWorld()),
+                      1e-12));
+  }
+  ASSERT_EQ(before.NumPoints3D(), after.NumPoints3D());
+  for (const auto& point : before.Points3D()) {
+    EXPECT_TRUE(after.Point3D(point.first)
+                    .xyz.isApprox(scale * point.second.xyz, 1e-12));
+  }
+}
 
 inline nlohmann::json ReadJson(const std::string& path) {
   std::ifstream file(path);
@@ -30,30 +61,30 @@ class SceneCopy {
  public:
   explicit SceneCopy(const std::string& scene) {
     const std::string source = kScenes + "/" + scene;
-    if (!boost::filesystem::is_directory(source)) {
+    if (!std::filesystem::is_directory(source)) {
       ADD_FAILURE() << "generated scene missing: " << source
                     << " (run the whole suite with ctest; the "
                        "e2e_generate_scenes fixture makes it)";
       return;
     }
     root_ = dir_ / scene;
-    boost::filesystem::create_directories(root_);
-    for (boost::filesystem::recursive_directory_iterator it(source), end;
+    std::filesystem::create_directories(root_);
+    for (std::filesystem::recursive_directory_iterator it(source), end;
          it != end;
          ++it) {
-      const boost::filesystem::path target =
-          boost::filesystem::path(root_) /
-          boost::filesystem::relative(it->path(), source);
-      if (boost::filesystem::is_directory(it->path())) {
-        boost::filesystem::create_directories(target);
+      const std::filesystem::path target =
+          std::filesystem::path(root_) /
+          std::filesystem::relative(it->path(), source);
+      if (std::filesystem::is_directory(it->path())) {
+        std::filesystem::create_directories(target);
       } else {
-        boost::filesystem::copy_file(it->path(), target);
+        std::filesystem::copy_file(it->path(), target);
       }
     }
   }
   const std::string& root() const { return root_; }
   std::string operator/(const std::string& name) const {
-    return (boost::filesystem::path(root_) / name).string();
+    return (std::filesystem::path(root_) / name).string();
   }
   const TempDir& temp() const { return dir_; }
 
@@ -65,10 +96,10 @@ class SceneCopy {
 // A copy of a binary model, to compare with after the run.
 inline std::string CopyModel(const std::string& model_dir,
                              const std::string& copy) {
-  boost::filesystem::create_directories(copy);
+  std::filesystem::create_directories(copy);
   for (const char* name : {"images.bin", "points3D.bin", "cameras.bin"}) {
-    boost::filesystem::copy_file(boost::filesystem::path(model_dir) / name,
-                                 boost::filesystem::path(copy) / name);
+    std::filesystem::copy_file(std::filesystem::path(model_dir) / name,
+                               std::filesystem::path(copy) / name);
   }
   return copy;
 }

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/workspace_reader.h"
 #include "tests/e2e/e2e_helpers.h"
 #include "tests/test_utils.h"
@@ -25,32 +27,10 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 // Largest accepted |1 - s_est / s_true| on the clean generated DSLR scene.
 constexpr double kMaxScaleError = 0.03;
-
-void ExpectModelScaled(const std::string& before_dir,
-                       const std::string& after_dir,
-                       double scale) {
-  colmap::Reconstruction before, after;
-  before.Read(before_dir);
-  after.Read(after_dir);
-  ASSERT_EQ(before.NumRegImages(), after.NumRegImages());
-  for (const auto& image : before.Images()) {
-    const colmap::Image& scaled = after.Image(image.first);
-    EXPECT_EQ(scaled.Name(), image.second.Name());
-    EXPECT_TRUE(scaled.CamFromWorld().rotation.isApprox(
-        image.second.CamFromWorld().rotation, 1e-15));
-    EXPECT_TRUE(scaled.CamFromWorld().translation.isApprox(
-        scale * image.second.CamFromWorld().translation, 1e-12));
-  }
-  ASSERT_EQ(before.NumPoints3D(), after.NumPoints3D());
-  for (const auto& point : before.Points3D()) {
-    EXPECT_TRUE(after.Point3D(point.first)
-                    .xyz.isApprox(scale * point.second.xyz, 1e-12));
-  }
-}
 
 void ExpectDepthMapScaled(const std::string& before_path,
                           const std::string& after_path,
@@ -92,6 +72,7 @@ bool IsRescaledArtefact(const std::string& relative) {
   if (relative.back() == '/') return false;  // a directory entry
   return relative == "dense/sparse/images.bin" ||
          relative == "dense/sparse/points3D.bin" ||
+         relative == "dense/sparse/frames.bin" ||
          relative == "dense/fused.ply" ||
          relative.find("dense/stereo/depth_maps/") == 0;
 }
@@ -136,8 +117,9 @@ TEST(EndToEnd, DenseWorkspaceInPlace) {
           << file.first << " changed";
     }
   }
-  // The model, 8 x 2 depth maps and fused.ply.
-  EXPECT_EQ(rescaled.size(), 2u + 16u + 1u);
+  // The model (with its frames on COLMAP 4; the trivial rigs hold no
+  // translation), 8 x 2 depth maps and fused.ply.
+  EXPECT_EQ(rescaled.size(), (kWriterWritesRigsAndFrames ? 3u : 2u) + 16u + 1u);
   for (const std::string& file : rescaled) {
     if (file.find("depth_maps/") != std::string::npos) {
       const std::string copy = scene.temp() / "depth_before.bin";
@@ -305,27 +287,28 @@ TEST(EndToEnd, RealColmapPipelineSparseMode) {
   const std::string sparse = scene.temp() / "sparse";
   fs::create_directories(sparse);
   for (const std::vector<std::string>& step :
-       std::vector<std::vector<std::string>>{{"feature_extractor",
-                                              "--database_path",
-                                              db,
-                                              "--image_path",
-                                              scene / "images",
-                                              "--ImageReader.single_camera",
-                                              "1",
-                                              "--SiftExtraction.use_gpu",
-                                              "0"},
-                                             {"exhaustive_matcher",
-                                              "--database_path",
-                                              db,
-                                              "--SiftMatching.use_gpu",
-                                              "0"},
-                                             {"mapper",
-                                              "--database_path",
-                                              db,
-                                              "--image_path",
-                                              scene / "images",
-                                              "--output_path",
-                                              sparse}}) {
+       std::vector<std::vector<std::string>>{
+           {"feature_extractor",
+            "--database_path",
+            db,
+            "--image_path",
+            scene / "images",
+            "--ImageReader.single_camera",
+            "1",
+            std::string("--") + kFeatureExtractionSection + ".use_gpu",
+            "0"},
+           {"exhaustive_matcher",
+            "--database_path",
+            db,
+            std::string("--") + kFeatureMatchingSection + ".use_gpu",
+            "0"},
+           {"mapper",
+            "--database_path",
+            db,
+            "--image_path",
+            scene / "images",
+            "--output_path",
+            sparse}}) {
     std::vector<std::string> command = {kColmap};
     command.insert(command.end(), step.begin(), step.end());
     const CommandResult result = RunCommand(command);
@@ -477,7 +460,7 @@ TEST(EndToEndErrors, ModelWithoutRegisteredImages) {
   colmap::Reconstruction model;
   model.Read(scene / "dense/sparse");
   for (const auto& camera : model.Cameras()) {
-    empty.AddCamera(camera.second);
+    dpsfm::AddCamera(&empty, camera.second);
   }
   fs::remove_all(scene / "dense/sparse");
   fs::create_directories(scene / "dense/sparse");
@@ -500,17 +483,17 @@ void WriteDatabase(const std::string& model_dir,
                    bool rename) {
   colmap::Reconstruction model;
   model.Read(model_dir);
-  colmap::Database database(path);
+  const std::shared_ptr<colmap::Database> database = dpsfm::OpenDatabase(path);
   for (const auto& camera : model.Cameras()) {
-    database.WriteCamera(camera.second, /*use_camera_id=*/true);
+    database->WriteCamera(camera.second, /*use_camera_id=*/true);
   }
   for (const auto& image : model.Images()) {
     colmap::Image copy;
     copy.SetName(rename ? "other_" + image.second.Name() : image.second.Name());
     copy.SetCameraId(image.second.CameraId());
-    database.WriteImage(copy);
+    database->WriteImage(copy);
   }
-  database.Close();
+  database->Close();
 }
 
 TEST(EndToEnd, DatabaseIsOnlyRead) {

@@ -22,7 +22,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 const std::string kMakeExample = DPSFM_MAKE_EXAMPLE_EXE;
 

@@ -21,7 +21,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 const std::string kColmap = DPSFM_COLMAP_EXE;
 const std::string kScenes = DPSFM_E2E_SCENES_DIR;

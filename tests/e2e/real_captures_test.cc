@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -14,7 +15,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <boost/filesystem.hpp>
 #include <nlohmann/json.hpp>
 
 #include "tests/e2e/e2e_helpers.h"
@@ -23,7 +23,7 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 constexpr double kTrueScale = 0.37;
 
@@ -67,10 +67,10 @@ class RealCaptures : public ::testing::Test {
       const fs::path from = fs::path(real_) / "flat/001" / c;
       fs::copy_file(from / "l.png",
                     dir + "/dp/left/" + name,
-                    fs::copy_option::overwrite_if_exists);
+                    fs::copy_options::overwrite_existing);
       fs::copy_file(from / "r.png",
                     dir + "/dp/right/" + name,
-                    fs::copy_option::overwrite_if_exists);
+                    fs::copy_options::overwrite_existing);
       targets << name << "," << std::stod(c.substr(0, 4)) / 1000 << "," << focus
               << ",49.57," << c.substr(6) << ",46.875\n";
     }

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <sstream>
 
-#include <boost/filesystem.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
 #include <opencv2/imgproc.hpp>
 
 #include "colmap/util/string.h"
@@ -15,7 +17,7 @@
 namespace dpsfm {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 std::string StripExtension(const std::string& relative) {
   const fs::path path(relative);
@@ -87,6 +89,48 @@ DPFramePaths DPImageIndex::Find(const std::string& image_name) const {
   return paths;
 }
 
+namespace {
+
+// Decodes an image file's bytes with OpenImageIO, the library COLMAP 4 reads
+// images with, so that any frame COLMAP reads, the plugin reads. Returns the
+// pixels as OpenCV's decoder would (8-bit, 16-bit or float; colour in BGR
+// order), or an empty matrix. The bytes are decoded in memory where the
+// format allows it; other formats are opened by name (a second read).
+cv::Mat DecodeImage(const std::string& bytes, const std::string& path) {
+  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
+  std::unique_ptr<OIIO::ImageInput> input =
+      OIIO::ImageInput::open(path, nullptr, &memory);
+  if (!input) input = OIIO::ImageInput::open(path);
+  if (!input) {
+    OIIO::geterror();  // clears OpenImageIO's per-thread error
+    return cv::Mat();
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  const int channels = spec.nchannels;
+  if (channels < 1 || channels > 4 || spec.width <= 0 || spec.height <= 0) {
+    return cv::Mat();
+  }
+  OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
+  int depth = CV_32F;
+  if (spec.format == OIIO::TypeDesc::UINT8) {
+    format = OIIO::TypeDesc::UINT8;
+    depth = CV_8U;
+  } else if (spec.format == OIIO::TypeDesc::UINT16) {
+    format = OIIO::TypeDesc::UINT16;
+    depth = CV_16U;
+  }
+  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, channels));
+  if (!input->read_image(0, 0, 0, channels, format, pixels.data)) {
+    input->geterror();
+    return cv::Mat();
+  }
+  if (channels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
+  if (channels == 4) cv::cvtColor(pixels, pixels, cv::COLOR_RGBA2BGRA);
+  return pixels;
+}
+
+}  // namespace
+
 DPFrameFile ReadDPFrameFile(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
@@ -96,13 +140,7 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
   std::ifstream stream(path, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(stream)),
                           std::istreambuf_iterator<char>());
-  const cv::Mat raw =
-      bytes.empty() ? cv::Mat()
-                    : cv::imdecode(cv::Mat(1,
-                                           static_cast<int>(bytes.size()),
-                                           CV_8UC1,
-                                           const_cast<char*>(bytes.data())),
-                                   cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  const cv::Mat raw = bytes.empty() ? cv::Mat() : DecodeImage(bytes, path);
   if (raw.empty()) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
@@ -120,7 +158,10 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
       file.bits = 16;
       break;
     default:
-      throw InputError("DP view is neither 8- nor 16-bit: " + path);
+      // Floating point (EXR, float TIFF): values as stored.
+      unit = 1.0;
+      file.bits = 32;
+      break;
   }
   std::string extension = fs::path(path).extension().string();
   colmap::StringToLower(&extension);

@@ -52,12 +52,13 @@ class DPImageIndex {
   bool has_right_ = false;
 };
 
-// One DP frame file as encoded: CV_32FC1 or CV_32FC3 in [0, 1] (16-bit
-// divided by 65535, 8-bit by 255). Throws InputError for a missing,
-// unreadable or unsupported file.
+// One DP frame file as encoded, decoded by OpenImageIO (as COLMAP 4 reads
+// images): CV_32FC1 or CV_32FC3, colour in B, G, R order; 16-bit values
+// divided by 65535, 8-bit by 255, floating-point ones as stored. Throws
+// InputError for a missing, unreadable or unsupported file.
 struct DPFrameFile {
   cv::Mat values;
-  int bits = 0;               // 8 or 16 per channel
+  int bits = 0;               // 8, 16 or 32 (float) per channel
   bool lossy = false;         // JPEG
   DeclaredEncoding declared;  // ParseDeclaredEncoding of the same bytes
 };
@@ -67,8 +68,8 @@ DPFrameFile ReadDPFrameFile(const std::string& path);
 // requested encoding when it is not kAuto; otherwise what the file declares
 // (DPFrameFile::declared: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace
 // sRGB), else its bit depth: 8-bit files are sRGB (exports, phone
-// captures), 16-bit ones linear (DPRSplit output, raw). `reason` says which
-// rule decided.
+// captures), 16-bit and floating-point ones linear (DPRSplit output, raw).
+// `reason` says which rule decided.
 DPEncoding DecideEncoding(DPEncoding requested,
                           const DPFrameFile& file,
                           std::string* reason);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -10,14 +11,12 @@
 #include <set>
 #include <sstream>
 
-#include <boost/filesystem.hpp>
-
 #include "colmap/util/string.h"
 #include "dpsfm/colmap/npy.h"
 #include "dpsfm/colmap/text.h"
 #include "dpsfm/colmap/workspace.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 namespace dpsfm {
 namespace {

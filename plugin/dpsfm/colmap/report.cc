@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
-
-#include <boost/filesystem.hpp>
 
 namespace dpsfm {
 namespace {
@@ -265,10 +264,10 @@ void WriteJsonFile(const std::string& path, const nlohmann::json& json) {
       throw InputError("cannot write " + path);
     }
   }
-  boost::system::error_code error;
-  boost::filesystem::rename(temporary, path, error);
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
   if (error) {
-    boost::filesystem::remove(temporary, error);
+    std::filesystem::remove(temporary, error);
     throw InputError("cannot write " + path);
   }
 }

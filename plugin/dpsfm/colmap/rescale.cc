@@ -11,12 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
-
-#include <boost/filesystem.hpp>
 
 #include "dpsfm/colmap/workspace.h"
 
@@ -28,7 +27,7 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
 
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 [[noreturn]] void Corrupt(const std::string& path, const std::string& what) {
   throw InputError("cannot rescale " + path + ": " + what);

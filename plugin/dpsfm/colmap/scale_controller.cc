@@ -7,6 +7,7 @@
 #include "colmap/util/logging.h"
 #include "colmap/util/misc.h"
 #include "colmap/util/timer.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/database_check.h"
 #include "dpsfm/colmap/psf_profile.h"
 #include "dpsfm/colmap/report.h"
@@ -161,7 +162,7 @@ ScaleRun DPScaleController::Run() {
   }
   run.checkpoints = budget.Checkpoints();
 
-  colmap::PrintHeading2("Scale estimation");
+  LOG_HEADING2("Scale estimation");
   if (run.checkpoints.empty() ||
       run.checkpoints.back().views != static_cast<int>(run.visited.size())) {
     run.result = estimator_->Estimate();
@@ -390,9 +391,8 @@ nlohmann::json RunReport(const ScaleRun& run,
 RescaleWorkspaceResult Rescale(const DPScaleEstimatorOptions& options,
                                const std::string& root,
                                double scale) {
-  colmap::PrintHeading2(options.output_path.empty()
-                            ? "Rescaling the workspace in place"
-                            : "Writing a rescaled copy");
+  LOG_HEADING2(options.output_path.empty() ? "Rescaling the workspace in place"
+                                           : "Writing a rescaled copy");
   RescaleWorkspaceOptions rescale_options;
   rescale_options.extra_model_dirs =
       colmap::CSVToVector<std::string>(options.extra_model_paths);
@@ -422,7 +422,7 @@ ScaleEstimationOutcome RunScaleEstimation(
     const DPScaleEstimatorOptions& options, DPScaleOptions core_options) {
   colmap::Timer total_timer;
   total_timer.Start();
-  colmap::PrintHeading1("DP scale estimation");
+  LOG_HEADING1("DP scale estimation");
   const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
   if (!core_options.Check()) {
     throw InputError("invalid DPScaleEstimator option: " +
@@ -449,7 +449,7 @@ ScaleEstimationOutcome RunScaleEstimation(
   const WorkspaceReader reader(options, layout);
   const std::vector<ViewSource> sources = LogInputs(options, reader);
 
-  colmap::PrintHeading2("Per-patch DP blur estimation");
+  LOG_HEADING2("Per-patch DP blur estimation");
   const ProfileChoice profile = ChooseProfile(options, sources);
   const DPPsfField psf_field =
       MakePsfField(profile.model, profile.path, &core_options);

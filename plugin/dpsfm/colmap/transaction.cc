@@ -11,12 +11,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include <boost/filesystem.hpp>
 #include <nlohmann/json.hpp>
 
 #include "dpsfm/colmap/workspace.h"
@@ -31,7 +31,7 @@ const char kFaultInjectCommitEnv[] = "DPSFM_FAULT_INJECT_COMMIT_AFTER";
 
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 using nlohmann::json;
 
 const char kTmpSuffix[] = ".tmp";
@@ -61,7 +61,7 @@ fs::path ResolveTarget(const std::string& target) {
 }
 
 bool Exists(const fs::path& path) {
-  boost::system::error_code ec;
+  std::error_code ec;
   return fs::exists(fs::symlink_status(path, ec));
 }
 
@@ -171,7 +171,7 @@ void SweepStagedFiles(const fs::path& root,
                       const std::vector<fs::path>& outside_dirs,
                       std::vector<std::string>* removed) {
   std::vector<fs::path> doomed;
-  boost::system::error_code ec;
+  std::error_code ec;
   for (fs::recursive_directory_iterator it(root, ec), end; !ec && it != end;
        it.increment(ec)) {
     if (EndsWith(it->path().filename().string(), kStagedSuffix) &&
@@ -430,7 +430,7 @@ void CommitTransaction::Stage(
     write_staged(staged);
     FsyncFile(staged);
   } catch (...) {
-    boost::system::error_code ec;
+    std::error_code ec;
     fs::remove(staged, ec);
     throw;
   }
@@ -686,7 +686,7 @@ RescaleWorkspaceResult WriteRescaledCopy(
   }
 
   const fs::path staging = output.string() + kCopyStagingSuffix;
-  boost::system::error_code ec;
+  std::error_code ec;
   fs::remove_all(staging, ec);  // a stale half copy of an interrupted run
   if (ec) {
     throw std::runtime_error("cannot remove the stale staging folder " +

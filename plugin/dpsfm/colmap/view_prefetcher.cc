@@ -13,7 +13,11 @@ ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader, int index) {
   colmap::Timer timer;
   timer.Start();
   ViewPrefetcher::Read read;
-  read.view = reader->LoadView(index);
+  try {
+    read.view = reader->LoadView(index);
+  } catch (...) {
+    read.error = std::current_exception();
+  }
   read.seconds = timer.ElapsedSeconds();
   return read;
 }
@@ -37,7 +41,7 @@ ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
 }
 
 ViewPrefetcher::~ViewPrefetcher() {
-  for (std::future<Read>& read : in_flight_) {
+  for (std::shared_future<Read>& read : in_flight_) {
     if (read.valid()) read.wait();
   }
 }
@@ -45,7 +49,7 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
-  in_flight_.push_back(
+  in_flight_.emplace_back(
       pool_->AddTask([reader, index]() { return TimedRead(reader, index); }));
 }
 
@@ -60,13 +64,14 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     read = TimedRead(reader_, order_[launched_++]);
   } else {
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
-    std::future<Read> next = std::move(in_flight_.front());
+    std::shared_future<Read> next = std::move(in_flight_.front());
     in_flight_.pop_front();
-    read = next.get();  // rethrows the read's error
+    read = next.get();
     // The next read starts once this one is out, so reads stay in order
     // and at most depth views wait in memory.
     if (launched_ < order_.size()) Launch();
   }
+  if (read.error) std::rethrow_exception(read.error);
   read.waited = timer.ElapsedSeconds();
   return read;
 }

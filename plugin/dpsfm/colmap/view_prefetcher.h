@@ -4,6 +4,7 @@
 #pragma once
 
 #include <deque>
+#include <exception>
 #include <future>
 #include <memory>
 #include <vector>
@@ -33,6 +34,10 @@ class ViewPrefetcher {
     DPView view;
     double seconds = 0;  // the read itself
     double waited = 0;   // how long Next() blocked for it
+    // The read's error, rethrown by Next(). Tasks never throw: COLMAP 4's
+    // thread pool treats an exception no one collected through Wait() as
+    // fatal when it is destroyed.
+    std::exception_ptr error;
   };
   // The next view in order; rethrows its read's error (InputError).
   Read Next();
@@ -45,7 +50,9 @@ class ViewPrefetcher {
   const int depth_;
   size_t launched_ = 0;
   std::unique_ptr<colmap::ThreadPool> pool_;
-  std::deque<std::future<Read>> in_flight_;
+  // Shared futures: COLMAP 4's ThreadPool::AddTask returns them (3.10's a
+  // std::future, which converts).
+  std::deque<std::shared_future<Read>> in_flight_;
 };
 
 }  // namespace dpsfm

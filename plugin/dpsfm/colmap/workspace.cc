@@ -1,9 +1,8 @@
 #include "dpsfm/colmap/workspace.h"
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
-
-#include <boost/filesystem.hpp>
 
 #include "dpsfm/core/check.h"
 #include "dpsfm/core/encoding.h"
@@ -11,7 +10,7 @@
 namespace dpsfm {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 std::string Join(const std::string& a, const std::string& b) {
   return (fs::path(a) / b).string();

@@ -7,17 +7,18 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
-#include <boost/filesystem.hpp>
-
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/rescale.h"
 
 namespace dpsfm {
 namespace {
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 // True if two cameras map pixels to rays identically (no distortion to
 // undo between them).
@@ -26,9 +27,10 @@ bool SameGeometry(const colmap::Camera& a, const colmap::Camera& b) {
   for (const double x : {0.0, 0.5, 1.0}) {
     for (const double y : {0.0, 0.5, 1.0}) {
       const Eigen::Vector2d pixel(x * a.width, y * a.height);
-      if ((a.CamFromImg(pixel) - b.CamFromImg(pixel)).norm() > 1e-6) {
-        return false;
-      }
+      const std::optional<Eigen::Vector2d> ray_a = CamFromImg(a, pixel);
+      const std::optional<Eigen::Vector2d> ray_b = CamFromImg(b, pixel);
+      if (ray_a.has_value() != ray_b.has_value()) return false;
+      if (ray_a && (*ray_a - *ray_b).norm() > 1e-6) return false;
     }
   }
   return true;
@@ -115,11 +117,10 @@ void CheckCamerasBinary(const std::string& path) {
 // will read (the ones the rescaler parses, and cameras.bin): COLMAP's own
 // readers turn a truncated file into "std::bad_alloc" or worse.
 void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
-  const boost::filesystem::path root(dir);
-  const bool binary =
-      boost::filesystem::is_regular_file(root / "cameras.bin") &&
-      boost::filesystem::is_regular_file(root / "images.bin") &&
-      boost::filesystem::is_regular_file(root / "points3D.bin");
+  const std::filesystem::path root(dir);
+  const bool binary = std::filesystem::is_regular_file(root / "cameras.bin") &&
+                      std::filesystem::is_regular_file(root / "images.bin") &&
+                      std::filesystem::is_regular_file(root / "points3D.bin");
   if (binary) CheckCamerasBinary((root / "cameras.bin").string());
   const std::vector<std::pair<const char*, ArtefactType>> files =
       binary ? std::vector<
@@ -133,7 +134,7 @@ void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
                    {"points3D.txt", ArtefactType::kPoints3DText}};
   for (const auto& file : files) {
     const std::string path = (root / file.first).string();
-    if (!boost::filesystem::is_regular_file(path)) continue;
+    if (!std::filesystem::is_regular_file(path)) continue;
     std::string bytes = internal::ReadFileBytes(path);
     try {
       RescaleContents(file.second, 1.0, path, &bytes);  // parses, all checked
@@ -290,11 +291,14 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
   for (int y = 0; y < frame_size.height; ++y) {
     for (int x = 0; x < frame_size.width; ++x) {
       // COLMAP puts the top-left pixel centre at 0.5.
-      const Eigen::Vector2d ray =
-          original.CamFromImg(Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
-      const Eigen::Vector2d uv = undistorted.ImgFromCam(ray);
-      const int col = static_cast<int>(std::floor(uv.x() * sx));
-      const int row = static_cast<int>(std::floor(uv.y() * sy));
+      const std::optional<Eigen::Vector2d> ray =
+          CamFromImg(original, Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
+      if (!ray) continue;
+      const std::optional<Eigen::Vector2d> uv =
+          ImgFromCam(undistorted, ray->homogeneous());
+      if (!uv) continue;
+      const int col = static_cast<int>(std::floor(uv->x() * sx));
+      const int row = static_cast<int>(std::floor(uv->y() * sy));
       if (col >= 0 && row >= 0 && col < depth.cols && row < depth.rows) {
         mapped.at<float>(y, x) = depth.at<float>(row, col);
       }

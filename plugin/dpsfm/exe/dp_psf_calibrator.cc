@@ -3,19 +3,20 @@
 #include <cmath>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <limits>
 #include <set>
 #include <sstream>
 
-#include <boost/filesystem.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "colmap/controllers/option_manager.h"
 #include "colmap/util/logging.h"
 #include "colmap/util/misc.h"
 #include "colmap/util/timer.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/dp_images.h"
 #include "dpsfm/colmap/psf_profile.h"
 #include "dpsfm/colmap/workspace.h"
@@ -28,7 +29,7 @@
 #include "dpsfm/core/shape_calibration.h"
 #include "dpsfm/core/target_calibration.h"
 
-namespace fs = boost::filesystem;
+namespace fs = std::filesystem;
 
 namespace dpsfm {
 namespace {
@@ -113,7 +114,7 @@ ShapeCalibration MeasureShapes(const std::vector<CalibrationTarget>& targets,
                                const TargetCalibration& calibration,
                                const std::vector<cv::Mat>& left,
                                const std::vector<cv::Mat>& right) {
-  colmap::PrintHeading2("Measuring the kernels' shape");
+  LOG_HEADING2("Measuring the kernels' shape");
   std::vector<ShapeCapture> captures;
   for (size_t i = 0; i < targets.size(); ++i) {
     const double r = calibration.capture_radius_px[i];
@@ -242,12 +243,12 @@ int RunDPPsfCalibrator(int argc, char** argv) {
   manager.AddDefaultOption("DPPsfCalibrator.num_threads",
                            &options.num_threads,
                            "threads (-1: all cores)");
-  manager.Parse(argc, argv);
+  if (!ParseOptions(&manager, argc, argv)) return EXIT_FAILURE;
 
   try {
     colmap::Timer timer;
     timer.Start();
-    colmap::PrintHeading1("DP PSF calibration");
+    LOG_HEADING1("DP PSF calibration");
     if (!options.Check()) {
       throw InputError("invalid --DPPsfCalibrator option: " +
                        OptionCheckFailure());
@@ -357,7 +358,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     if (!fit_options.Check()) {
       throw InputError("invalid calibration options: " + OptionCheckFailure());
     }
-    colmap::PrintHeading2("Fitting the DP profile");
+    LOG_HEADING2("Fitting the DP profile");
     const TargetCalibration calibration =
         CalibrateFromTargets(captures, fit_options);
     for (size_t i = 0; i < captures.size(); ++i) {

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "colmap/controllers/option_manager.h"
+#include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/scale_controller.h"
 #include "dpsfm/colmap/workspace.h"
 #include "dpsfm/core/dp_scale_estimator.h"
@@ -176,7 +177,7 @@ int RunDPScaleEstimator(int argc, char** argv) {
 
   colmap::OptionManager option_manager;
   AddCommandOptions(&option_manager, &options, &core_options);
-  option_manager.Parse(argc, argv);
+  if (!ParseOptions(&option_manager, argc, argv)) return EXIT_FAILURE;
   options.num_threads = core_options.num_threads;
 
   try {

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Compiles dp-sfm's sources that include COLMAP headers (the plugin's COLMAP
+# layer and commands, the examples, the tests) against the newest COLMAP
+# source at hand: COLMAP's main branch of 2026-08 (4.2.0.dev0, in
+# ../shared/sources). A compile check only: COLMAP itself does not link from
+# that tree with the PoseLib we have, so nothing is linked or run. Prints each
+# file that fails and exits non-zero if any does.
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+[ -n "$POSELIB_REVISION" ] || die "run it with the default build (COLMAP 4), not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION"
+
+stage "install dependencies" "$DPSFM_ROOT/scripts/install_deps.sh"
+poselib_prefix="$("$DPSFM_ROOT/scripts/build_poselib.sh")"
+pristine="$("$DPSFM_ROOT/scripts/fetch_archive.sh" colmap-main \
+  "$COLMAP_MAIN_ARCHIVE" "$COLMAP_MAIN_ARCHIVE_SHA256" \
+  "$COLMAP_MAIN_TREE_SHA256" "$COLMAP_MAIN_URL")"
+
+# The patched tree and its build directory, keyed by the patch series.
+key="$(cd "$DPSFM_ROOT/colmap_patches" && cat $(ls -1 *.patch | LC_ALL=C sort) \
+  | sha256sum | cut -c1-16)"
+source_dir="$DPSFM_CACHE_DIR/src/colmap-main-check-$key"
+if [ ! -f "$source_dir/.dpsfm-complete" ]; then
+  rm -rf "$source_dir.part"
+  cp -a "$pristine" "$source_dir.part"
+  for patch in $(ls -1 "$DPSFM_ROOT"/colmap_patches/*.patch | LC_ALL=C sort); do
+    (cd "$source_dir.part" && git apply --whitespace=nowarn "$patch") \
+      || die "patch $(basename "$patch") does not apply to COLMAP's main branch"
+  done
+  touch "$source_dir.part/.dpsfm-complete"
+  rm -rf "$source_dir"
+  mv "$source_dir.part" "$source_dir"
+fi
+build_dir="$DPSFM_CACHE_DIR/build/colmap-main-check-$key"
+mkdir -p "$build_dir"
+ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
+
+configure() {
+  cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
+    -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" -DCOLMAP_SOURCE_DIR="$source_dir" \
+    -DCMAKE_PREFIX_PATH="$poselib_prefix" "${DPSFM_COLMAP_OPTIONS[@]}" \
+    >"$build_dir/configure.log" 2>&1 \
+    || { tail -n 40 "$build_dir/configure.log" >&2; die "CMake configuration against COLMAP's main branch failed (log: $build_dir/configure.log)"; }
+}
+stage "configure against $(grep -o 'COLMAP_VERSION "[^"]*"' "$source_dir/CMakeLists.txt")" configure
+
+# Every object of dp-sfm's own targets that sees COLMAP headers: the COLMAP
+# layer, the commands, the examples and the tests of tests/{colmap,e2e,scripts}
+# (the core and its tests include no COLMAP header).
+mapfile -t objects < <(ninja -C "$build_dir" -t targets all | cut -d: -f1 \
+  | grep -E '^(plugin/CMakeFiles/dpsfm_(colmap|exe)\.dir/|examples/CMakeFiles/|tests/CMakeFiles/[^/]+\.dir/(colmap|e2e|scripts)/).*\.o$')
+[ ${#objects[@]} -gt 0 ] || die "found no objects to compile in $build_dir"
+log "compiling ${#objects[@]} files against $source_dir"
+failed=0
+start=$SECONDS
+if ! ninja -C "$build_dir" -k 0 -j "$(jobs_count)" "${objects[@]}" >"$build_dir/compile.log" 2>&1; then
+  failed=1
+fi
+grep -E '^FAILED: ' "$build_dir/compile.log" | sed 's/^/[dp-sfm] /' >&2 || true
+grep -E 'error:' "$build_dir/compile.log" | head -n 40 >&2 || true
+log "compiled ${#objects[@]} files in $((SECONDS - start)) s (log: $build_dir/compile.log)"
+[ "$failed" -eq 0 ] || die "dp-sfm does not compile against COLMAP's main branch (4.2.0.dev0)"
+log "dp-sfm compiles against COLMAP's main branch (4.2.0.dev0): ${#objects[@]} files, no errors"
