@@ -38,6 +38,7 @@ configure() {
   cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
     -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" -DCOLMAP_SOURCE_DIR="$source_dir" \
     -DCMAKE_PREFIX_PATH="$poselib_prefix" "${DPSFM_COLMAP_OPTIONS[@]}" \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \
     >"$build_dir/configure.log" 2>&1 \
     || { tail -n 40 "$build_dir/configure.log" >&2; die "CMake configuration against COLMAP's main branch failed (log: $build_dir/configure.log)"; }
 }
@@ -45,18 +46,41 @@ stage "configure against $(grep -o 'COLMAP_VERSION "[^"]*"' "$source_dir/CMakeLi
 
 # Every object of dp-sfm's own targets that sees COLMAP headers: the COLMAP
 # layer, the commands, the examples and the tests of tests/{colmap,e2e,scripts}
-# (the core and its tests include no COLMAP header).
-mapfile -t objects < <(ninja -C "$build_dir" -t targets all | cut -d: -f1 \
-  | grep -E '^(plugin/CMakeFiles/dpsfm_(colmap|exe)\.dir/|examples/CMakeFiles/|tests/CMakeFiles/[^/]+\.dir/(colmap|e2e|scripts)/).*\.o$')
-[ ${#objects[@]} -gt 0 ] || die "found no objects to compile in $build_dir"
-log "compiling ${#objects[@]} files against $source_dir"
-failed=0
+# (the core and its tests include no COLMAP header). Compiled one by one from
+# compile_commands.json: building them through Ninja would first build the
+# COLMAP libraries they link.
+mapfile -t files < <(python3 - "$build_dir/compile_commands.json" <<'PY'
+import json, re, sys
+pattern = re.compile(r"/(plugin/dpsfm/(colmap|exe)|examples|tests/(colmap|e2e|scripts))/[^/]+\.cc$")
+for entry in json.load(open(sys.argv[1])):
+    if pattern.search(entry["file"]):
+        print(entry["file"])
+PY
+)
+[ ${#files[@]} -gt 0 ] || die "found no dp-sfm sources in $build_dir/compile_commands.json"
+log "compiling ${#files[@]} files against $source_dir (syntax and types only)"
 start=$SECONDS
-if ! ninja -C "$build_dir" -k 0 -j "$(jobs_count)" "${objects[@]}" >"$build_dir/compile.log" 2>&1; then
-  failed=1
-fi
+: >"$build_dir/compile.log"
+compile_one() {
+  python3 - "$build_dir/compile_commands.json" "$1" <<'PY'
+import json, shlex, subprocess, sys
+entry = next(e for e in json.load(open(sys.argv[1])) if e["file"] == sys.argv[2])
+args = shlex.split(entry["command"])
+# Drop the output file: check syntax and types only.
+if "-o" in args:
+    k = args.index("-o"); del args[k:k + 2]
+args.append("-fsyntax-only")
+sys.exit(subprocess.call(args, cwd=entry["directory"]))
+PY
+}
+export -f compile_one
+export build_dir
+failed=0
+printf '%s\n' "${files[@]}" | xargs -P "$(jobs_count)" -I{} bash -c \
+  'compile_one "$1" >>"$build_dir/compile.log" 2>&1 || { echo "FAILED: $1" >>"$build_dir/compile.log"; exit 1; }' _ {} \
+  || failed=1
 grep -E '^FAILED: ' "$build_dir/compile.log" | sed 's/^/[dp-sfm] /' >&2 || true
 grep -E 'error:' "$build_dir/compile.log" | head -n 40 >&2 || true
-log "compiled ${#objects[@]} files in $((SECONDS - start)) s (log: $build_dir/compile.log)"
+log "compiled ${#files[@]} files in $((SECONDS - start)) s (log: $build_dir/compile.log)"
 [ "$failed" -eq 0 ] || die "dp-sfm does not compile against COLMAP's main branch (4.2.0.dev0)"
-log "dp-sfm compiles against COLMAP's main branch (4.2.0.dev0): ${#objects[@]} files, no errors"
+log "dp-sfm compiles against COLMAP's main branch (4.2.0.dev0): ${#files[@]} files, no errors"
