@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds COLMAP (DPSFM_COLMAP_VERSION: 4.1.1 by default, or 3.10) with the
 # dp-sfm plugin in one CMake tree and prints the build directory. COLMAP 4's
-# PoseLib is built first, into its own cache entry (build_poselib.sh). The build directory is cached outside the clone, keyed by
+# PoseLib is built first, into its own cache entry (build_poselib.sh). The
+# build directory is cached outside the clone, keyed by
 # COLMAP version + patch series + build options, so a fresh clone on the same
 # machine reuses it and COLMAP is not rebuilt. The build tree reaches the
 # clone through a symlink (<build>/.source), so whichever clone runs the

@@ -16,16 +16,12 @@ pristine="$("$DPSFM_ROOT/scripts/fetch_archive.sh" colmap-main \
   "$COLMAP_MAIN_TREE_SHA256" "$COLMAP_MAIN_URL")"
 
 # The patched tree and its build directory, keyed by the patch series.
-key="$(cd "$DPSFM_ROOT/colmap_patches" && cat $(ls -1 *.patch | LC_ALL=C sort) \
-  | sha256sum | cut -c1-16)"
+key="$(cat $(patch_series) | sha256sum | cut -c1-16)"
 source_dir="$DPSFM_CACHE_DIR/src/colmap-main-check-$key"
 if [ ! -f "$source_dir/.dpsfm-complete" ]; then
   rm -rf "$source_dir.part"
   cp -a "$pristine" "$source_dir.part"
-  for patch in $(ls -1 "$DPSFM_ROOT"/colmap_patches/*.patch | LC_ALL=C sort); do
-    (cd "$source_dir.part" && git apply --whitespace=nowarn "$patch") \
-      || die "patch $(basename "$patch") does not apply to COLMAP's main branch"
-  done
+  apply_patch_series "$source_dir.part" "COLMAP's main branch"
   touch "$source_dir.part/.dpsfm-complete"
   rm -rf "$source_dir"
   mv "$source_dir.part" "$source_dir"

@@ -80,6 +80,20 @@ if [ -n "$POSELIB_REVISION" ]; then
   )
 fi
 
+# The patch series (colmap_patches/*.patch, in application order).
+patch_series() { ls -1 "$DPSFM_ROOT"/colmap_patches/*.patch | LC_ALL=C sort; }
+
+# Applies the patch series to the COLMAP tree $1 with git apply; stops
+# naming the patch that does not apply to $2 (what the tree is).
+apply_patch_series() {
+  local patch
+  for patch in $(patch_series); do
+    log "applying $(basename "$patch")"
+    (cd "$1" && git apply --whitespace=nowarn "$patch") \
+      || die "patch $(basename "$patch") does not apply to $2"
+  done
+}
+
 # The sha256 of the files under $1 (names and contents, in a fixed order).
 tree_sha256() {
   (cd "$1" && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 sha256sum) \

@@ -94,11 +94,7 @@ else
   [ -d "$work/colmap-$COLMAP_VERSION" ] || die "unexpected tarball layout in $tarball"
   mv "$work/colmap-$COLMAP_VERSION" "$work/colmap"
 fi
-for patch in $(ls -1 "$DPSFM_ROOT"/colmap_patches/*.patch | LC_ALL=C sort); do
-  log "applying $(basename "$patch")"
-  (cd "$work/colmap" && git apply --whitespace=nowarn "$patch") \
-    || die "patch $(basename "$patch") does not apply to COLMAP $COLMAP_VERSION"
-done
+apply_patch_series "$work/colmap" "COLMAP $COLMAP_VERSION"
 touch "$work/colmap/.dpsfm-complete"
 rm -rf "$source_dir"
 mv "$work/colmap" "$source_dir"
