@@ -80,10 +80,11 @@ int main(int argc, char** argv) {
   double true_scale = 0.37, focal_mm = 49.57, f_number = 4, pitch_um = 46.875;
   double recorded_focus_m = 0;
   bool linear16 = false, frames_only = false;
-  po::options_description desc("dpsfm_make_realdp_workspace");
-  desc.add_options()("capture_path",
-                     po::value(&capture)->required(),
-                     "folder with l.png, r.png, d.png")(
+  po::options_description desc("Options");
+  desc.add_options()("help,h", "print this help")(
+      "capture_path",
+      po::value(&capture)->required(),
+      "folder with l.png, r.png, d.png")(
       "output_path", po::value(&output)->required(), "workspace to create")(
       "true_scale", po::value(&true_scale), "metres per model unit")(
       "focal_length_mm", po::value(&focal_mm), "lens focal length")(
@@ -102,6 +103,30 @@ int main(int argc, char** argv) {
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
+    if (vm.count("help")) {
+      std::cout << "dpsfm_make_realdp_workspace\n\n"
+                   "  Makes a COLMAP dense workspace from one DP capture with "
+                   "measured depth\n"
+                   "  (a folder with l.png, r.png and d.png, the layout of "
+                   "../shared/realdp):\n"
+                   "  one PINHOLE view whose depth map is the measured depth "
+                   "divided by\n"
+                   "  --true_scale (the \"up to scale\" depth a reconstruction "
+                   "would have),\n"
+                   "  the DP views in dp/left and dp/right, a lens.csv and "
+                   "truth.json.\n"
+                   "  colmap dp_scale_estimator must then recover --true_scale "
+                   "(docs/user-guide.md,\n"
+                   "  \"A first hour\"). d.png: 16-bit = millimetres, 8-bit = "
+                   "metres x 255 / 10.\n\n"
+                   "Usage:\n"
+                   "  dpsfm_make_realdp_workspace --capture_path CAPTURE "
+                   "--output_path OUT\n"
+                   "      [--true_scale 0.37] [--recorded_focus_m 1.0] "
+                   "[--frames_only 1]\n\n"
+                << desc << "\n";
+      return 0;
+    }
     po::notify(vm);
     if (!(true_scale > 0)) throw std::runtime_error("true_scale must be > 0");
     const fs::path in(capture), out(output);

@@ -54,5 +54,11 @@ fi
 
 ccache --zero-stats >/dev/null 2>&1 || true
 stage "build" cmake --build "$build_dir" -j "$(jobs_count)"
+# The programs a user runs, in one folder (docs/user-guide.md puts it on
+# PATH): COLMAP with the plugin's commands, and the capture-to-workspace tool.
+mkdir -p "$build_dir/bin"
+ln -sfn ../colmap/src/colmap/exe/colmap "$build_dir/bin/colmap"
+ln -sfn ../examples/dpsfm_make_realdp_workspace \
+  "$build_dir/bin/dpsfm_make_realdp_workspace"
 ccache --show-stats 2>/dev/null | grep -E "Hits|Misses|hit rate" | head -n 3 | sed 's/^/[dp-sfm] ccache: /' >&2 || true
 result "$build_dir"

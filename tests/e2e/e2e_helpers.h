@@ -3,6 +3,8 @@
 // the checks every refusal must pass.
 #pragma once
 
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
@@ -48,6 +50,25 @@ inline void ExpectModelScaled(const std::string& before_dir,
     EXPECT_TRUE(after.Point3D(point.first)
                     .xyz.isApprox(scale * point.second.xyz, 1e-12));
   }
+}
+
+// The real DP captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the
+// source tree, else /work/shared/realdp; the first that holds
+// canon_r6m2_rf50/, or "" when none does.
+inline std::string RealDpDir() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("DPSFM_REALDP_DIR")) {
+    candidates.push_back(env);
+  }
+  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/realdp");
+  candidates.push_back("/work/shared/realdp");
+  for (const std::string& c : candidates) {
+    if (std::filesystem::is_directory(std::filesystem::path(c) /
+                                      "canon_r6m2_rf50")) {
+      return std::filesystem::canonical(c).string();
+    }
+  }
+  return "";
 }
 
 inline nlohmann::json ReadJson(const std::string& path) {

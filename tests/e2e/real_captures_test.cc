@@ -27,21 +27,10 @@ namespace fs = std::filesystem;
 
 constexpr double kTrueScale = 0.37;
 
-// The captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the source
-// tree, else /work/shared/realdp.
+// The Canon R6 II captures (e2e_helpers.h, RealDpDir), or "".
 std::string RealDir() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("DPSFM_REALDP_DIR")) {
-    candidates.push_back(env);
-  }
-  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/realdp");
-  candidates.push_back("/work/shared/realdp");
-  for (const std::string& c : candidates) {
-    if (fs::is_directory(fs::path(c) / "canon_r6m2_rf50")) {
-      return (fs::path(c) / "canon_r6m2_rf50").string();
-    }
-  }
-  return "";
+  const std::string dir = RealDpDir();
+  return dir.empty() ? dir : dir + "/canon_r6m2_rf50";
 }
 
 class RealCaptures : public ::testing::Test {

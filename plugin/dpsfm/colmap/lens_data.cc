@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
 #include <sstream>
 #include <vector>
 
@@ -12,92 +12,76 @@
 namespace dpsfm {
 namespace {
 
-double ParseCell(const std::string& cell,
-                 const std::string& path,
-                 int line,
-                 const char* column,
-                 bool allow_empty) {
-  if (cell.empty()) {
-    if (allow_empty) return 0;
-    throw InputError(path + ":" + std::to_string(line) + ": " + column +
-                     " is empty");
-  }
+// An empty cell is 0 ("not given"); anything else a positive number.
+double ParseCell(const CsvTable& table,
+                 const CsvTable::Row& row,
+                 const char* column) {
+  const std::string cell = table.Cell(row, column);
+  if (cell.empty()) return 0;
   char* end = nullptr;
   const double value = std::strtod(cell.c_str(), &end);
   if (end == cell.c_str() || *end != '\0' || !std::isfinite(value) ||
       value <= 0) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + column +
-                     " must be a positive number, got '" + cell + "'");
+    throw InputError(table.Where(row) + column +
+                     " must be a positive number or empty, got '" + cell + "'");
   }
   return value;
 }
 
+// A word on the unit when an unknown column looks like a known one in
+// another unit.
+std::string LensColumnHint(const std::string& column) {
+  if (column.rfind("pixel_pitch", 0) == 0) {
+    return " (the pitch is given in micrometres, as pixel_pitch_um)";
+  }
+  if (column.rfind("focal_length", 0) == 0) {
+    return " (the focal length is given in millimetres, as focal_length_mm)";
+  }
+  if (column.rfind("focus_distance", 0) == 0) {
+    return " (the focus distance is given in metres, as focus_distance_m)";
+  }
+  return "";
+}
+
 }  // namespace
 
+const std::vector<std::string>& LensCsvColumns() {
+  static const std::vector<std::string> kColumns = {"name",
+                                                    "focal_length_mm",
+                                                    "f_number",
+                                                    "pixel_pitch_um",
+                                                    "focus_distance_m",
+                                                    "camera",
+                                                    "lens"};
+  return kColumns;
+}
+
 std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) {
-    throw InputError("cannot read lens file " + path);
-  }
-  std::string line;
-  if (!std::getline(file, line)) {
-    throw InputError("lens file is empty: " + path);
-  }
-  const std::vector<std::string> header = SplitCsvLine(line);
-  const std::vector<std::string> required = {
-      "name", "focal_length_mm", "f_number", "pixel_pitch_um"};
-  bool valid = header.size() >= required.size() &&
-               std::equal(required.begin(), required.end(), header.begin());
-  int focus_column = -1, camera_column = -1, lens_column = -1;
-  for (size_t c = required.size(); valid && c < header.size(); ++c) {
-    int* column = header[c] == "focus_distance_m" ? &focus_column
-                  : header[c] == "camera"         ? &camera_column
-                  : header[c] == "lens"           ? &lens_column
-                                                  : nullptr;
-    valid = column != nullptr && *column < 0;
-    if (valid) *column = static_cast<int>(c);
-  }
-  if (!valid) {
-    throw InputError("lens file " + path +
-                     " must start with the header "
-                     "name,focal_length_mm,f_number,pixel_pitch_um (optionally "
-                     "followed by focus_distance_m, camera, lens, each once)");
-  }
-  const size_t max_cells = header.size();
-  const bool with_focus = focus_column >= 0;
+  const CsvTable table(path,
+                       LensCsvColumns(),
+                       {"name"},
+                       "IMG_1.JPG,50,4,5.93,1.2,Canon / Canon EOS R6m2,RF50mm "
+                       "F1.8 STM",
+                       LensColumnHint);
   std::map<std::string, LensCsvRow> rows;
-  int line_number = 1;
-  while (std::getline(file, line)) {
-    ++line_number;
-    if (Trim(line).empty()) continue;
-    const std::vector<std::string> cells = SplitCsvLine(line);
-    if (cells.size() < 3 || cells.size() > max_cells || cells[0].empty()) {
-      throw InputError(
-          path + ":" + std::to_string(line_number) +
-          ": expected name,focal_length_mm,f_number[,"
-          "pixel_pitch_um" +
-          (with_focus ? std::string("[,...]]") : std::string("]")));
+  for (const CsvTable::Row& cells : table.rows()) {
+    const std::string name = table.Cell(cells, "name");
+    if (name.empty()) {
+      throw InputError(table.Where(cells) +
+                       "the name cell is empty (the image's name as the "
+                       "model stores it, e.g. IMG_1.JPG)");
     }
     LensCsvRow row;
-    row.focal_length_mm =
-        ParseCell(cells[1], path, line_number, "focal_length_mm", false);
-    row.f_number = ParseCell(cells[2], path, line_number, "f_number", false);
-    row.pixel_pitch_um =
-        cells.size() == 4
-            ? ParseCell(cells[3], path, line_number, "pixel_pitch_um", true)
-            : 0;
-    auto cell = [&](int column) {
-      return column >= 0 && column < static_cast<int>(cells.size())
-                 ? cells[column]
-                 : std::string();
-    };
-    row.focus_distance_m = ParseCell(
-        cell(focus_column), path, line_number, "focus_distance_m", true);
-    row.camera = cell(camera_column);
-    row.lens = cell(lens_column);
-    if (!rows.emplace(cells[0], row).second) {
-      throw InputError(path + ":" + std::to_string(line_number) + ": image " +
-                       cells[0] + " is listed twice");
+    row.focal_length_mm = ParseCell(table, cells, "focal_length_mm");
+    row.f_number = ParseCell(table, cells, "f_number");
+    row.pixel_pitch_um = ParseCell(table, cells, "pixel_pitch_um");
+    row.focus_distance_m = ParseCell(table, cells, "focus_distance_m");
+    row.camera = table.Cell(cells, "camera");
+    row.lens = table.Cell(cells, "lens");
+    row.line = cells.line;
+    if (!rows.emplace(name, row).second) {
+      throw InputError(table.Where(cells) + "image " + name +
+                       " is listed twice");
     }
   }
   return rows;
@@ -111,6 +95,10 @@ ResolvedLens ResolveLens(const std::string& image_name,
   ResolvedLens resolved;
   const auto row = csv.find(image_name);
   const LensCsvRow* csv_row = row == csv.end() ? nullptr : &row->second;
+  const std::string csv_source =
+      csv_row == nullptr  ? ""
+      : csv_row->line > 0 ? "lens.csv line " + std::to_string(csv_row->line)
+                          : "lens.csv";
 
   auto pick = [&](double csv_value,
                   double flag_value,
@@ -119,7 +107,7 @@ ResolvedLens ResolveLens(const std::string& image_name,
                   std::string* source) {
     if (csv_value > 0) {
       *out = csv_value;
-      *source = "lens.csv";
+      *source = csv_source;
     } else if (flag_value > 0) {
       *out = flag_value;
       *source = "flag";
@@ -146,7 +134,7 @@ ResolvedLens ResolveLens(const std::string& image_name,
 
   if (csv_row && csv_row->focus_distance_m > 0) {
     resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
-    resolved.focus_source = "lens.csv";
+    resolved.focus_source = csv_source;
   } else if (exif && exif->focus_distance_mm > 0) {
     resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
     resolved.lens.recorded_focus_bracket = exif->focus_bracket;
@@ -182,6 +170,159 @@ ResolvedLens ResolveLens(const std::string& image_name,
     resolved.pixel_pitch_source = "derived f_mm/f_px";
   }
   return resolved;
+}
+
+namespace {
+
+std::string Number(double value) {
+  std::ostringstream s;
+  s.precision(4);
+  s << value;
+  return s.str();
+}
+
+// Where a number can be corrected, in the words of its source.
+std::string FixFor(const std::string& source, const char* column) {
+  if (source.rfind("lens.csv", 0) == 0) {
+    return "correct " + std::string(column) + " in " + source;
+  }
+  if (source == "flag") {
+    return "correct --DPScaleEstimator." + std::string(column);
+  }
+  if (source == "EXIF") {
+    return "the original image's EXIF is wrong here: override it with "
+           "--DPScaleEstimator." +
+           std::string(column) + " or lens.csv";
+  }
+  return "give " + std::string(column) + " in lens.csv or as a flag";
+}
+
+// v / f of a lens of focal length f focused at `focus_mm` from the sensor.
+double Breathing(double focus_mm, double f_mm) {
+  const double u = FocusObjectDistanceMm(focus_mm, f_mm);
+  return (focus_mm - u) / f_mm;
+}
+
+void CheckRanges(const std::string& image_name,
+                 const ResolvedLens& resolved,
+                 const LensCheckOptions& options) {
+  const DPLensData& lens = resolved.lens;
+  const std::string prefix = "image " + image_name + ": ";
+  if (lens.focal_length_mm > options.max_focal_length_mm) {
+    throw InputError(prefix + "focal length " + Number(lens.focal_length_mm) +
+                     " mm (" + resolved.focal_length_source +
+                     ") is beyond any lens: is it in pixels? Give it in "
+                     "millimetres; " +
+                     FixFor(resolved.focal_length_source, "focal_length_mm"));
+  }
+  if (lens.f_number < options.min_f_number ||
+      lens.f_number > options.max_f_number) {
+    throw InputError(prefix + "f-number " + Number(lens.f_number) + " (" +
+                     resolved.f_number_source + ") is outside [" +
+                     Number(options.min_f_number) + ", " +
+                     Number(options.max_f_number) + "]; " +
+                     FixFor(resolved.f_number_source, "f_number"));
+  }
+  const double focus_mm = lens.recorded_focus_mm;
+  if (std::isfinite(focus_mm)) {
+    if (focus_mm < 4 * lens.focal_length_mm) {
+      throw InputError(
+          prefix + "recorded focus distance " + Number(focus_mm / 1000) +
+          " m (" + resolved.focus_source + ") is nearer than a " +
+          Number(lens.focal_length_mm) +
+          " mm lens can focus (4 f): is it in the wrong unit? lens.csv's "
+          "focus_distance_m is in metres from the focal-plane mark");
+    }
+    if (focus_mm >= 1000 * options.max_recorded_focus_m &&
+        resolved.focus_source.rfind("lens.csv", 0) == 0) {
+      throw InputError(prefix + "recorded focus distance " +
+                       Number(focus_mm / 1000) + " m (" +
+                       resolved.focus_source +
+                       ") looks like millimetres: focus_distance_m is in "
+                       "metres (leave it empty for a focus at infinity)");
+    }
+  }
+}
+
+}  // namespace
+
+void CheckLensAgainstCamera(const std::string& image_name,
+                            const ResolvedLens& resolved,
+                            const CameraGeometry& camera,
+                            const LensCheckOptions& options) {
+  CheckRanges(image_name, resolved, options);
+  const DPLensData& lens = resolved.lens;
+  const std::string prefix = "image " + image_name + ": ";
+  const int long_side = std::max(camera.width, camera.height);
+  const double sensor_mm = lens.pixel_pitch_um * long_side / 1000;
+  const std::string pitch_text = "pixel pitch " + Number(lens.pixel_pitch_um) +
+                                 " um (" + resolved.pixel_pitch_source + ")";
+  const double implied_pitch_um =
+      camera.focal_px > 0 ? 1000 * lens.focal_length_mm / camera.focal_px : 0;
+  const std::string implied =
+      implied_pitch_um > 0 ? " (f_mm / f_px gives " + Number(implied_pitch_um) +
+                                 " um; leave the pitch out to use that)"
+                           : "";
+  if (sensor_mm < options.min_sensor_mm || sensor_mm > options.max_sensor_mm) {
+    const bool derived = resolved.pixel_pitch_source.rfind("derived", 0) == 0;
+    // A pitch in mm makes the sensor 1000 times too small.
+    const bool in_mm = 1000 * sensor_mm >= options.min_sensor_mm &&
+                       1000 * sensor_mm <= options.max_sensor_mm;
+    const std::string cause =
+        derived
+            ? "the focal length " + Number(lens.focal_length_mm) + " mm (" +
+                  resolved.focal_length_source + ") and the camera's " +
+                  Number(camera.focal_px) +
+                  " px disagree: is the focal length in pixels or the "
+                  "camera's calibration wrong? " +
+                  FixFor(resolved.focal_length_source, "focal_length_mm")
+            : (in_mm ? "is the pitch in millimetres? Give micrometres; " : "") +
+                  FixFor(resolved.pixel_pitch_source, "pixel_pitch_um") +
+                  " (the pitch is of the model camera's pixels)" + implied;
+    throw InputError(prefix + pitch_text + " x the camera's " +
+                     std::to_string(long_side) + " px makes a sensor of " +
+                     Number(sensor_mm) + " mm, outside [" +
+                     Number(options.min_sensor_mm) + ", " +
+                     Number(options.max_sensor_mm) + "] mm: " + cause);
+  }
+  if (resolved.pixel_pitch_source.rfind("derived", 0) == 0 ||
+      !(camera.focal_px > 0)) {
+    return;
+  }
+  // The calibrated f_px is the image distance v over the pitch; v >= f.
+  const double ratio =
+      camera.focal_px * lens.pixel_pitch_um / (1000 * lens.focal_length_mm);
+  const bool focus = std::isfinite(lens.recorded_focus_mm);
+  const double breathing =
+      focus ? Breathing(lens.recorded_focus_mm, lens.focal_length_mm)
+            : options.breathing_without_focus;
+  const double low = 1 / (1 + options.tolerance);
+  const double high = (1 + options.tolerance) * breathing;
+  if (ratio >= low && ratio <= high) return;
+
+  std::string hint;
+  // ratio = given pitch / the pitch f_mm / f_px implies.
+  const double nearest = std::round(ratio);
+  if (nearest >= 2 && std::abs(ratio / nearest - 1) < options.tolerance) {
+    hint = "; if " + Number(lens.pixel_pitch_um) +
+           " um is the pitch of the DP frames' pixels (" + Number(nearest) +
+           " model pixels each), give the model camera's";
+  } else if (std::abs(ratio * 1000 - 1) < 0.5) {
+    hint = "; is the pitch in millimetres? Give micrometres";
+  }
+  throw InputError(
+      prefix + "focal length " + Number(lens.focal_length_mm) + " mm (" +
+      resolved.focal_length_source + ") / " + pitch_text + " = " +
+      Number(1000 * lens.focal_length_mm / lens.pixel_pitch_um) +
+      " px, but the model's camera has f = " + Number(camera.focal_px) +
+      " px (ratio " + Number(ratio) + ", accepted " + Number(low) + "-" +
+      Number(high) +
+      (focus ? " with the recorded focus" : " without a recorded focus") +
+      "). The pitch is of the model camera's pixels" + implied + hint + "; " +
+      FixFor(resolved.pixel_pitch_source, "pixel_pitch_um") +
+      " or the focal length (" +
+      FixFor(resolved.focal_length_source, "focal_length_mm") +
+      "), or allow more with --DPScaleEstimator.lens_check_tolerance");
 }
 
 }  // namespace dpsfm

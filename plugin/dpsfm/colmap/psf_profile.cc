@@ -493,51 +493,69 @@ std::string DefaultProfileLibrary() {
 }
 
 std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw InputError("cannot read calibration targets " + path);
-  const std::string header =
-      "name,target_distance_m,focus_distance_m,focal_length_mm,f_number,"
-      "pixel_pitch_um";
-  std::string line;
-  if (!std::getline(file, line) || Trim(line) != header) {
-    throw InputError("calibration targets " + path +
-                     " must start with the header " + header);
+  const CsvTable table(path,
+                       {"name",
+                        "target_distance_m",
+                        "focus_distance_m",
+                        "focal_length_mm",
+                        "f_number",
+                        "pixel_pitch_um",
+                        "left",
+                        "right"},
+                       {"name",
+                        "target_distance_m",
+                        "focal_length_mm",
+                        "f_number",
+                        "pixel_pitch_um"},
+                       "near_f4,0.6,1.0,49.57,4,46.875,0600/f4/l.png,"
+                       "0600/f4/r.png");
+  if (table.Has("left") != table.Has("right")) {
+    throw InputError(path +
+                     ":1: give both left and right columns (each capture's "
+                     "DP view files, relative to --dp_image_path) or neither");
   }
   std::vector<CalibrationTarget> targets;
-  int number = 1;
-  while (std::getline(file, line)) {
-    ++number;
-    if (Trim(line).empty()) continue;
-    const std::string where = path + ":" + std::to_string(number);
-    std::vector<std::string> cells;
-    std::stringstream stream(line);
-    std::string cell;
-    while (std::getline(stream, cell, ',')) cells.push_back(Trim(cell));
-    if (cells.size() != 6 || cells[0].empty()) {
-      throw InputError(where + ": expected " + header);
-    }
+  for (const CsvTable::Row& row : table.rows()) {
+    const std::string where = table.Where(row);
+    auto number = [&](const char* column) {
+      const std::string cell = table.Cell(row, column);
+      if (cell.empty()) {
+        throw InputError(where + column + " is empty");
+      }
+      return ParseNumber(cell, where + column);
+    };
     CalibrationTarget target;
-    target.name = cells[0];
-    target.target_distance_m = ParseNumber(cells[1], where);
+    target.name = table.Cell(row, "name");
+    if (target.name.empty()) {
+      throw InputError(where + "the name cell is empty");
+    }
+    target.target_distance_m = number("target_distance_m");
     // Empty = unknown: dp_psf_calibrator fits it.
-    target.focus_distance_m = cells[2].empty()
+    target.focus_distance_m = table.Cell(row, "focus_distance_m").empty()
                                   ? std::numeric_limits<double>::quiet_NaN()
-                                  : ParseNumber(cells[2], where);
-    target.lens.focal_length_mm = ParseNumber(cells[3], where);
-    target.lens.f_number = ParseNumber(cells[4], where);
-    target.lens.pixel_pitch_um = ParseNumber(cells[5], where);
+                                  : number("focus_distance_m");
+    target.lens.focal_length_mm = number("focal_length_mm");
+    target.lens.f_number = number("f_number");
+    target.lens.pixel_pitch_um = number("pixel_pitch_um");
+    target.left = table.Cell(row, "left");
+    target.right = table.Cell(row, "right");
+    if (table.Has("left") && (target.left.empty() || target.right.empty())) {
+      throw InputError(where +
+                       "left and right name the capture's DP view "
+                       "files and may not be empty");
+    }
     const bool focus_known = !std::isnan(target.focus_distance_m);
     if (!target.lens.Check() || !(target.target_distance_m > 0) ||
         (focus_known && !(target.focus_distance_m > 0))) {
-      throw InputError(where + ": distances and lens data must be positive");
+      throw InputError(where + "distances and lens data must be positive");
     }
     // Distances are from the focal-plane mark: a lens focuses no nearer
     // than 4 f from the sensor.
     for (const double d : {target.target_distance_m, target.focus_distance_m}) {
       if (!std::isnan(d) && d * 1000 < 4 * target.lens.focal_length_mm) {
         throw InputError(where +
-                         ": distances from the focal-plane mark must "
-                         "be at least 4 focal lengths");
+                         "distances from the focal-plane mark must "
+                         "be at least 4 focal lengths (they are in metres)");
       }
     }
     targets.push_back(target);

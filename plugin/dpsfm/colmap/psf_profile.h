@@ -24,7 +24,7 @@
 //                                 (rows, cols, K, K) or
 //   right kernels_right.npy       (K, K) for one cell; relative to the file
 //
-// (docs/cli-contract.md, "DP profiles": published calibrations import as
+// (docs/user-guide.md, "Profile files": published calibrations import as
 // they are). Both may carry
 //   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
 // for the profile library, uncertainty <relative 95 % of the strength>,
@@ -121,10 +121,15 @@ struct CalibrationTarget {
   double target_distance_m = 0;
   double focus_distance_m = 0;  // NaN = unknown (an empty cell): fitted
   DPLensData lens;              // pitch: of the DP frame's pixels
+  // The capture's DP view files, relative to the captures folder; empty:
+  // left/<name> with right/<name> (or sum/<name>).
+  std::string left, right;
 };
 
-// CSV with the header
-// name,target_distance_m,focus_distance_m,focal_length_mm,f_number,pixel_pitch_um
+// A CSV whose header names its columns (text.h, CsvTable): name,
+// target_distance_m, focal_length_mm, f_number and pixel_pitch_um required;
+// focus_distance_m (empty cells: fitted) and left, right (both or neither)
+// optional.
 std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path);
 
 }  // namespace dpsfm

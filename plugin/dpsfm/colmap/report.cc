@@ -40,11 +40,18 @@ nlohmann::json MakeReport(const DPScaleResult& result,
     report["reason"] = result.failure_reason;
   }
   report["scale"] = result.success ? Number(result.scale) : nullptr;
-  report["scale_initial"] = Number(result.scale_initial);
-  report["scale_ci_low"] = Number(result.scale_ci_low);
-  report["scale_ci_high"] = Number(result.scale_ci_high);
+  report["scale_initial"] =
+      result.scale_initial > 0 ? Number(result.scale_initial) : nullptr;
+  // A refused run has no scale and no interval of it (null, never 0); what
+  // the stages computed stays under scale_initial and cues.
+  report["scale_ci_low"] =
+      result.success ? Number(result.scale_ci_low) : nullptr;
+  report["scale_ci_high"] =
+      result.success ? Number(result.scale_ci_high) : nullptr;
   report["scale_initial_ci"] =
-      Interval(result.scale_initial_ci_low, result.scale_initial_ci_high);
+      result.scale_initial > 0
+          ? Interval(result.scale_initial_ci_low, result.scale_initial_ci_high)
+          : nullptr;
   report["units"] = "scale: metres per model unit (metric = scale * model)";
 
   nlohmann::json intensity;

@@ -90,6 +90,11 @@ ScaleRun DPScaleController::Run() {
     DPViewSummary summary;
     try {
       summary = estimator_->AddView(view);
+    } catch (const CheckFailure& error) {
+      // A view the core cannot take: its own words, without the check.
+      throw InputError("image " + view.name + ": " +
+                       (error.message().empty() ? std::string(error.what())
+                                                : error.message()));
     } catch (const std::invalid_argument& error) {
       throw InputError("image " + view.name + ": " + error.what());
     }
@@ -326,6 +331,32 @@ ProfileChoice ChooseProfile(const DPScaleEstimatorOptions& options,
   return choice;
 }
 
+// What 8-bit and lossy DP frames cost, for the log and the report.
+std::vector<std::string> FrameWarnings(const DPScaleResult& result) {
+  int eight_bit = 0, lossy = 0;
+  for (const DPViewResult& view : result.views) {
+    eight_bit += view.frames.bits <= 8;
+    lossy += view.frames.lossy;
+  }
+  std::vector<std::string> warnings;
+  if (eight_bit > 0) {
+    warnings.push_back(
+        std::to_string(eight_bit) +
+        " view(s) have 8-bit DP frames: they are decoded to linear light, "
+        "where 8 bits leave the darker patches coarsely quantised (their "
+        "texture reads as noise and fewer patches qualify). 16-bit frames "
+        "(DPRSplit output) keep it.");
+  }
+  if (lossy > 0) {
+    warnings.push_back(
+        std::to_string(lossy) +
+        " view(s) have lossy (JPEG) DP frames: compression removes fine "
+        "texture and rings at edges, which biases small blur estimates; "
+        "export PNG or TIFF.");
+  }
+  return warnings;
+}
+
 // Step 6: what the estimate found, per view and overall.
 void LogResult(const DPScaleResult& result) {
   if (!result.psf_status.empty()) {
@@ -339,7 +370,6 @@ void LogResult(const DPScaleResult& result) {
       LOG(WARNING) << "Recorded focus: " << result.focus_check;
     }
   }
-  int eight_bit = 0, lossy = 0;
   for (const DPViewResult& view : result.views) {
     LOG(INFO) << "  " << view.name << ": " << (view.used ? "used" : "not used")
               << (view.reason.empty() || view.reason == "used"
@@ -347,20 +377,9 @@ void LogResult(const DPScaleResult& result) {
                       : " (" + view.reason + ")")
               << "; DP frames " << DPEncodingName(view.frames.encoding) << " ("
               << view.frames.encoding_reason << ")";
-    eight_bit += view.frames.bits <= 8;
-    lossy += view.frames.lossy;
   }
-  if (eight_bit > 0) {
-    LOG(WARNING) << eight_bit << " view(s) have 8-bit DP frames: they are "
-                 << "decoded to linear light, where 8 bits leave the darker "
-                 << "patches coarsely quantised (their texture reads as noise "
-                 << "and fewer patches qualify). 16-bit frames (DPRSplit "
-                 << "output) keep it.";
-  }
-  if (lossy > 0) {
-    LOG(WARNING) << lossy << " view(s) have lossy (JPEG) DP frames: "
-                 << "compression removes fine texture and rings at edges, "
-                 << "which biases small blur estimates; export PNG or TIFF.";
+  for (const std::string& warning : FrameWarnings(result)) {
+    LOG(WARNING) << warning;
   }
 }
 
@@ -384,6 +403,7 @@ nlohmann::json RunReport(const ScaleRun& run,
   nlohmann::json report = ReportWithSource(
       MakeReport(run.result, sources, run.summaries, run.timings), psf_source);
   report["view_budget"] = ViewBudgetReport(run, reader);
+  report["warnings"] = FrameWarnings(run.result);
   return report;
 }
 

@@ -1,6 +1,10 @@
 #include "dpsfm/colmap/text.h"
 
+#include <algorithm>
+#include <fstream>
 #include <sstream>
+
+#include "dpsfm/colmap/workspace.h"
 
 namespace dpsfm {
 
@@ -20,6 +24,86 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
   }
   if (!line.empty() && line.back() == ',') cells.push_back("");
   return cells;
+}
+
+namespace {
+
+std::string JoinColumns(const std::vector<std::string>& columns) {
+  std::string joined;
+  for (const std::string& column : columns) {
+    joined += (joined.empty() ? "" : ",") + column;
+  }
+  return joined;
+}
+
+}  // namespace
+
+CsvTable::CsvTable(
+    const std::string& path,
+    const std::vector<std::string>& known,
+    const std::vector<std::string>& required,
+    const std::string& example_row,
+    const std::function<std::string(const std::string&)>& unknown_column_hint)
+    : path_(path) {
+  std::ifstream file(path);
+  if (!file) throw InputError("cannot read " + path);
+  const std::string layout =
+      " (its header names the columns, in any order: " + JoinColumns(known) +
+      "; required: " + JoinColumns(required) + "; e.g. the header " +
+      JoinColumns(known) + " with the row " + example_row + ")";
+  std::string line;
+  if (!std::getline(file, line) || Trim(line).empty()) {
+    throw InputError(path + " is empty" + layout);
+  }
+  const std::vector<std::string> header = SplitCsvLine(line);
+  for (size_t c = 0; c < header.size(); ++c) {
+    if (std::find(known.begin(), known.end(), header[c]) == known.end()) {
+      const std::string hint =
+          unknown_column_hint ? unknown_column_hint(header[c]) : "";
+      throw InputError(path + ":1: unknown column '" + header[c] + "'" + hint +
+                       layout);
+    }
+    if (!columns_.emplace(header[c], static_cast<int>(c)).second) {
+      throw InputError(path + ":1: column " + header[c] + " appears twice" +
+                       layout);
+    }
+  }
+  for (const std::string& column : required) {
+    if (!Has(column)) {
+      throw InputError(path + ":1: no " + column + " column" + layout);
+    }
+  }
+  const std::string header_text = Trim(line);
+  int number = 1;
+  while (std::getline(file, line)) {
+    ++number;
+    if (Trim(line).empty()) continue;
+    Row row;
+    row.line = number;
+    row.cells = SplitCsvLine(line);
+    if (row.cells.size() != header.size()) {
+      throw InputError(
+          Where(row) + std::to_string(row.cells.size()) +
+          " cells under a header of " + std::to_string(header.size()) + " (" +
+          header_text +
+          "): give every column in every row, leaving unknown values empty "
+          "(a,,c leaves the middle one empty)");
+    }
+    rows_.push_back(std::move(row));
+  }
+}
+
+bool CsvTable::Has(const std::string& column) const {
+  return columns_.count(column) > 0;
+}
+
+std::string CsvTable::Cell(const Row& row, const std::string& column) const {
+  const auto it = columns_.find(column);
+  return it == columns_.end() ? std::string() : row.cells[it->second];
+}
+
+std::string CsvTable::Where(const Row& row) const {
+  return path_ + ":" + std::to_string(row.line) + ": ";
 }
 
 }  // namespace dpsfm

@@ -2,6 +2,8 @@
 // DP PSF profiles).
 #pragma once
 
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,5 +15,40 @@ std::string Trim(const std::string& text);
 // The comma-separated cells of one line, each trimmed; a trailing comma
 // gives a last empty cell.
 std::vector<std::string> SplitCsvLine(const std::string& line);
+
+// A CSV file whose header names its columns (lens.csv, calibration
+// targets): columns in any order, each row with as many cells as the
+// header (cells may be empty), blank lines skipped. Every problem is an
+// InputError naming the file, the line and what to write instead.
+class CsvTable {
+ public:
+  struct Row {
+    int line = 0;  // 1-based line number in the file
+    std::vector<std::string> cells;
+  };
+
+  // `known`: the columns the file may have, in the order the docs list
+  // them; `required`: those it must have; `example_row`: a row under the
+  // header written as `known`, for the messages. `unknown_column_hint`
+  // (optional) adds a word on an unknown column (e.g. a unit mix-up).
+  CsvTable(const std::string& path,
+           const std::vector<std::string>& known,
+           const std::vector<std::string>& required,
+           const std::string& example_row,
+           const std::function<std::string(const std::string&)>&
+               unknown_column_hint = nullptr);
+
+  const std::vector<Row>& rows() const { return rows_; }
+  bool Has(const std::string& column) const;
+  // The cell of `column` in `row`, "" when the header has no such column.
+  std::string Cell(const Row& row, const std::string& column) const;
+  // "<path>:<line>: ", the prefix of a message about one row.
+  std::string Where(const Row& row) const;
+
+ private:
+  std::string path_;
+  std::map<std::string, int> columns_;
+  std::vector<Row> rows_;
+};
 
 }  // namespace dpsfm

@@ -66,6 +66,10 @@ bool DPScaleEstimatorOptions::Check() const {
   DPSFM_CHECK_OPTION_MESSAGE(OptionalPositive(pixel_pitch_um),
                              NotPositive("pixel_pitch_um", pixel_pitch_um));
   DPSFM_CHECK_OPTION_MESSAGE(
+      std::isfinite(lens_check_tolerance) && lens_check_tolerance >= 0,
+      "--DPScaleEstimator.lens_check_tolerance must be a number >= 0, got " +
+          std::to_string(lens_check_tolerance));
+  DPSFM_CHECK_OPTION_MESSAGE(
       IsDPEncodingName(dp_encoding),
       "--DPScaleEstimator.dp_encoding must be auto, linear or srgb, got '" +
           dp_encoding + "'");
@@ -118,7 +122,14 @@ WorkspaceLayout ResolveWorkspaceLayout(const DPScaleEstimatorOptions& options) {
     }
     layout.depth_maps_path =
         Join(Join(options.workspace_path, "stereo"), "depth_maps");
-    RequireDir(layout.depth_maps_path, "the dense workspace's depth maps");
+    if (!fs::is_directory(layout.depth_maps_path)) {
+      throw InputError(
+          "the dense workspace has no depth maps (" + layout.depth_maps_path +
+          "): run colmap patch_match_stereo on it (it needs CUDA), or, "
+          "without CUDA, give its sparse model with --input_path (e.g. "
+          "sparse/0, depths from the triangulated points) instead of "
+          "--workspace_path");
+    }
   } else {
     RequireDir(options.input_path, "--input_path");
     layout.model_path = options.input_path;

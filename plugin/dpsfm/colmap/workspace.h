@@ -56,6 +56,9 @@ struct DPScaleEstimatorOptions {
   double focal_length_mm = 0.0;
   double f_number = 0.0;
   double pixel_pitch_um = 0.0;
+  // Relative tolerance of each image's f_mm / pitch against its camera's
+  // f_px, beyond focus breathing (lens_data.h, CheckLensAgainstCamera).
+  double lens_check_tolerance = 0.1;
   bool swap_dp_views = false;
   // How the DP frames encode light: "auto" (colmap/dp_images.h,
   // DecideEncoding), "linear" or "srgb". Frames are brought to linear

@@ -12,6 +12,7 @@
 #include <optional>
 #include <sstream>
 
+#include "colmap/util/logging.h"
 #include "dpsfm/colmap/colmap_compat.h"
 #include "dpsfm/colmap/rescale.h"
 
@@ -154,6 +155,54 @@ void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
   }
 }
 
+// Sparse mode takes each view's depths from its triangulated points: every
+// point an image refers to must exist (COLMAP's readers do not check), and
+// a view without any has no depth and is left out.
+std::vector<colmap::image_t> ImagesWithTriangulatedPoints(
+    const colmap::Reconstruction& model,
+    const std::vector<colmap::image_t>& image_ids,
+    const std::string& model_path) {
+  std::vector<colmap::image_t> kept;
+  std::vector<std::string> without;
+  for (const colmap::image_t image_id : image_ids) {
+    const colmap::Image& image = model.Image(image_id);
+    int points = 0;
+    for (const colmap::Point2D& point2D : image.Points2D()) {
+      if (!point2D.HasPoint3D()) continue;
+      if (!model.ExistsPoint3D(point2D.point3D_id)) {
+        throw InputError(
+            "the model in " + model_path + " is inconsistent: image " +
+            image.Name() + " refers to 3D point " +
+            std::to_string(point2D.point3D_id) +
+            ", which its points3D file does not hold (files of two "
+            "different runs?): export the model again with colmap "
+            "model_converter");
+      }
+      ++points;
+    }
+    if (points == 0) {
+      without.push_back(image.Name());
+    } else {
+      kept.push_back(image_id);
+    }
+  }
+  if (kept.empty()) {
+    throw InputError(
+        "the sparse model in " + model_path +
+        " has no triangulated 3D points, and --input_path takes each "
+        "view's depths from them: run colmap point_triangulator (or the "
+        "mapper) to triangulate it, or give a dense workspace with "
+        "--workspace_path");
+  }
+  if (!without.empty()) {
+    LOG(WARNING) << without.size() << " of " << image_ids.size()
+                 << " images have no triangulated 3D points and are left "
+                    "out of the estimate (e.g. "
+                 << without[0] << ")";
+  }
+  return kept;
+}
+
 }  // namespace
 
 WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
@@ -172,6 +221,10 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
               return reconstruction_.Image(a).Name() <
                      reconstruction_.Image(b).Name();
             });
+  if (!layout_.dense) {
+    image_ids = ImagesWithTriangulatedPoints(
+        reconstruction_, image_ids, layout_.model_path);
+  }
 
   if (!options_.database_path.empty()) {
     database_check_ =
@@ -244,6 +297,13 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
     }
     source.lens = ResolveLens(
         image.Name(), lens_csv, flags, exif_ptr, camera.MeanFocalLength());
+    CameraGeometry geometry;
+    geometry.focal_px = camera.MeanFocalLength();
+    geometry.width = static_cast<int>(camera.width);
+    geometry.height = static_cast<int>(camera.height);
+    LensCheckOptions check;
+    check.tolerance = options_.lens_check_tolerance;
+    CheckLensAgainstCamera(image.Name(), source.lens, geometry, check);
 
     if (layout_.dense) {
       source.depth_source = DepthMapPath(image.Name());
@@ -270,7 +330,10 @@ std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
     }
   }
   throw InputError("no " + options_.input_type + " depth map for image " +
-                   image_name + " (expected " + preferred + ")");
+                   image_name + " (expected " + preferred +
+                   "): run colmap patch_match_stereo over every image of "
+                   "the workspace, or, without CUDA, give the sparse model "
+                   "with --input_path instead of --workspace_path");
 }
 
 cv::Mat ResampleDepthToFrame(const cv::Mat& depth,

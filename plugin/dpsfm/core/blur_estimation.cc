@@ -16,6 +16,9 @@
 #include "dpsfm/core/kernel_grid.h"
 
 namespace dpsfm {
+
+const char* const kBlurAtSearchBound = "blur at the search bound";
+
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -752,7 +755,7 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
 
   result.at_bound = std::abs(best.radius) > t.bound - 0.5 * t.step;
   if (result.at_bound) {
-    result.reject_reason = "blur at the search bound";
+    result.reject_reason = kBlurAtSearchBound;
     return result;
   }
   if (result.fit_quality < options.min_fit_quality) {

@@ -47,6 +47,9 @@
 
 namespace dpsfm {
 
+// The reject reason of a patch whose blur lies at the search bound.
+extern const char* const kBlurAtSearchBound;
+
 struct BlurEstimationOptions {
   // Search bound on |r| in pixels of the (possibly resized) DP frame. 20 is
   // the reference DSLR default (kernel 41 on 0.5-resized Canon 5D IV frames);

@@ -7,8 +7,24 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace dpsfm {
+
+// What a failed DPSFM_CHECK throws: what() has the condition and the source
+// line (for developers and logs); message() only the text streamed after
+// it, in words for a user ("" when none was given), which the command
+// boundary shows with the input it concerns.
+class CheckFailure : public std::invalid_argument {
+ public:
+  CheckFailure(const std::string& what, std::string message)
+      : std::invalid_argument(what), message_(std::move(message)) {}
+  const std::string& message() const { return message_; }
+
+ private:
+  std::string message_;
+};
+
 namespace internal {
 
 class CheckMessage {
@@ -18,7 +34,7 @@ class CheckMessage {
             << ")";
   }
   ~CheckMessage() noexcept(false) {
-    throw std::invalid_argument(stream_.str());
+    throw CheckFailure(stream_.str(), message_.str());
   }
   template <typename T>
   CheckMessage& operator<<(const T& value) {
@@ -27,11 +43,13 @@ class CheckMessage {
       first_ = false;
     }
     stream_ << value;
+    message_ << value;
     return *this;
   }
 
  private:
   std::ostringstream stream_;
+  std::ostringstream message_;
   bool first_ = true;
 };
 

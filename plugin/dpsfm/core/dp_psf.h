@@ -8,7 +8,7 @@
 // aperture and the position in the frame and must stay replaceable (notes,
 // section 5).
 //
-// Conventions (docs/cli-contract.md, "Conventions"):
+// Conventions (the CLI contract's, docs/user-guide.md "Capturing"):
 // - Signed blur radius r = b / (2 p) in pixels of the DP frame, r > 0 for a
 //   point farther than the focal plane, r < 0 for a nearer one.
 // - A point NEARER than the focal plane (r < 0) images in the LEFT view towards

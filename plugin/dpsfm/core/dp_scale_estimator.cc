@@ -671,6 +671,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     out.name = v.summary.name;
     out.frames = v.summary.frames;
     out.lens = v.lens;
+    out.recorded_focus_m = v.lens.recorded_focus_mm / 1000;  // NaN if none
     out.used = lv.used;
     out.reason = lv.reason;
     if (lv.rejection == ViewRejection::kTooFewPatches) {
@@ -704,12 +705,13 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   for (const auto& v : views_) {
     counts.push_back({v->summary.patches_tried,
                       v->summary.patches_valid,
-                      v->summary.rejections});
+                      v->summary.rejections,
+                      v->summary.max_radius_px});
   }
   const PatchAccount account = AccountPatches(counts);
   if (!linear.success) {
-    result.failure_reason =
-        account.leading_cause + linear.failure_reason + account.Summary();
+    result.failure_reason = account.leading_cause + linear.failure_reason +
+                            account.Summary() + account.Fixes();
     return result;
   }
   // Intervals: the bootstrap's, widened by the systematic terms: the
@@ -770,6 +772,12 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   const bool use_focus =
       options_.pin_to_recorded_focus && result.focus_cue.valid;
   result.dp_cue = DPCue(linear);
+  // What the linear stage found, kept in the result (and the report) even
+  // when the interval check below refuses it.
+  result.scale_initial = linear.scale;
+  result.scale_initial_ci_low = linear.scale_ci_low;
+  result.scale_initial_ci_high = linear.scale_ci_high;
+  result.num_views_used = static_cast<int>(linear.selected_views.size());
   {
     const double width =
         (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
@@ -829,22 +837,18 @@ DPScaleResult DPScaleEstimator::Estimate() const {
         if (options_.pin_to_recorded_focus && !result.focus_cue.valid) {
           s << RecordedFocusMissingHint(linear);
         }
-        s << account.TypicalCauses();
+        s << account.TypicalCauses() << account.Fixes();
         result.failure_reason = s.str();
         return result;
       }
     }
   }
-  result.scale_initial = linear.scale;
-  result.scale_initial_ci_low = linear.scale_ci_low;
-  result.scale_initial_ci_high = linear.scale_ci_high;
   result.linear_median_abs_residual_px = linear.median_abs_residual_px;
   if (!result.scale_from_cues) {
     result.scale = linear.scale;
     result.scale_ci_low = linear.scale_ci_low;
     result.scale_ci_high = linear.scale_ci_high;
   }
-  result.num_views_used = static_cast<int>(linear.selected_views.size());
   result.num_patches = linear.num_rows;
 
   // --- Intensity stage on the selected views and their stored patches. ---

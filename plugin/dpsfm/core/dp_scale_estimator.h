@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -278,8 +279,8 @@ struct DPViewResult {
   // The recorded focus (m, from the focal-plane mark; NaN if none) and the
   // scale it implies with the fitted focal plane g' (profile-free: where
   // the disparity changes sign does not depend on the DP profile).
-  double recorded_focus_m = 0;
-  double focus_scale = 0;
+  double recorded_focus_m = std::numeric_limits<double>::quiet_NaN();
+  double focus_scale = std::numeric_limits<double>::quiet_NaN();
   double predicted_blur_range_px = 0;
   double median_abs_residual_px = 0;
   int patches_tried = 0;

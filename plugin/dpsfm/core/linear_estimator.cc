@@ -371,7 +371,8 @@ std::string FailureFromCounts(const std::vector<LinearViewResult>& results,
   }
   if (!sorted.empty() && sorted[0].second == ViewRejection::kNonPositiveScale) {
     s << ". Blur that shrinks with depth in most views usually means the "
-         "left and right DP views are swapped";
+         "left and right DP views are swapped: run again with "
+         "--DPScaleEstimator.swap_dp_views flipped (1 if it was 0)";
   }
   return s.str();
 }

@@ -1,9 +1,12 @@
 #include "dpsfm/core/refusal.h"
 
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <map>
 #include <sstream>
 
+#include "dpsfm/core/blur_estimation.h"
 #include "dpsfm/core/patch_selection.h"
 
 namespace dpsfm {
@@ -25,6 +28,7 @@ PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views) {
   for (const ViewPatchCounts& v : views) {
     account.tried += v.tried;
     account.usable += v.usable;
+    account.max_radius_px = std::max(account.max_radius_px, v.max_radius_px);
     for (const auto& r : v.rejections) {
       if (r.first == kLeftUnsearched) continue;
       rejections[r.first] += r.second;
@@ -35,6 +39,7 @@ PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views) {
         CountsToString(std::vector<std::pair<std::string, int>>(
             rejections.begin(), rejections.end()));
   }
+  account.at_search_bound = rejections[kBlurAtSearchBound];
   const int weak = rejections[kTextureTooWeak];
   if (weak > 0 && weak >= 0.5 * account.tried) {
     std::ostringstream cause;
@@ -62,6 +67,24 @@ std::string PatchAccount::TypicalCauses() const {
   s << ". Typical causes: sensor noise too strong for the texture, "
        "too little defocus blur (small aperture, distant subjects), "
        "textureless surfaces";
+  return s.str();
+}
+
+std::string PatchAccount::Fixes() const {
+  if (tried == 0 || at_search_bound < 0.05 * tried || !(max_radius_px > 0)) {
+    return "";
+  }
+  // A bound 1.6 times larger reaches the blur of points about that much
+  // farther from the focal plane (in inverse depth).
+  const int larger = static_cast<int>(
+      std::ceil(std::max(1.6 * max_radius_px, max_radius_px + 2)));
+  std::ostringstream s;
+  s << "; " << at_search_bound << " of " << tried
+    << " patches have more blur than the search bound of "
+    << std::setprecision(3) << max_radius_px
+    << " px: let the search reach farther with "
+       "--DPScaleEstimator.max_radius_px "
+    << larger;
   return s.str();
 }
 

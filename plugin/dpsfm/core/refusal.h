@@ -28,9 +28,17 @@ struct PatchAccount {
 
   // " (patches over all views: N tried, M usable; <rejections>)".
   std::string Summary() const;
+  // Patches whose blur lies at the search bound, and the largest bound of
+  // the views (px of the working frame, as --DPScaleEstimator.max_radius_px).
+  int at_search_bound = 0;
+  double max_radius_px = 0;
+
   // "; patches over all views: ... . Typical causes: ..." (the tail of a
   // refusal for an undetermined scale).
   std::string TypicalCauses() const;
+  // The options that may turn the refusal into an answer, as "; ..." or "":
+  // a larger search bound when at least 5 % of the patches hit it.
+  std::string Fixes() const;
 };
 
 // Per view: (tried, usable, (reason, count) pairs).
@@ -38,6 +46,7 @@ struct ViewPatchCounts {
   int tried = 0;
   int usable = 0;
   std::vector<std::pair<std::string, int>> rejections;
+  double max_radius_px = 0;  // the view's search bound
 };
 PatchAccount AccountPatches(const std::vector<ViewPatchCounts>& views);
 

@@ -28,6 +28,7 @@
 #include "dpsfm/core/psf_calibration.h"
 #include "dpsfm/core/shape_calibration.h"
 #include "dpsfm/core/target_calibration.h"
+#include "dpsfm/exe/command_options.h"
 
 namespace fs = std::filesystem;
 
@@ -176,74 +177,169 @@ ShapeCalibration MeasureShapes(const std::vector<CalibrationTarget>& targets,
   return shape;
 }
 
+// The last line: the one number a profile is (its DP strength, defined in
+// docs/psf-profiles.md), how well the captures measured it and what the
+// scale inherits. Good under 5 % from the captures, usable under 10 %.
+std::string CalibrationVerdict(double strength,
+                               double own_uncertainty,
+                               double transfer_uncertainty,
+                               double uncertainty) {
+  std::ostringstream line;
+  line << std::setprecision(4) << "Verdict: DP strength " << strength
+       << " (translating disk " << TranslatingDiskPsf::CentroidOffsetPerRadius()
+       << ") +-" << std::fixed << std::setprecision(1) << 100 * own_uncertainty
+       << " % from the captures: ";
+  if (own_uncertainty <= 0.05) {
+    line << "good";
+  } else if (own_uncertainty <= 0.10) {
+    line << "usable (add a capture farther from the focus to tighten it)";
+  } else {
+    line << "poor (capture the target at more distances, nearer and "
+            "farther than the focus, with several pixels of blur)";
+  }
+  line << "; scales from this profile carry +-" << 100 * uncertainty << " % ("
+       << 100 * transfer_uncertainty << " % for the transfer to scenes)";
+  return line.str();
+}
+
+// Each capture's DP view files: the targets' left and right columns
+// (relative to the captures folder), else left/<name> with right/<name> or
+// sum/<name>.
+std::vector<DPFramePaths> CaptureFiles(
+    const std::string& dp_image_path,
+    const std::vector<CalibrationTarget>& targets) {
+  std::vector<DPFramePaths> files;
+  if (!targets.empty() && !targets[0].left.empty()) {
+    for (const CalibrationTarget& target : targets) {
+      DPFramePaths paths;
+      paths.left = (fs::path(dp_image_path) / target.left).string();
+      paths.right = (fs::path(dp_image_path) / target.right).string();
+      files.push_back(paths);
+    }
+    return files;
+  }
+  const std::string kLayouts =
+      ": the captures go in left/<name> with right/<name> (or sum/<name>) "
+      "under --dp_image_path, or targets.csv names each capture's files in "
+      "left and right columns, relative to --dp_image_path (e.g. "
+      "0600/f4/l.png and 0600/f4/r.png)";
+  WorkspaceLayout layout;
+  layout.left_path = (fs::path(dp_image_path) / "left").string();
+  const fs::path right = fs::path(dp_image_path) / "right";
+  const fs::path sum = fs::path(dp_image_path) / "sum";
+  if (!fs::is_directory(layout.left_path)) {
+    throw InputError("no folder " + layout.left_path + kLayouts);
+  }
+  if (fs::is_directory(right)) {
+    layout.right_path = right.string();
+  } else if (fs::is_directory(sum)) {
+    layout.sum_path = sum.string();
+  } else {
+    throw InputError("neither right/ nor sum/ in " + dp_image_path + kLayouts);
+  }
+  const DPImageIndex index(layout);
+  for (const CalibrationTarget& target : targets) {
+    if (!index.HasLeft(target.name)) {
+      throw InputError("no DP view " + target.name + " in " + layout.left_path +
+                       kLayouts);
+    }
+    files.push_back(index.Find(target.name));
+  }
+  return files;
+}
+
 }  // namespace
 
 int RunDPPsfCalibrator(int argc, char** argv) {
   CalibratorOptions options;
-  colmap::OptionManager manager;
-  manager.AddRequiredOption("dp_image_path",
-                            &options.dp_image_path,
-                            "folder with left/ and right/ (or sum/) DP views");
-  manager.AddRequiredOption(
+  CommandOptions manager(
+      "dp_psf_calibrator",
+      "Measures a camera's dual-pixel (DP) blur profile from captures of a "
+      "textured flat target at known distances (two or more, nearer and "
+      "farther than the focus, several pixels of blur each) and writes it "
+      "as a profile file for dp_scale_estimator --DPScaleEstimator."
+      "psf_model calibrated. docs/psf-profiles.md explains the capture and "
+      "the numbers it prints.",
+      {"--dp_image_path captures --targets_path targets.csv --output_path "
+       "camera.dpsf"});
+  manager.Group("Required");
+  manager.AddRequired(
+      "dp_image_path",
+      &options.dp_image_path,
+      "folder of the captures: left/<name> with right/<name> (or "
+      "sum/<name>), or any layout when targets.csv has left and right "
+      "columns (paths relative to this folder)");
+  manager.AddRequired(
       "targets_path",
       &options.targets_path,
-      "CSV: name,target_distance_m,focus_distance_m,focal_length_mm,"
-      "f_number,pixel_pitch_um (pitch of the DP frames' pixels)");
-  manager.AddRequiredOption(
-      "output_path", &options.output_path, "profile file to write");
-  manager.AddDefaultOption("DPPsfCalibrator.swap_dp_views",
-                           &options.swap_dp_views,
-                           "swap left and right DP views");
-  manager.AddDefaultOption(
+      "targets.csv: a header naming its columns (name, target_distance_m, "
+      "focus_distance_m, focal_length_mm, f_number, pixel_pitch_um, and "
+      "optionally left, right) and one row per capture; the pitch is of the "
+      "DP frames' pixels in micrometres, distances in metres from the "
+      "focal-plane mark");
+  manager.AddRequired("output_path",
+                      &options.output_path,
+                      "profile file to write (.dpsf; its .npy kernel files "
+                      "are written beside it and must stay there)");
+  manager.Group("Captures");
+  manager.AddDefault("DPPsfCalibrator.swap_dp_views",
+                     &options.swap_dp_views,
+                     "swap the left and right DP views");
+  manager.AddDefault(
       "DPPsfCalibrator.dp_encoding",
       &options.dp_encoding,
       "how the DP frames encode light: auto (PNG/EXIF colour tags, else "
       "8-bit = srgb, 16-bit = linear), linear or srgb; the profile is "
       "measured in linear light either way");
-  manager.AddDefaultOption(
+  manager.AddDefault("DPPsfCalibrator.measure_shape",
+                     &options.measure_shape,
+                     "measure the kernels' shape against stopped-down "
+                     "captures of the same targets (f/16 or smaller)");
+  manager.Group("The profile library");
+  manager.AddDefault("DPPsfCalibrator.camera",
+                     &options.camera,
+                     "camera body the profile belongs to (EXIF Make / "
+                     "Model, e.g. 'Canon / Canon EOS R6m2')");
+  manager.AddDefault("DPPsfCalibrator.lens",
+                     &options.lens,
+                     "lens the profile belongs to (EXIF LensModel)");
+  manager.Group("Fit (rarely changed)");
+  manager.AddDefault(
       "DPPsfCalibrator.transfer_uncertainty",
       &options.transfer_uncertainty,
-      "how far a plane calibration transfers to scenes (relative, 95 %), "
-      "added to the fit's own uncertainty in the profile (0.22: measured on "
-      "real Canon R6 II scenes; 0 for simulated cameras)");
-  manager.AddDefaultOption("DPPsfCalibrator.patch_size",
-                           &options.patch_size,
-                           "patch side in px of the working frame (0: auto)");
-  manager.AddDefaultOption(
-      "DPPsfCalibrator.stride", &options.stride, "patch stride (0: auto)");
-  manager.AddDefaultOption("DPPsfCalibrator.max_radius_px",
-                           &options.max_radius_px,
-                           "blur radius search bound in px (0: auto)");
-  manager.AddDefaultOption("DPPsfCalibrator.min_texture_snr",
-                           &options.min_texture_snr,
-                           "patches need this much texture over noise");
-  manager.AddDefaultOption("DPPsfCalibrator.max_patches_per_capture",
-                           &options.max_patches_per_capture,
-                           "patches used per capture (evenly spread)");
-  manager.AddDefaultOption("DPPsfCalibrator.grid_rows",
-                           &options.grid_rows,
-                           "rows of frame regions fitted on their own");
-  manager.AddDefaultOption("DPPsfCalibrator.grid_cols",
-                           &options.grid_cols,
-                           "columns of frame regions fitted on their own");
-  manager.AddDefaultOption("DPPsfCalibrator.num_bootstrap",
-                           &options.num_bootstrap,
-                           "bootstrap resamples for the intervals");
-  manager.AddDefaultOption("DPPsfCalibrator.camera",
-                           &options.camera,
-                           "camera body for the profile library (EXIF Make "
-                           "/ Model, e.g. 'Canon / Canon EOS R6m2')");
-  manager.AddDefaultOption("DPPsfCalibrator.lens",
-                           &options.lens,
-                           "lens for the profile library (EXIF LensModel)");
-  manager.AddDefaultOption("DPPsfCalibrator.measure_shape",
-                           &options.measure_shape,
-                           "measure the kernels' shape against stopped-down "
-                           "captures of the same targets");
-  manager.AddDefaultOption("DPPsfCalibrator.num_threads",
-                           &options.num_threads,
-                           "threads (-1: all cores)");
-  if (!ParseOptions(&manager, argc, argv)) return EXIT_FAILURE;
+      "how far a calibration on planes transfers to scenes, as a relative "
+      "95 % uncertainty added to the fit's own (0.22: measured on real "
+      "Canon R6 II scenes; 0 for simulated cameras)");
+  manager.AddDefault("DPPsfCalibrator.patch_size",
+                     &options.patch_size,
+                     "patch side in pixels of the working frame (0: auto)");
+  manager.AddDefault("DPPsfCalibrator.stride",
+                     &options.stride,
+                     "step between patches in pixels (0: auto)");
+  manager.AddDefault("DPPsfCalibrator.max_radius_px",
+                     &options.max_radius_px,
+                     "largest blur radius searched, in pixels of the "
+                     "working frame (0: auto, at least 10)");
+  manager.AddDefault("DPPsfCalibrator.min_texture_snr",
+                     &options.min_texture_snr,
+                     "patches need this ratio of texture to sensor noise");
+  manager.AddDefault("DPPsfCalibrator.max_patches_per_capture",
+                     &options.max_patches_per_capture,
+                     "patches used per capture (evenly spread)");
+  manager.AddDefault("DPPsfCalibrator.grid_rows",
+                     &options.grid_rows,
+                     "rows of frame regions fitted on their own");
+  manager.AddDefault("DPPsfCalibrator.grid_cols",
+                     &options.grid_cols,
+                     "columns of frame regions fitted on their own");
+  manager.AddDefault("DPPsfCalibrator.num_bootstrap",
+                     &options.num_bootstrap,
+                     "bootstrap resamples for the intervals");
+  manager.AddDefault("DPPsfCalibrator.num_threads",
+                     &options.num_threads,
+                     "threads (-1: all cores)");
+  int exit_code = EXIT_SUCCESS;
+  if (!manager.Parse(argc, argv, std::cout, &exit_code)) return exit_code;
 
   try {
     colmap::Timer timer;
@@ -255,22 +351,8 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     }
     const std::vector<CalibrationTarget> targets =
         ReadCalibrationTargets(options.targets_path);
-    WorkspaceLayout layout;
-    layout.left_path = (fs::path(options.dp_image_path) / "left").string();
-    const fs::path right = fs::path(options.dp_image_path) / "right";
-    const fs::path sum = fs::path(options.dp_image_path) / "sum";
-    if (!fs::is_directory(layout.left_path)) {
-      throw InputError("no DP left views in " + layout.left_path);
-    }
-    if (fs::is_directory(right)) {
-      layout.right_path = right.string();
-    } else if (fs::is_directory(sum)) {
-      layout.sum_path = sum.string();
-    } else {
-      throw InputError("neither right/ nor sum/ DP views in " +
-                       options.dp_image_path);
-    }
-    const DPImageIndex index(layout);
+    const std::vector<DPFramePaths> capture_files =
+        CaptureFiles(options.dp_image_path, targets);
 
     std::vector<CalibrationCapture> captures;
     // The grey working frames, for the shape measurement.
@@ -282,8 +364,10 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     // What the captures were given in (every capture alike, or said).
     std::set<std::string> frame_encodings;
     for (const CalibrationTarget& target : targets) {
-      const DPFrames frames = LoadDPFrames(
-          index.Find(target.name), options.swap_dp_views, requested_encoding);
+      const DPFrames frames =
+          LoadDPFrames(capture_files[&target - targets.data()],
+                       options.swap_dp_views,
+                       requested_encoding);
       frame_encodings.insert(std::string(DPEncodingName(frames.encoding)) +
                              " (" + frames.encoding_reason + ")");
       if (frame_size.area() == 0) {
@@ -362,14 +446,20 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     const TargetCalibration calibration =
         CalibrateFromTargets(captures, fit_options);
     for (size_t i = 0; i < captures.size(); ++i) {
+      const double kappa = calibration.capture_centroid_offset[i];
+      std::ostringstream own;
+      if (std::isfinite(kappa)) {
+        own << "its own DP strength " << std::setprecision(4) << kappa;
+      } else {
+        own << "too little blur to read a DP strength (a sharp reference, "
+               "used for the kernels' shape)";
+      }
       LOG(INFO) << "  " << calibration.capture_names[i] << ": blur radius "
                 << std::fixed << std::setprecision(2)
                 << calibration.capture_radius_px[i]
                 << " px at the focus used, read as "
                 << calibration.capture_reading_px[i]
-                << " px by the linear split; centroid offset "
-                << std::setprecision(4)
-                << calibration.capture_centroid_offset[i] << " R";
+                << " px by the linear split; " << own.str();
     }
     if (!calibration.determined) {
       return Fail("the captures do not determine the DP profile: " +
@@ -414,9 +504,11 @@ int RunDPPsfCalibrator(int argc, char** argv) {
           MeasuredStrength(shape, calibration.cell_patches);
       uncertainty = std::max(
           uncertainty, std::abs(shape_strength / calibration.strength - 1));
-      LOG(INFO) << "Measured shape: strength " << std::setprecision(4)
-                << shape_strength << " R against " << calibration.strength
-                << " R from the blur readings";
+      LOG(INFO) << "Measured shape: the deconvolved kernels' DP strength "
+                << std::setprecision(4) << shape_strength << " against "
+                << calibration.strength
+                << " from the blur readings (their difference counts in "
+                   "the uncertainty)";
     } else {
       for (int c = 0; c < calibration.layout.NumCells(); ++c) {
         const DPKernels k =
@@ -485,12 +577,13 @@ int RunDPPsfCalibrator(int argc, char** argv) {
     WritePsfProfile(options.output_path, profile);
     LOG(INFO) << "Profile: " << options.output_path << " ("
               << calibration.layout.ToString() << " of measured kernels at "
-              << profile.reference_radius_px << " px, uncertainty "
-              << std::fixed << std::setprecision(1) << 100 * uncertainty
-              << " % = " << 100 * own_uncertainty << " % from the captures and "
-              << 100 * options.transfer_uncertainty
-              << " % for the transfer to scenes; " << std::fixed
+              << profile.reference_radius_px
+              << " px; its .npy kernel files are beside it; " << std::fixed
               << std::setprecision(1) << timer.ElapsedSeconds() << " s)";
+    LOG(INFO) << CalibrationVerdict(calibration.strength,
+                                    own_uncertainty,
+                                    options.transfer_uncertainty,
+                                    uncertainty);
     return EXIT_SUCCESS;
   } catch (const InputError& error) {
     return Fail(error.what());

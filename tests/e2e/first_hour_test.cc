@@ -1,0 +1,285 @@
+// A new user's first hour through the real `colmap` binary: the mistakes
+// such a user makes (lens data, workspaces, options) end in the right
+// answer or in one error line that names the input and the fix, never in a
+// scale with exit 0 or in internal text; refused runs' reports hold null,
+// not 0; --help reads like a manual. Workspaces come from a real capture
+// (../shared/realdp box/002, dpsfm_make_realdp_workspace) and from the
+// generated scenes.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/e2e/e2e_helpers.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string RealCapture(const std::string& scene) {
+  const std::string dir = RealDpDir();
+  return dir.empty() ? dir : dir + "/canon_r6m2_rf50/" + scene;
+}
+
+// The one "ERROR: " line of a failed run, after checking there is exactly
+// one, no internal text, and exit 1.
+std::string ErrorLine(const CommandResult& result) {
+  EXPECT_FALSE(result.signaled) << result.err;
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  std::string error;
+  int count = 0;
+  for (const std::string& line : Lines(result.err)) {
+    if (line.compare(0, 7, "ERROR: ") == 0) {
+      error = line;
+      ++count;
+    }
+  }
+  EXPECT_EQ(count, 1) << result.err;
+  for (const char* internal :
+       {"Check failed", "internal error", "unordered_map", "what():"}) {
+    EXPECT_EQ(result.err.find(internal), std::string::npos) << result.err;
+  }
+  return error;
+}
+
+void ExpectContains(const std::string& text, const std::string& part) {
+  EXPECT_NE(text.find(part), std::string::npos)
+      << "'" << part << "' not in: " << text;
+}
+
+class FirstHour : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string capture = RealCapture("box/002");
+    ASSERT_FALSE(capture.empty())
+        << "the real DP captures (../shared/realdp) are missing; set "
+           "DPSFM_REALDP_DIR to the folder holding canon_r6m2_rf50/";
+    ws_ = dir_ / "box002";
+    const CommandResult made = RunCommand({DPSFM_MAKE_REALDP_EXE,
+                                           "--capture_path",
+                                           capture,
+                                           "--output_path",
+                                           ws_,
+                                           "--name",
+                                           "box002",
+                                           "--true_scale",
+                                           "0.37"});
+    ASSERT_EQ(made.exit_code, 0) << made.err;
+  }
+
+  void WriteLens(const std::string& text) {
+    WriteTextFile(ws_ + "/lens.csv", text);
+  }
+
+  CommandResult Dense(std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"--workspace_path",
+                                     ws_ + "/dense",
+                                     "--dp_image_path",
+                                     ws_ + "/dp",
+                                     "--lens_path",
+                                     ws_ + "/lens.csv",
+                                     "--dry_run",
+                                     "1"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunEstimator(args);
+  }
+
+  CommandResult Sparse(const std::string& model) {
+    return RunEstimator({"--input_path",
+                         model,
+                         "--dp_image_path",
+                         ws_ + "/dp",
+                         "--lens_path",
+                         ws_ + "/lens.csv",
+                         "--dry_run",
+                         "1"});
+  }
+
+  TempDir dir_;
+  std::string ws_;
+};
+
+// The row is one cell short under a five-column header: once read as f/46.875
+// with a pitch of 1 um, scale 1.23 (3.3x the truth) with exit 0.
+TEST_F(FirstHour, ShortLensRowStops) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,46.875,1\n");
+  const std::string error = ErrorLine(Dense());
+  ExpectContains(error, "lens.csv:2: 4 cells under a header of 5");
+}
+
+// A pitch beside a focus column is read (once ignored, then derived), and a
+// wrong one stops the run instead of scaling the answer by 40 / 46.875.
+TEST_F(FirstHour, WrongPitchBesideAFocusColumnStops) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,40,1\n");
+  const std::string error = ErrorLine(Dense());
+  ExpectContains(error, "image box002.png");
+  ExpectContains(error, "lens.csv line 2");
+  ExpectContains(error, "46.88 um");
+}
+
+TEST_F(FirstHour, PitchInMillimetresStops) {
+  WriteLens("name,focal_length_mm,f_number\nbox002.png,49.57,4\n");
+  const std::string error =
+      ErrorLine(Dense({"--DPScaleEstimator.pixel_pitch_um", "0.046875"}));
+  ExpectContains(error, "millimetres");
+  ExpectContains(error, "--DPScaleEstimator.pixel_pitch_um");
+}
+
+TEST_F(FirstHour, FocalLengthInPixelsStops) {
+  WriteLens("name,f_number\nbox002.png,4\n");
+  const std::string error =
+      ErrorLine(Dense({"--DPScaleEstimator.focal_length_mm", "1057"}));
+  ExpectContains(error, "in pixels");
+}
+
+TEST_F(FirstHour, FocusInMillimetresStops) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,1000\n");
+  ExpectContains(ErrorLine(Dense()), "looks like millimetres");
+}
+
+TEST_F(FirstHour, DenseWorkspaceWithoutDepthMapsNamesTheFix) {
+  fs::remove_all(ws_ + "/dense/stereo/depth_maps");
+  const std::string error = ErrorLine(Dense());
+  ExpectContains(error, "patch_match_stereo");
+  ExpectContains(error, "--input_path");
+}
+
+// The workspace tool's model has a camera and an image but no 3D points.
+TEST_F(FirstHour, SparseModelWithoutPointsNamesTheFix) {
+  const std::string error = ErrorLine(Sparse(ws_ + "/dense/sparse"));
+  ExpectContains(error, "no triangulated 3D points");
+  ExpectContains(error, "point_triangulator");
+}
+
+// images.txt refers to a 3D point points3D.txt does not hold (once
+// "internal error: unordered_map::at").
+TEST_F(FirstHour, ModelReferringToMissingPointsStops) {
+  const std::string model = dir_ / "text_model";
+  fs::create_directories(model);
+  WriteTextFile(model + "/cameras.txt",
+                "1 PINHOLE 512 768 1057.49 1057.49 256 384\n");
+  WriteTextFile(model + "/images.txt",
+                "1 1 0 0 0 0 0 0 1 box002.png\n100.5 200.5 7\n");
+  WriteTextFile(model + "/points3D.txt", "# no points\n");
+  const std::string error = ErrorLine(Sparse(model));
+  ExpectContains(error, "3D point");
+  ExpectContains(error, model);
+}
+
+// A refused run's report: null where there is no number, the intervals the
+// stages computed kept, `used` and num_views_used consistent, and the
+// recorded focus lens.csv gave.
+TEST_F(FirstHour, RefusedRunsReportTellsTheTruth) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,1\n");
+  const std::string report = dir_ / "report.json";
+  // An interval limit no real capture meets: a refusal after the linear
+  // stage has computed its estimate and interval.
+  const CommandResult run =
+      Dense({"--report_path",
+             report,
+             "--DPScaleEstimator.max_scale_ci_relative_width",
+             "0.0001",
+             "--DPScaleEstimator.pin_to_recorded_focus",
+             "0"});
+  ExpectContains(ErrorLine(run), "no scale");
+  const nlohmann::json r = ReadJson(report);
+  EXPECT_FALSE(r.at("success").get<bool>());
+  EXPECT_TRUE(r.at("scale").is_null());
+  EXPECT_TRUE(r.at("scale_ci_low").is_null());
+  EXPECT_TRUE(r.at("scale_ci_high").is_null());
+  ASSERT_TRUE(r.at("scale_initial").is_number());
+  EXPECT_GT(r.at("scale_initial").get<double>(), 0);
+  EXPECT_LT(r.at("scale_initial_ci").at(0).get<double>(),
+            r.at("scale_initial_ci").at(1).get<double>());
+  int used = 0;
+  for (const auto& view : r.at("views").items()) {
+    used += view.value().at("used").get<bool>();
+    EXPECT_DOUBLE_EQ(view.value().at("recorded_focus_distance_m").get<double>(),
+                     1.0);
+  }
+  EXPECT_EQ(r.at("num_views_used").get<int>(), used);
+  EXPECT_EQ(used, 1);
+  EXPECT_TRUE(r.at("cues").at("dual_pixel").at("valid").get<bool>());
+}
+
+// The answer's last line: the scale, its interval and where it came from;
+// 8-bit frames are named in the log and the report.
+TEST_F(FirstHour, FinalLineCarriesIntervalAndSource) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,1\n");
+  const std::string report = dir_ / "report.json";
+  const CommandResult run = Dense({"--report_path", report});
+  if (run.exit_code != 0) {
+    // A refusal is an acceptable outcome on one real view; it must be
+    // clean.
+    ErrorLine(run);
+    return;
+  }
+  const std::vector<std::string> lines = Lines(run.err);
+  ASSERT_FALSE(lines.empty());
+  const std::string& last = lines.back();
+  ExpectContains(last, "Scale ");
+  ExpectContains(last, "95 % interval [");
+  ExpectContains(last, "from the ");
+  ExpectContains(last, "dry run");
+  ExpectContains(run.err, "8-bit DP frames");
+  const nlohmann::json r = ReadJson(report);
+  ASSERT_FALSE(r.at("warnings").empty());
+  ExpectContains(r.at("warnings").at(0).get<std::string>(), "8-bit");
+}
+
+// Swapped DP views: the refusal names the option that fixes it.
+TEST(FirstHourGenerated, SwappedViewsNameTheOption) {
+  SceneCopy scene("dslr");
+  const CommandResult run = RunEstimator(
+      With(DenseArgs(scene),
+           {"--dry_run", "1", "--DPScaleEstimator.swap_dp_views", "1"}));
+  ExpectContains(ErrorLine(run), "--DPScaleEstimator.swap_dp_views");
+}
+
+TEST(FirstHourHelp, ReadsLikeAManual) {
+  for (const char* command : {"dp_scale_estimator", "dp_psf_calibrator"}) {
+    const CommandResult help = RunCommand({kColmap, command, "--help"});
+    EXPECT_EQ(help.exit_code, 0) << help.err;
+    EXPECT_EQ(help.err, "") << command;  // no glog lines
+    EXPECT_EQ(help.out.rfind(std::string("colmap ") + command + "\n", 0), 0u)
+        << help.out.substr(0, 200);
+    ExpectContains(help.out, "Usage:");
+    ExpectContains(help.out, "(required)");
+    for (const char* symbol : {"[T_c]", "[N_v]", "[T_p]", "[T_s]", "00000"}) {
+      EXPECT_EQ(help.out.find(symbol), std::string::npos) << symbol;
+    }
+  }
+  const CommandResult help =
+      RunCommand({kColmap, "dp_scale_estimator", "--help"});
+  ExpectContains(help.out, "--dp_image_path PATH  (required)");
+  ExpectContains(help.out,
+                 "--DPScaleEstimator.lens_check_tolerance X  (default 0.1)");
+  ExpectContains(help.out, "--DPScaleEstimator.swap_dp_views 0|1  (default 0)");
+  // The common options come before the method's parameters.
+  EXPECT_LT(help.out.find("--lens_path"),
+            help.out.find("--DPScaleEstimator.top_patch_fraction"));
+  const CommandResult tool = RunCommand({DPSFM_MAKE_REALDP_EXE, "--help"});
+  EXPECT_EQ(tool.exit_code, 0) << tool.err;
+  ExpectContains(tool.out, "--capture_path");
+  ExpectContains(tool.out, "Usage:");
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm

@@ -1,0 +1,98 @@
+// The user guide's first-hour walkthrough, run exactly as written: the
+// shell block after "<!-- first-hour walkthrough -->" in docs/user-guide.md,
+// with the build's programs on PATH, HOME in a temporary folder and
+// DPSFM_REALDP_DIR at the real captures, as the guide tells a user to set
+// them. What the guide promises of it is checked: the calibrator's verdict,
+// the answer's last line, and an interval that holds the true 0.37.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/e2e/e2e_helpers.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kMarker[] = "<!-- first-hour walkthrough -->";
+
+// The block's lines, or "" when the marker or the block is missing.
+std::string WalkthroughBlock() {
+  std::ifstream guide(std::string(DPSFM_SOURCE_DIR) + "/docs/user-guide.md");
+  std::string line, block;
+  bool marked = false, inside = false;
+  while (std::getline(guide, line)) {
+    if (!marked) {
+      marked = line == kMarker;
+      continue;
+    }
+    if (!inside) {
+      if (line != "```sh") return "";
+      inside = true;
+      continue;
+    }
+    if (line == "```") return block;
+    block += line + "\n";
+  }
+  return "";
+}
+
+TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
+  const std::string block = WalkthroughBlock();
+  ASSERT_FALSE(block.empty())
+      << "no ```sh block after " << kMarker << " in docs/user-guide.md";
+  const std::string real = RealDpDir();
+  ASSERT_FALSE(real.empty()) << "the real DP captures are missing";
+
+  TempDir dir;
+  const std::string home = dir / "home";
+  const std::string bin = dir / "bin";
+  fs::create_directories(home);
+  fs::create_directories(bin);
+  fs::create_symlink(kColmap, bin + "/colmap");
+  fs::create_symlink(DPSFM_MAKE_REALDP_EXE,
+                     bin + "/dpsfm_make_realdp_workspace");
+  const std::string script = dir / "walkthrough.sh";
+  WriteTextFile(script, "set -euo pipefail\n" + block);
+  const char* path = std::getenv("PATH");
+  const CommandResult run =
+      RunCommand({"env",
+                  "HOME=" + home,
+                  "PATH=" + bin + ":" + (path ? path : "/usr/bin:/bin"),
+                  "DPSFM_REALDP_DIR=" + real,
+                  "bash",
+                  script});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+
+  EXPECT_NE(run.err.find("Verdict: DP strength"), std::string::npos) << run.err;
+  // The last line is the answer, with its interval and source.
+  const std::vector<std::string> lines = Lines(run.err);
+  ASSERT_FALSE(lines.empty());
+  const std::string& last = lines.back();
+  EXPECT_NE(last.find("Scale "), std::string::npos) << last;
+  EXPECT_NE(last.find("95 % interval ["), std::string::npos) << last;
+  EXPECT_NE(last.find("the model is now in metres"), std::string::npos) << last;
+  EXPECT_NE(run.err.find("8-bit DP frames"), std::string::npos);
+
+  const std::string work = home + "/dp-first-hour";
+  const nlohmann::json report = ReadJson(work + "/box002/report.json");
+  ASSERT_TRUE(report.at("success").get<bool>());
+  const double low = report.at("scale_ci_low").get<double>();
+  const double high = report.at("scale_ci_high").get<double>();
+  EXPECT_LE(low, 0.37) << report.at("scale");
+  EXPECT_GE(high, 0.37) << report.at("scale");
+  EXPECT_TRUE(fs::exists(work + "/box002/dense/dp_scale_record.json"));
+  EXPECT_TRUE(fs::exists(work + "/r6m2_rf50_f4_left.npy"));
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
