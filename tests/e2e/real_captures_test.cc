@@ -163,13 +163,17 @@ TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
   // strength is a second, independent measurement of the blur readings'.
   EXPECT_NE(text.find("fit_shape measured by deconvolution"), std::string::npos)
       << text;
-  const size_t shape = calibrated.err.find("Measured shape: strength ");
+  const std::string kShapeLine =
+      "Measured shape: the deconvolved kernels' DP strength ";
+  const size_t shape = calibrated.err.find(kShapeLine);
   ASSERT_NE(shape, std::string::npos) << calibrated.err;
-  std::istringstream strengths(calibrated.err.substr(shape + 25));
+  std::istringstream strengths(
+      calibrated.err.substr(shape + kShapeLine.size()));
   double from_kernels = 0, from_readings = 0;
-  std::string unit, against;
-  strengths >> from_kernels >> unit >> against >> from_readings;
-  std::printf("strength: kernels %.4f R, blur readings %.4f R\n",
+  std::string against;
+  strengths >> from_kernels >> against >> from_readings;
+  EXPECT_EQ(against, "against");
+  std::printf("DP strength: kernels %.4f, blur readings %.4f\n",
               from_kernels,
               from_readings);
   EXPECT_NEAR(from_kernels / from_readings, 1.0, 0.1);
