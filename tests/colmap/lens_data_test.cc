@@ -1,6 +1,7 @@
 // lens.csv read by its header's names, and each image's lens data checked
 // against its camera (CheckLensAgainstCamera). Expected bounds and ratios
 // are computed by hand in the comments, not with the code's formulas.
+#include <map>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -83,6 +84,38 @@ TEST(LensCsv, UnknownColumnNamesTheUnit) {
   WriteTextFile(dir / "noname.csv", "focal_length_mm,f_number\n50,4\n");
   ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "noname.csv"); }),
                  "no name column");
+}
+
+TEST(LensCsv, SpreadsheetExports) {
+  TempDir dir;
+  // A UTF-8 byte order mark, CRLF line ends, and a quoted cell with a comma.
+  WriteTextFile(dir / "excel.csv",
+                "\xEF\xBB\xBFname,focal_length_mm,f_number,lens\r\n"
+                "a.JPG,50,4,\"RF50mm F1.8 STM, v2\"\r\n");
+  const LensCsvRow row = ReadLensCsv(dir / "excel.csv").at("a.JPG");
+  EXPECT_DOUBLE_EQ(row.f_number, 4);
+  EXPECT_EQ(row.lens, "RF50mm F1.8 STM, v2");
+  // Semicolons (a European spreadsheet): the message says so.
+  WriteTextFile(dir / "semicolon.csv",
+                "name;focal_length_mm;f_number\na.JPG;50;4\n");
+  ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "semicolon.csv"); }),
+                 "separated by commas");
+}
+
+TEST(LensCsv, RowsMatchImagesWithAnotherExtension) {
+  std::map<std::string, LensCsvRow> csv;
+  csv["IMG_1.png"].f_number = 2;
+  csv["IMG_2.png"].f_number = 3;
+  csv["IMG_2.tif"].f_number = 4;
+  std::string matched;
+  const LensCsvRow* row = FindLensRow(csv, "IMG_1.JPG", &matched);
+  ASSERT_NE(row, nullptr);
+  EXPECT_EQ(matched, "IMG_1.png");
+  EXPECT_EQ(row->f_number, 2);
+  // Two rows of the same stem: neither is taken.
+  EXPECT_EQ(FindLensRow(csv, "IMG_2.JPG", nullptr), nullptr);
+  EXPECT_EQ(FindLensRow(csv, "IMG_2.tif", nullptr)->f_number, 4);
+  EXPECT_EQ(FindLensRow(csv, "IMG_3.JPG", nullptr), nullptr);
 }
 
 // The real captures' camera: 49.57 mm over 46.875 um pixels, 512 x 768.

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "tests/e2e/e2e_helpers.h"
 
@@ -246,6 +247,46 @@ TEST_F(FirstHour, FinalLineCarriesIntervalAndSource) {
   const nlohmann::json r = ReadJson(report);
   ASSERT_FALSE(r.at("warnings").empty());
   ExpectContains(r.at("warnings").at(0).get<std::string>(), "8-bit");
+}
+
+// Lossy DP frames are accepted with a warning in the log and the report.
+TEST_F(FirstHour, JpegFramesAreWarnedAbout) {
+  for (const char* side : {"left", "right"}) {
+    const std::string png = ws_ + "/dp/" + side + "/box002.png";
+    const cv::Mat frame = cv::imread(png, cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(frame.empty()) << png;
+    ASSERT_TRUE(cv::imwrite(ws_ + "/dp/" + side + "/box002.jpg", frame));
+    fs::remove(png);
+  }
+  const std::string report = dir_ / "report.json";
+  const CommandResult run = Dense({"--report_path", report});
+  if (run.exit_code != 0) ErrorLine(run);  // a refusal must be clean
+  ExpectContains(run.err, "lossy (JPEG) DP frames");
+  bool reported = false;
+  const nlohmann::json r = ReadJson(report);
+  for (const auto& warning : r.at("warnings")) {
+    reported |= warning.get<std::string>().find("lossy") != std::string::npos;
+  }
+  EXPECT_TRUE(reported);
+}
+
+// The calibrator names both layouts it reads when the captures are in
+// neither.
+TEST_F(FirstHour, CalibratorShowsTheLayoutsItReads) {
+  WriteTextFile(dir_ / "targets.csv",
+                "name,target_distance_m,focal_length_mm,f_number,"
+                "pixel_pitch_um\n"
+                "near,0.6,49.57,4,46.875\n");
+  const std::string error = ErrorLine(RunCommand({kColmap,
+                                                  "dp_psf_calibrator",
+                                                  "--dp_image_path",
+                                                  RealCapture("flat/001"),
+                                                  "--targets_path",
+                                                  dir_ / "targets.csv",
+                                                  "--output_path",
+                                                  dir_ / "profile.dpsf"}));
+  ExpectContains(error, "left/<name> with right/<name>");
+  ExpectContains(error, "left and right columns");
 }
 
 // Swapped DP views: the refusal names the option that fixes it.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <vector>
 
@@ -87,14 +88,43 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
   return rows;
 }
 
+namespace {
+
+std::string WithoutExtension(const std::string& name) {
+  const std::filesystem::path path(name);
+  return (path.parent_path() / path.stem()).generic_string();
+}
+
+}  // namespace
+
+const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
+                              const std::string& image_name,
+                              std::string* matched_name) {
+  auto found = csv.find(image_name);
+  if (found == csv.end()) {
+    // As DP views are matched: the same name with another extension, when
+    // exactly one row has it.
+    const std::string stem = WithoutExtension(image_name);
+    int matches = 0;
+    for (auto it = csv.begin(); it != csv.end(); ++it) {
+      if (WithoutExtension(it->first) == stem) {
+        found = it;
+        ++matches;
+      }
+    }
+    if (matches != 1) return nullptr;
+  }
+  if (matched_name != nullptr) *matched_name = found->first;
+  return &found->second;
+}
+
 ResolvedLens ResolveLens(const std::string& image_name,
                          const std::map<std::string, LensCsvRow>& csv,
                          const LensFlags& flags,
                          const ExifLens* exif,
                          double camera_focal_px) {
   ResolvedLens resolved;
-  const auto row = csv.find(image_name);
-  const LensCsvRow* csv_row = row == csv.end() ? nullptr : &row->second;
+  const LensCsvRow* csv_row = FindLensRow(csv, image_name, nullptr);
   const std::string csv_source =
       csv_row == nullptr  ? ""
       : csv_row->line > 0 ? "lens.csv line " + std::to_string(csv_row->line)
@@ -273,8 +303,10 @@ void CheckLensAgainstCamera(const std::string& image_name,
             ? "the focal length " + Number(lens.focal_length_mm) + " mm (" +
                   resolved.focal_length_source + ") and the camera's " +
                   Number(camera.focal_px) +
-                  " px disagree: is the focal length in pixels or the "
-                  "camera's calibration wrong? " +
+                  " px disagree: is the focal length in " +
+                  (sensor_mm > options.max_sensor_mm ? "pixels" : "metres") +
+                  " (it is in millimetres), or the camera's calibration "
+                  "wrong? " +
                   FixFor(resolved.focal_length_source, "focal_length_mm")
             : (in_mm ? "is the pitch in millimetres? Give micrometres; " : "") +
                   FixFor(resolved.pixel_pitch_source, "pixel_pitch_um") +

@@ -36,6 +36,13 @@ const std::vector<std::string>& LensCsvColumns();
 // that is not a positive number).
 std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
 
+// The row of an image: its exact name, else the one row whose name differs
+// only in the extension (IMG_1.png for a model image IMG_1.JPG, as DP views
+// are matched); null if none. `matched_name` (optional) gets the row's name.
+const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
+                              const std::string& image_name,
+                              std::string* matched_name);
+
 // Lens data of one image and where each number came from ("lens.csv line
 // N", "flag", "EXIF", "derived"), for the log, the report and the errors.
 struct ResolvedLens {

@@ -16,13 +16,34 @@ std::string Trim(const std::string& text) {
 }
 
 std::vector<std::string> SplitCsvLine(const std::string& line) {
+  // RFC 4180 as spreadsheets write it: a cell in double quotes may hold
+  // commas, and "" inside it is one quote.
   std::vector<std::string> cells;
   std::string cell;
-  std::istringstream stream(line);
-  while (std::getline(stream, cell, ',')) {
-    cells.push_back(Trim(cell));
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cell += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cell += c;
+      }
+    } else if (c == '"' && Trim(cell).empty()) {
+      cell.clear();
+      quoted = true;
+    } else if (c == ',') {
+      cells.push_back(Trim(cell));
+      cell.clear();
+    } else {
+      cell += c;
+    }
   }
-  if (!line.empty() && line.back() == ',') cells.push_back("");
+  cells.push_back(Trim(cell));
+  if (cells.size() == 1 && cells[0].empty()) cells.clear();
   return cells;
 }
 
@@ -55,11 +76,16 @@ CsvTable::CsvTable(
   if (!std::getline(file, line) || Trim(line).empty()) {
     throw InputError(path + " is empty" + layout);
   }
+  // The byte order mark spreadsheets put before UTF-8 text.
+  if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   const std::vector<std::string> header = SplitCsvLine(line);
   for (size_t c = 0; c < header.size(); ++c) {
     if (std::find(known.begin(), known.end(), header[c]) == known.end()) {
-      const std::string hint =
+      std::string hint =
           unknown_column_hint ? unknown_column_hint(header[c]) : "";
+      if (header[c].find_first_of(";\t") != std::string::npos) {
+        hint += " (cells are separated by commas, not semicolons or tabs)";
+      }
       throw InputError(path + ":1: unknown column '" + header[c] + "'" + hint +
                        layout);
     }

@@ -13,12 +13,14 @@ namespace dpsfm {
 std::string Trim(const std::string& text);
 
 // The comma-separated cells of one line, each trimmed; a trailing comma
-// gives a last empty cell.
+// gives a last empty cell; a cell in double quotes may hold commas ("" is
+// one quote). An empty line has no cells.
 std::vector<std::string> SplitCsvLine(const std::string& line);
 
 // A CSV file whose header names its columns (lens.csv, calibration
 // targets): columns in any order, each row with as many cells as the
-// header (cells may be empty), blank lines skipped. Every problem is an
+// header (cells may be empty), blank lines skipped, a UTF-8 byte order
+// mark ignored. Every problem is an
 // InputError naming the file, the line and what to write instead.
 class CsvTable {
  public:

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "colmap/util/logging.h"
@@ -203,6 +204,32 @@ std::vector<colmap::image_t> ImagesWithTriangulatedPoints(
   return kept;
 }
 
+// lens.csv rows that match no image of the model are not used: a typo in a
+// name would otherwise pass in silence (the image's numbers then come from
+// the flags or EXIF).
+void WarnUnmatchedLensRows(const colmap::Reconstruction& model,
+                           const std::vector<colmap::image_t>& image_ids,
+                           const std::map<std::string, LensCsvRow>& csv) {
+  std::set<std::string> matched;
+  for (const colmap::image_t image_id : image_ids) {
+    std::string name;
+    if (FindLensRow(csv, model.Image(image_id).Name(), &name) != nullptr) {
+      matched.insert(name);
+    }
+  }
+  std::vector<std::string> unmatched;
+  for (const auto& row : csv) {
+    if (matched.count(row.first) == 0) unmatched.push_back(row.first);
+  }
+  if (!unmatched.empty()) {
+    LOG(WARNING) << unmatched.size() << " of " << csv.size()
+                 << " lens.csv rows name no image of the model (e.g. "
+                 << unmatched[0] << ", line " << csv.at(unmatched[0]).line
+                 << "); names are the model's, e.g. "
+                 << model.Image(image_ids[0]).Name();
+  }
+}
+
 }  // namespace
 
 WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
@@ -277,6 +304,7 @@ WorkspaceReader::WorkspaceReader(const DPScaleEstimatorOptions& options,
   flags.f_number = options_.f_number;
   flags.pixel_pitch_um = options_.pixel_pitch_um;
 
+  WarnUnmatchedLensRows(reconstruction_, image_ids, lens_csv);
   for (const colmap::image_t image_id : image_ids) {
     const colmap::Image& image = reconstruction_.Image(image_id);
     const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
