@@ -38,6 +38,18 @@ TEST(PatchAccount, FewPatchesAtTheBoundNameNothing) {
             std::string::npos);
 }
 
+TEST(CalibratedProfileOpenReason, AdvisesRecordingTheFocusOnlyWithoutOne) {
+  const std::string without =
+      CalibratedProfileOpenReason(0.22, 0.39, 0.28, 3.39, 0.3, false);
+  EXPECT_NE(without.find("Record the focus distance"), std::string::npos);
+  EXPECT_NE(without.find("between 0.2800 and 3.3900"), std::string::npos)
+      << without;
+  const std::string with =
+      CalibratedProfileOpenReason(0.22, 0.39, 0.28, 3.39, 0.3, true);
+  EXPECT_EQ(with.find("Record the focus distance"), std::string::npos) << with;
+  EXPECT_NE(with.find("recorded_focus_tolerance"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace dpsfm

@@ -807,7 +807,8 @@ DPScaleResult DPScaleEstimator::Estimate() const {
                                        linear.scale,
                                        linear.scale_ci_low,
                                        linear.scale_ci_high,
-                                       options_.max_scale_ci_relative_width);
+                                       options_.max_scale_ci_relative_width,
+                                       result.focus_cue.valid);
     } else if (profile_open) {
       s << UnknownProfileReason(
           result.psf_fit.reason +

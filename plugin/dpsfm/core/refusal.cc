@@ -102,7 +102,8 @@ std::string CalibratedProfileOpenReason(double relative_uncertainty,
                                         double scale,
                                         double ci_low,
                                         double ci_high,
-                                        double limit) {
+                                        double limit,
+                                        bool focus_recorded) {
   std::ostringstream s;
   s << "the DP profile's own uncertainty (+-" << std::fixed
     << std::setprecision(1) << 100 * relative_uncertainty
@@ -110,10 +111,16 @@ std::string CalibratedProfileOpenReason(double relative_uncertainty,
        "scenes) and the data's leave the scale between "
     << std::setprecision(4) << ci_low << " and " << ci_high << " (estimate "
     << scale << "), wider than the limit of " << std::setprecision(0)
-    << 100 * limit
-    << " %. Record the focus distance (lens.csv focus_distance_m, or the "
-       "camera's EXIF) so that the profile-free cue joins the DP data, add "
-       "views with more depth range, or allow a wider interval with "
+    << 100 * limit << " %. "
+    << (focus_recorded ? "Add views with more depth range, measure the focus "
+                         "distance with a tape (then set "
+                         "--DPScaleEstimator.recorded_focus_tolerance to its "
+                         "accuracy), "
+                       : "Record the focus distance (lens.csv "
+                         "focus_distance_m, or the camera's EXIF) so that the "
+                         "profile-free cue joins the DP data, add views with "
+                         "more depth range, ")
+    << "or allow a wider interval with "
        "--DPScaleEstimator.max_scale_ci_relative_width";
   return s.str();
 }

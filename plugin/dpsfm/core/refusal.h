@@ -58,11 +58,14 @@ std::string UndeterminedScaleReason(
 // The DP profile's own uncertainty leaves the scale open: a calibrated
 // profile's (+-relative_uncertainty), or, with self-calibration, an unknown
 // profile (fit_reason: the self-calibration's reason, may be "").
+// `focus_recorded`: a recorded focus distance already joins the DP data
+// (then recording one is not the advice).
 std::string CalibratedProfileOpenReason(double relative_uncertainty,
                                         double scale,
                                         double ci_low,
                                         double ci_high,
-                                        double limit);
+                                        double limit,
+                                        bool focus_recorded);
 std::string UnknownProfileReason(const std::string& fit_reason,
                                  double scale,
                                  double ci_low,
