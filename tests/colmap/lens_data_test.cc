@@ -102,6 +102,25 @@ TEST(LensCsv, SpreadsheetExports) {
                  "separated by commas");
 }
 
+TEST(LensCsv, CellsMayCarryTheirColumnsUnit) {
+  TempDir dir;
+  WriteTextFile(dir / "units.csv",
+                "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m,"
+                "\n"
+                "a.JPG,50mm,f/2.8,5.9 um,1.2 m,\n");
+  const LensCsvRow row = ReadLensCsv(dir / "units.csv").at("a.JPG");
+  EXPECT_DOUBLE_EQ(row.focal_length_mm, 50);
+  EXPECT_DOUBLE_EQ(row.f_number, 2.8);
+  EXPECT_DOUBLE_EQ(row.pixel_pitch_um, 5.9);
+  EXPECT_DOUBLE_EQ(row.focus_distance_m, 1.2);
+  // Another unit is named, not converted.
+  WriteTextFile(dir / "mm.csv",
+                "name,pixel_pitch_um\n"
+                "a.JPG,0.0059mm\n");
+  ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "mm.csv"); }),
+                 "pixel_pitch_um must be a positive number in um");
+}
+
 TEST(LensCsv, RowsMatchImagesWithAnotherExtension) {
   std::map<std::string, LensCsvRow> csv;
   csv["IMG_1.png"].f_number = 2;

@@ -14,17 +14,30 @@ namespace dpsfm {
 namespace {
 
 // An empty cell is 0 ("not given"); anything else a positive number.
+// An empty cell is 0 ("not given"); anything else a positive number, which
+// may carry the column's own unit as people write it ("50mm", "5.9 um",
+// "1.2 m", "f/4"); another unit is an error that names the column's.
 double ParseCell(const CsvTable& table,
                  const CsvTable::Row& row,
                  const char* column) {
-  const std::string cell = table.Cell(row, column);
+  std::string cell = table.Cell(row, column);
   if (cell.empty()) return 0;
+  const std::string name = column;
+  const std::string unit = name.substr(name.rfind('_') + 1);
+  if (name == "f_number" &&
+      (cell.rfind("f/", 0) == 0 || cell.rfind("F/", 0) == 0)) {
+    cell = Trim(cell.substr(2));
+  }
   char* end = nullptr;
   const double value = std::strtod(cell.c_str(), &end);
-  if (end == cell.c_str() || *end != '\0' || !std::isfinite(value) ||
-      value <= 0) {
-    throw InputError(table.Where(row) + column +
-                     " must be a positive number or empty, got '" + cell + "'");
+  std::string rest = Trim(end == nullptr ? "" : std::string(end));
+  if (rest == "\xC2\xB5m" || rest == "\xCE\xBCm") rest = "um";  // micro sign
+  const bool own_unit = name != "f_number" && rest == unit;
+  if (end == cell.c_str() || !(rest.empty() || own_unit) ||
+      !std::isfinite(value) || value <= 0) {
+    throw InputError(table.Where(row) + column + " must be a positive number" +
+                     (name == "f_number" ? "" : " in " + unit) +
+                     " or empty, got '" + table.Cell(row, column) + "'");
   }
   return value;
 }

@@ -80,6 +80,9 @@ CsvTable::CsvTable(
   if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   const std::vector<std::string> header = SplitCsvLine(line);
   for (size_t c = 0; c < header.size(); ++c) {
+    // An unnamed column (a trailing comma, a spreadsheet's spare column)
+    // is not read.
+    if (header[c].empty()) continue;
     if (std::find(known.begin(), known.end(), header[c]) == known.end()) {
       std::string hint =
           unknown_column_hint ? unknown_column_hint(header[c]) : "";

@@ -20,7 +20,7 @@ std::vector<std::string> SplitCsvLine(const std::string& line);
 // A CSV file whose header names its columns (lens.csv, calibration
 // targets): columns in any order, each row with as many cells as the
 // header (cells may be empty), blank lines skipped, a UTF-8 byte order
-// mark ignored. Every problem is an
+// mark ignored, unnamed columns not read. Every problem is an
 // InputError naming the file, the line and what to write instead.
 class CsvTable {
  public:
