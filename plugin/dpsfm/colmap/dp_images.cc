@@ -13,16 +13,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "colmap/util/string.h"
+#include "dpsfm/colmap/text.h"
 
 namespace dpsfm {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string StripExtension(const std::string& relative) {
-  const fs::path path(relative);
-  return (path.parent_path() / path.stem()).generic_string();
-}
 
 }  // namespace
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <sstream>
 #include <vector>
 
@@ -13,7 +12,6 @@
 namespace dpsfm {
 namespace {
 
-// An empty cell is 0 ("not given"); anything else a positive number.
 // An empty cell is 0 ("not given"); anything else a positive number, which
 // may carry the column's own unit as people write it ("50mm", "5.9 um",
 // "1.2 m", "f/4"); another unit is an error that names the column's.
@@ -101,15 +99,6 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
   return rows;
 }
 
-namespace {
-
-std::string WithoutExtension(const std::string& name) {
-  const std::filesystem::path path(name);
-  return (path.parent_path() / path.stem()).generic_string();
-}
-
-}  // namespace
-
 const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
                               const std::string& image_name,
                               std::string* matched_name) {
@@ -117,10 +106,10 @@ const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
   if (found == csv.end()) {
     // As DP views are matched: the same name with another extension, when
     // exactly one row has it.
-    const std::string stem = WithoutExtension(image_name);
+    const std::string stem = StripExtension(image_name);
     int matches = 0;
     for (auto it = csv.begin(); it != csv.end(); ++it) {
-      if (WithoutExtension(it->first) == stem) {
+      if (StripExtension(it->first) == stem) {
         found = it;
         ++matches;
       }

@@ -1,6 +1,7 @@
 #include "dpsfm/colmap/text.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -13,6 +14,11 @@ std::string Trim(const std::string& text) {
   if (begin == std::string::npos) return "";
   const size_t end = text.find_last_not_of(" \t\r\n");
   return text.substr(begin, end - begin + 1);
+}
+
+std::string StripExtension(const std::string& name) {
+  const std::filesystem::path path(name);
+  return (path.parent_path() / path.stem()).generic_string();
 }
 
 std::vector<std::string> SplitCsvLine(const std::string& line) {

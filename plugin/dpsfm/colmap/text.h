@@ -17,6 +17,11 @@ std::string Trim(const std::string& text);
 // one quote). An empty line has no cells.
 std::vector<std::string> SplitCsvLine(const std::string& line);
 
+// An image name without its extension, sub-folders kept ("a/IMG_1.JPG" ->
+// "a/IMG_1"): how DP views and lens.csv rows match a model image whose file
+// has another extension.
+std::string StripExtension(const std::string& name);
+
 // A CSV file whose header names its columns (lens.csv, calibration
 // targets): columns in any order, each row with as many cells as the
 // header (cells may be empty), blank lines skipped, a UTF-8 byte order

@@ -1173,7 +1173,6 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
   for (size_t i = 0; i < result->views.size(); ++i) {
     DPViewResult& out = result->views[i];
     const DPLensData& lens = views_[i]->lens;
-    out.recorded_focus_m = lens.recorded_focus_mm / 1000;
     out.focus_scale = kNaN;
     if (!out.used || !std::isfinite(lens.recorded_focus_mm) ||
         !(out.focus_distance_model > 0)) {
