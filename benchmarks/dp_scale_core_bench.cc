@@ -8,9 +8,9 @@
 //   dp_scale_core_bench [--views N] [--width W] [--height H] [--threads T]
 //                       [--noise SIGMA] [--budget 1] [--resize F]
 // --width alone keeps the 3:2 aspect ratio. --budget 1 visits the views
-// under the command's default view budget (core/view_budget.h: checkpoints
-// from 14 views every 7, stop when the scale settles, at most 60), so a
-// large --views shows the peak memory of a large project: views are
+// under the command's default view budget (core/scale/view_budget.h:
+// checkpoints from 14 views every 7, stop when the scale settles, at most 60),
+// so a large --views shows the peak memory of a large project: views are
 // rendered only when visited. --resize F sets DPScaleOptions::resize_factor
 // (0 = the automatic working resolution).
 #include <sys/resource.h>
@@ -26,13 +26,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "../tests/core/synthetic_dp.h"
-#include "dpsfm/core/dp_scale_estimator.h"
-#include "dpsfm/core/view_budget.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+#include "dpsfm/core/scale/view_budget.h"
+#include "dpsfm/core/util/threads.h"
 
 namespace {
 
@@ -80,11 +77,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "need --views >= 1 and a frame of >= 64 px\n");
     return 1;
   }
-#ifdef _OPENMP
-  const int used_threads = threads > 0 ? threads : omp_get_max_threads();
-#else
-  const int used_threads = 1;
-#endif
+  const int used_threads = dpsfm::EffectiveNumThreads(threads);
   std::printf(
       "dp_scale_core_bench: %d views of %dx%d RGB DP frames, noise "
       "%.4f, %d threads\n",

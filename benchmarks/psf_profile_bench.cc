@@ -22,10 +22,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "../tests/core/synthetic_dp.h"
-#include "dpsfm/core/dp_scale_estimator.h"
-#include "dpsfm/core/psf_calibration.h"
-#include "dpsfm/core/shape_calibration.h"
-#include "dpsfm/core/target_calibration.h"
+#include "dpsfm/core/calibration/psf_calibration.h"
+#include "dpsfm/core/calibration/shape_calibration.h"
+#include "dpsfm/core/calibration/target_calibration.h"
+#include "dpsfm/core/scale/scale_estimator.h"
 
 namespace {
 
@@ -332,7 +332,8 @@ int main(int argc, char** argv) {
        measured(1.0, 0, 6, 0.3, 1)},
       // Apodized: light falling to a tenth towards the rim (1 - 0.9 rho^4),
       // the family's bright rim reversed, with a soft split.
-      {"apodized, soft split (kernels)", measured(1.0, 0, 1.5, 0, -0.9),
+      {"apodized, soft split (kernels)",
+       measured(1.0, 0, 1.5, 0, -0.9),
        nullptr},
   };
   std::printf(

@@ -28,7 +28,7 @@
 
 #include "colmap/mvs/depth_map.h"
 #include "colmap/scene/reconstruction.h"
-#include "dpsfm/colmap/colmap_compat.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
 
 namespace fs = std::filesystem;
 

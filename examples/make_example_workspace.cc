@@ -39,11 +39,11 @@
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
 #include "colmap/util/ply.h"
-#include "dpsfm/colmap/colmap_compat.h"
-#include "dpsfm/core/blur_estimation.h"
-#include "dpsfm/core/dp_psf.h"
-#include "dpsfm/core/dp_renderer.h"
-#include "dpsfm/core/lens_model.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/optics/dp_renderer.h"
+#include "dpsfm/core/optics/lens_model.h"
 #include "synthetic_scene.h"
 
 namespace fs = std::filesystem;

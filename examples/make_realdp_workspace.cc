@@ -32,8 +32,8 @@
 
 #include "colmap/mvs/depth_map.h"
 #include "colmap/scene/reconstruction.h"
-#include "dpsfm/colmap/colmap_compat.h"
-#include "dpsfm/core/encoding.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/optics/encoding.h"
 
 namespace fs = std::filesystem;
 namespace po = boost::program_options;

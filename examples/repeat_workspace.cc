@@ -14,7 +14,7 @@
 #include <string>
 
 #include "colmap/scene/reconstruction.h"
-#include "dpsfm/colmap/colmap_compat.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
 
 namespace fs = std::filesystem;
 

@@ -144,13 +144,13 @@ inline std::string PycolmapPython() {
   return cache + "/venv/pycolmap-4.2.1/bin/python";
 }
 
-// Runs tests/colmap/colmap4_oracle.py (make, convert, map, check; see
+// Runs tests/colmap/rescale/colmap4_oracle.py (make, convert, map, check; see
 // there) with PycolmapPython().
 inline CommandResult RunColmap4Oracle(std::vector<std::string> args) {
-  args.insert(
-      args.begin(),
-      {PycolmapPython(),
-       std::string(DPSFM_SOURCE_DIR) + "/tests/colmap/colmap4_oracle.py"});
+  args.insert(args.begin(),
+              {PycolmapPython(),
+               std::string(DPSFM_SOURCE_DIR) +
+                   "/tests/colmap/rescale/colmap4_oracle.py"});
   return RunCommand(args);
 }
 

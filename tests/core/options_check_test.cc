@@ -1,4 +1,4 @@
-// One way of checking options (core/check.h): every options struct's
+// One way of checking options (core/util/check.h): every options struct's
 // Check() passes on its defaults, fails on a bad field with a failure text
 // that names the field and the value given, and DPSFM_CHECK_OPTIONS turns
 // it into std::invalid_argument naming the struct. Nested structs prefix
@@ -8,19 +8,19 @@
 
 #include <gtest/gtest.h>
 
-#include "dpsfm/core/blur_estimation.h"
-#include "dpsfm/core/check.h"
-#include "dpsfm/core/dp_psf.h"
-#include "dpsfm/core/dp_renderer.h"
-#include "dpsfm/core/dp_scale_estimator.h"
-#include "dpsfm/core/intensity_search.h"
-#include "dpsfm/core/kernel_estimation.h"
-#include "dpsfm/core/lens_model.h"
-#include "dpsfm/core/linear_estimator.h"
-#include "dpsfm/core/psf_calibration.h"
-#include "dpsfm/core/shape_calibration.h"
-#include "dpsfm/core/target_calibration.h"
-#include "dpsfm/core/view_budget.h"
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/blur/kernel_estimation.h"
+#include "dpsfm/core/calibration/psf_calibration.h"
+#include "dpsfm/core/calibration/shape_calibration.h"
+#include "dpsfm/core/calibration/target_calibration.h"
+#include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/optics/dp_renderer.h"
+#include "dpsfm/core/optics/lens_model.h"
+#include "dpsfm/core/scale/intensity_search.h"
+#include "dpsfm/core/scale/linear_estimator.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+#include "dpsfm/core/scale/view_budget.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace {

@@ -14,8 +14,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "dpsfm/core/check.h"
-#include "dpsfm/core/dp_psf.h"
+#include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace test {

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "colmap/scene/reconstruction.h"
-#include "dpsfm/colmap/colmap_compat.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {

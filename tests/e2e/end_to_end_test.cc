@@ -18,8 +18,8 @@
 
 #include "colmap/scene/database.h"
 #include "colmap/scene/reconstruction.h"
-#include "dpsfm/colmap/colmap_compat.h"
-#include "dpsfm/colmap/workspace_reader.h"
+#include "dpsfm/colmap/io/workspace_reader.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
 #include "tests/e2e/e2e_helpers.h"
 #include "tests/test_utils.h"
 

@@ -12,8 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "dpsfm/colmap/psf_profile.h"
-#include "dpsfm/core/lens_model.h"
+#include "dpsfm/colmap/io/psf_profile.h"
+#include "dpsfm/core/optics/lens_model.h"
 #include "tests/core/synthetic_dp.h"
 #include "tests/test_utils.h"
 

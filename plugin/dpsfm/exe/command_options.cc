@@ -4,7 +4,7 @@
 #include <cstring>
 #include <ostream>
 
-#include "dpsfm/colmap/colmap_compat.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
 
 namespace dpsfm {
 namespace {

@@ -16,18 +16,18 @@
 #include "colmap/util/logging.h"
 #include "colmap/util/misc.h"
 #include "colmap/util/timer.h"
-#include "dpsfm/colmap/colmap_compat.h"
-#include "dpsfm/colmap/dp_images.h"
-#include "dpsfm/colmap/psf_profile.h"
-#include "dpsfm/colmap/workspace.h"
-#include "dpsfm/core/blur_estimation.h"
-#include "dpsfm/core/check.h"
-#include "dpsfm/core/encoding.h"
-#include "dpsfm/core/kernel_grid.h"
-#include "dpsfm/core/lens_model.h"
-#include "dpsfm/core/psf_calibration.h"
-#include "dpsfm/core/shape_calibration.h"
-#include "dpsfm/core/target_calibration.h"
+#include "dpsfm/colmap/io/dp_images.h"
+#include "dpsfm/colmap/io/psf_profile.h"
+#include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/calibration/psf_calibration.h"
+#include "dpsfm/core/calibration/shape_calibration.h"
+#include "dpsfm/core/calibration/target_calibration.h"
+#include "dpsfm/core/optics/encoding.h"
+#include "dpsfm/core/optics/kernel_grid.h"
+#include "dpsfm/core/optics/lens_model.h"
+#include "dpsfm/core/util/check.h"
 #include "dpsfm/exe/command_options.h"
 
 namespace fs = std::filesystem;
@@ -45,7 +45,7 @@ struct CalibratorOptions {
   std::string targets_path;
   std::string output_path;
   bool swap_dp_views = false;
-  // auto, linear or srgb (colmap/dp_images.h, DecideEncoding).
+  // auto, linear or srgb (colmap/io/dp_images.h, DecideEncoding).
   std::string dp_encoding = "auto";
   // How far a profile calibrated on planes transfers to scenes (relative,
   // 95 %), added in quadrature to the fit's own uncertainty in the

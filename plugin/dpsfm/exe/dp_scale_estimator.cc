@@ -4,9 +4,9 @@
 #include <exception>
 #include <iostream>
 
-#include "dpsfm/colmap/scale_controller.h"
-#include "dpsfm/colmap/workspace.h"
-#include "dpsfm/core/dp_scale_estimator.h"
+#include "dpsfm/colmap/controllers/scale_controller.h"
+#include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/exe/command_options.h"
 
 namespace dpsfm {
@@ -19,7 +19,7 @@ int Fail(const std::string& message) {
 }
 
 void AddCommandOptions(CommandOptions* manager,
-                       DPScaleEstimatorOptions* options,
+                       ScaleRunOptions* options,
                        DPScaleOptions* core) {
   manager->Group(
       "Required (and exactly one of --workspace_path, --input_path)");
@@ -219,7 +219,7 @@ void AddCommandOptions(CommandOptions* manager,
 }  // namespace
 
 int RunDPScaleEstimator(int argc, char** argv) {
-  DPScaleEstimatorOptions options;
+  ScaleRunOptions options;
   DPScaleOptions core_options;
 
   CommandOptions command(

@@ -1,0 +1,553 @@
+#include "dpsfm/colmap/controllers/scale_controller.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "colmap/util/logging.h"
+#include "colmap/util/misc.h"
+#include "colmap/util/timer.h"
+#include "dpsfm/colmap/io/database_check.h"
+#include "dpsfm/colmap/io/psf_profile.h"
+#include "dpsfm/colmap/io/view_prefetcher.h"
+#include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/colmap/report/report.h"
+#include "dpsfm/colmap/report/report_plots.h"
+#include "dpsfm/colmap/rescale/rescale.h"
+#include "dpsfm/colmap/rescale/transaction.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/util/check.h"
+
+namespace dpsfm {
+namespace {
+
+std::string Seconds(double seconds) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(2) << seconds << " s";
+  return text.str();
+}
+
+// The report with where the DP profile came from.
+nlohmann::json ReportWithSource(nlohmann::json report,
+                                const std::string& psf_source) {
+  report["psf"]["source"] = psf_source;
+  return report;
+}
+
+}  // namespace
+
+DPScaleController::DPScaleController(const ViewBudgetOptions& budget,
+                                     const WorkspaceReader* reader,
+                                     DPScaleEstimator* estimator,
+                                     bool capture_overlays,
+                                     int prefetch_views)
+    : budget_(budget),
+      reader_(reader),
+      estimator_(estimator),
+      capture_overlays_(capture_overlays),
+      prefetch_views_(prefetch_views) {
+  DPSFM_CHECK_OPTIONS(budget_, "ViewBudgetOptions");
+}
+
+std::vector<int> DPScaleController::VisitingOrder() const {
+  std::vector<ViewPlacement> placements;
+  for (size_t i = 0; i < reader_->NumViews(); ++i) {
+    const ViewSource& source = reader_->Source(i);
+    ViewPlacement p;
+    const colmap::Image& image =
+        reader_->reconstruction().Image(source.image_id);
+    p.centre = image.ProjectionCenter();
+    p.direction = image.ViewingDirection();
+    p.camera_id = static_cast<int>(image.CameraId());
+    p.f_number = source.lens.lens.f_number;
+    placements.push_back(p);
+  }
+  return SpreadViewOrder(placements);
+}
+
+ScaleRun DPScaleController::Run() {
+  ScaleRun run;
+  const int num_views = static_cast<int>(reader_->NumViews());
+  ViewBudget budget(budget_, num_views);
+  run.planned = budget.Planned();
+  const std::vector<int> order = VisitingOrder();
+  colmap::Timer views_timer;
+  views_timer.Start();
+  const int planned = run.planned;
+  // Views are read ahead (decoding and depth maps overlap the blur search),
+  // never beyond those planned.
+  ViewPrefetcher prefetcher(
+      reader_,
+      std::vector<int>(order.begin(), order.begin() + planned),
+      prefetch_views_);
+  // Overlays: the first, middle and last view of those planned.
+  for (int k = 0; k < planned; ++k) {
+    const int index = order[k];
+    ViewPrefetcher::Read read = prefetcher.Next();
+    const DPView& view = read.view;
+    run.timings.read += read.seconds;
+    run.timings.read_wait += read.waited;
+    DPViewSummary summary;
+    try {
+      summary = estimator_->AddView(view);
+    } catch (const CheckFailure& error) {
+      // A view the core cannot take: its own words, without the check.
+      throw InputError("image " + view.name + ": " +
+                       (error.message().empty() ? std::string(error.what())
+                                                : error.message()));
+    } catch (const std::invalid_argument& error) {
+      throw InputError("image " + view.name + ": " + error.what());
+    }
+    run.timings.blur += summary.seconds;
+    if (capture_overlays_ &&
+        (k == 0 || k == (planned - 1) / 2 || k == planned - 1) &&
+        (run.overlay_images.empty() || run.overlay_images.back().first != k)) {
+      cv::Mat image;
+      cv::Mat(0.5 * (view.left + view.right)).convertTo(image, CV_8U, 255.0);
+      run.overlay_images.emplace_back(k, image);
+    }
+    run.visited.push_back(index);
+    const double elapsed = views_timer.ElapsedSeconds();
+    LOG(INFO) << "[" << k + 1 << "/" << planned << "] " << view.name << ": "
+              << summary.patches_valid << " of " << summary.patches_tried
+              << " patches with a blur estimate, " << summary.patches_kept
+              << " kept (" << Seconds(summary.seconds) << "; "
+              << Seconds(elapsed) << " so far"
+              << (k + 1 < planned
+                      ? ", at most " +
+                            Seconds(elapsed / (k + 1) * (planned - k - 1)) +
+                            " to go"
+                      : std::string())
+              << ")";
+    run.summaries.push_back(summary);
+    if (budget.IsCheckpoint(k + 1)) {
+      colmap::Timer check_timer;
+      check_timer.Start();
+      const DPScaleResult provisional = estimator_->Estimate();
+      Checkpoint checkpoint;
+      checkpoint.views = k + 1;
+      checkpoint.success = provisional.success;
+      checkpoint.scale = provisional.scale;
+      checkpoint.ci_low = provisional.scale_ci_low;
+      checkpoint.ci_high = provisional.scale_ci_high;
+      std::string why;
+      const bool stop = budget.Record(checkpoint, &why);
+      if (provisional.success) {
+        LOG(INFO) << "  after " << k + 1 << " views: scale "
+                  << provisional.scale << " (95% interval "
+                  << provisional.scale_ci_low << " .. "
+                  << provisional.scale_ci_high << "; "
+                  << Seconds(check_timer.ElapsedSeconds()) << ")";
+      } else {
+        LOG(INFO) << "  after " << k + 1 << " views: no scale yet ("
+                  << provisional.failure_reason.substr(0, 120) << "; "
+                  << Seconds(check_timer.ElapsedSeconds()) << ")";
+      }
+      if (stop) {
+        // The final estimate would repeat this one (the same views).
+        run.result = provisional;
+        run.stop_reason = why;
+        LOG(INFO) << "  " << why << ": " << num_views - (k + 1)
+                  << " views left unvisited ("
+                  << "--DPScaleEstimator.all_views 1 visits them all)";
+        break;
+      }
+    }
+  }
+  for (int k = static_cast<int>(run.visited.size()); k < num_views; ++k) {
+    run.skipped.push_back(order[k]);
+  }
+  if (run.stop_reason.empty() && !run.skipped.empty()) {
+    std::ostringstream why;
+    why << "the view budget (--DPScaleEstimator.max_views " << planned
+        << ") was reached before the scale settled";
+    run.stop_reason = why.str();
+    LOG(INFO) << "  " << run.stop_reason << ": " << run.skipped.size()
+              << " views left unvisited";
+  }
+  run.checkpoints = budget.Checkpoints();
+
+  LOG_HEADING2("Scale estimation");
+  if (run.checkpoints.empty() ||
+      run.checkpoints.back().views != static_cast<int>(run.visited.size())) {
+    run.result = estimator_->Estimate();
+  } else {
+    LOG(INFO) << "  the estimate of the last checkpoint (" << run.visited.size()
+              << " views)";
+  }
+  run.timings.linear = run.result.seconds_linear;
+  run.timings.intensity = run.result.seconds_intensity;
+  return run;
+}
+
+nlohmann::json ViewBudgetReport(const ScaleRun& run,
+                                const WorkspaceReader& reader) {
+  nlohmann::json out;
+  out["views_total"] = reader.NumViews();
+  out["views_planned"] = run.planned;
+  out["views_visited"] = run.visited.size();
+  nlohmann::json order = nlohmann::json::array();
+  for (const int i : run.visited) order.push_back(reader.Source(i).image_name);
+  out["visited"] = order;
+  nlohmann::json skipped = nlohmann::json::array();
+  for (const int i : run.skipped) {
+    skipped.push_back(reader.Source(i).image_name);
+  }
+  out["skipped"] = skipped;
+  out["stop_reason"] = run.stop_reason;
+  nlohmann::json checkpoints = nlohmann::json::array();
+  for (const Checkpoint& c : run.checkpoints) {
+    nlohmann::json entry = {{"views", c.views}, {"success", c.success}};
+    if (c.success) {
+      entry["scale"] = c.scale;
+      entry["scale_ci"] = {c.ci_low, c.ci_high};
+    }
+    checkpoints.push_back(entry);
+  }
+  out["checkpoints"] = checkpoints;
+  return out;
+}
+
+namespace {
+
+// Step 1: a commit cut short by a crash or kill is finished (or rolled
+// back) before anything else reads the workspace. True if the interrupted
+// run had estimated and staged everything, so finishing its commit was the
+// whole job (estimating again would rescale twice).
+bool FinishInterruptedCommit(const std::string& root) {
+  const RecoveryReport recovery = RecoverInterruptedCommit(root);
+  if (recovery.action == RecoveryReport::Action::kRolledForward) {
+    const ScaleRecord finished = ReadScaleRecord(root);
+    LOG(WARNING) << "Finished an interrupted rescale: " << recovery.Describe();
+    if (finished.IsRescaled()) {
+      LOG(INFO) << "Scale " << finished.entries.back().scale
+                << " metres per model unit (applied "
+                << finished.entries.back().time
+                << "); the model is now in metres. Record: "
+                << ScaleRecordPath(root);
+    }
+    return true;
+  }
+  if (recovery.action == RecoveryReport::Action::kRolledBack) {
+    LOG(WARNING) << "Rolled back an interrupted rescale: "
+                 << recovery.Describe();
+  }
+  return false;
+}
+
+// Step 2: the already-rescaled policy. Rescaling in place twice needs
+// --force; anything else only warns.
+void CheckAlreadyRescaled(const std::string& root, bool in_place, bool force) {
+  const ScaleRecord record = ReadScaleRecord(root);
+  if (!record.IsRescaled()) return;
+  const ScaleRecordEntry& last = record.entries.back();
+  std::ostringstream note;
+  note << "this workspace was already rescaled by dp_scale_estimator ("
+       << record.entries.size() << " time(s), last on " << last.time << " by "
+       << last.scale << ", total " << record.CumulativeScale() << "; see "
+       << ScaleRecordPath(root) << ")";
+  if (in_place && !force) {
+    throw InputError(note.str() +
+                     "; pass --force 1 to apply another scale on top");
+  }
+  LOG(WARNING) << note.str();
+}
+
+// Step 3: what was read: the database cross-check and each view's lens
+// data with its source.
+std::vector<ViewSource> LogInputs(const ScaleRunOptions& options,
+                                  const WorkspaceReader& reader) {
+  if (!options.database_path.empty()) {
+    const DatabaseCheck& check = reader.database_check();
+    LOG(INFO) << "Database: " << check.num_database_images << " images; "
+              << check.missing_images.size()
+              << " model images missing from it, "
+              << check.camera_mismatches.size()
+              << " with a different camera aspect; "
+              << check.original_cameras.size() << " original cameras";
+    for (const std::string& name : check.missing_images) {
+      LOG(WARNING) << "  not in the database: " << name;
+    }
+    for (const std::string& name : check.camera_mismatches) {
+      LOG(WARNING) << "  camera differs from the database's: " << name;
+    }
+  }
+  std::vector<ViewSource> sources;
+  for (size_t i = 0; i < reader.NumViews(); ++i) {
+    const ViewSource& source = reader.Source(i);
+    sources.push_back(source);
+    std::ostringstream line;
+    line << "  " << source.image_name << ": f "
+         << source.lens.lens.focal_length_mm << " mm ("
+         << source.lens.focal_length_source << "), f/"
+         << source.lens.lens.f_number << " (" << source.lens.f_number_source
+         << "), pitch " << source.lens.lens.pixel_pitch_um << " um ("
+         << source.lens.pixel_pitch_source << ")";
+    if (!source.lens.focus_source.empty()) {
+      line << ", focus " << source.lens.lens.recorded_focus_mm / 1000 << " m ("
+           << source.lens.focus_source << ")";
+    }
+    LOG(INFO) << line.str();
+  }
+  return sources;
+}
+
+struct ProfileChoice {
+  std::string model, path;
+  std::string source;  // for the log and the report
+};
+
+// Step 4: the DP profile: the given one, or (auto) a calibrated one from
+// the library when every view has the same known camera and lens.
+ProfileChoice ChooseProfile(const ScaleRunOptions& options,
+                            const std::vector<ViewSource>& sources) {
+  ProfileChoice choice;
+  choice.model = options.psf_model;
+  choice.path = options.psf_path;
+  choice.source =
+      choice.model == "calibrated" ? "psf_path " + choice.path : choice.model;
+  if (choice.model != "auto" || sources.empty()) return choice;
+  const std::string& camera = sources[0].lens.camera;
+  const std::string& lens = sources[0].lens.lens_model;
+  bool same = true;
+  for (const ViewSource& source : sources) {
+    same =
+        same && source.lens.camera == camera && source.lens.lens_model == lens;
+  }
+  const std::string library = options.psf_library.empty()
+                                  ? DefaultProfileLibrary()
+                                  : options.psf_library;
+  const std::string found =
+      same ? FindLibraryProfile(library, camera, lens) : "";
+  if (!found.empty()) {
+    choice.model = "calibrated";
+    choice.path = found;
+    choice.source =
+        "library " + found + " (camera '" + camera + "', lens '" + lens + "')";
+  } else if (same && !camera.empty() && !lens.empty()) {
+    LOG(INFO) << "DP PSF: no profile for camera '" << camera << "', lens '"
+              << lens << "' in the library " << library;
+  }
+  return choice;
+}
+
+// What 8-bit and lossy DP frames cost, for the log and the report.
+std::vector<std::string> FrameWarnings(const DPScaleResult& result) {
+  int eight_bit = 0, lossy = 0;
+  for (const DPViewResult& view : result.views) {
+    eight_bit += view.frames.bits <= 8;
+    lossy += view.frames.lossy;
+  }
+  std::vector<std::string> warnings;
+  if (eight_bit > 0) {
+    warnings.push_back(
+        std::to_string(eight_bit) +
+        " view(s) have 8-bit DP frames: they are decoded to linear light, "
+        "where 8 bits leave the darker patches coarsely quantised (their "
+        "texture reads as noise and fewer patches qualify). 16-bit frames "
+        "(DPRSplit output) keep it.");
+  }
+  if (lossy > 0) {
+    warnings.push_back(
+        std::to_string(lossy) +
+        " view(s) have lossy (JPEG) DP frames: compression removes fine "
+        "texture and rings at edges, which biases small blur estimates; "
+        "export PNG or TIFF.");
+  }
+  return warnings;
+}
+
+// Step 6: what the estimate found, per view and overall.
+void LogResult(const DPScaleResult& result) {
+  if (!result.psf_status.empty()) {
+    LOG(INFO) << "DP PSF: " << result.psf_status << " ("
+              << Seconds(result.seconds_psf_fit) << ")";
+  }
+  if (!result.focus_check.empty()) {
+    if (result.focus_agrees) {
+      LOG(INFO) << "Recorded focus: " << result.focus_check;
+    } else {
+      LOG(WARNING) << "Recorded focus: " << result.focus_check;
+    }
+  }
+  for (const DPViewResult& view : result.views) {
+    LOG(INFO) << "  " << view.name << ": " << (view.used ? "used" : "not used")
+              << (view.reason.empty() || view.reason == "used"
+                      ? std::string()
+                      : " (" + view.reason + ")")
+              << "; DP frames " << DPEncodingName(view.frames.encoding) << " ("
+              << view.frames.encoding_reason << ")";
+  }
+  for (const std::string& warning : FrameWarnings(result)) {
+    LOG(WARNING) << warning;
+  }
+}
+
+// "Scale S metres per model unit (95 % interval [lo, hi], from <source>)".
+std::string ScaleLine(const DPScaleResult& result) {
+  std::ostringstream line;
+  line << "Scale " << result.scale << " metres per model unit (95 % interval ["
+       << result.scale_ci_low << ", " << result.scale_ci_high << "], from the "
+       << (result.scale_source.empty() ? std::string("DP data")
+                                       : result.scale_source)
+       << ")";
+  return line.str();
+}
+
+// The report: the estimate, the inputs, the profile's source, the view
+// budget, and (after a rescale) what was rescaled.
+nlohmann::json RunReport(const ScaleRun& run,
+                         const std::vector<ViewSource>& sources,
+                         const WorkspaceReader& reader,
+                         const std::string& psf_source) {
+  nlohmann::json report = ReportWithSource(
+      MakeReport(run.result, sources, run.summaries, run.timings), psf_source);
+  report["view_budget"] = ViewBudgetReport(run, reader);
+  report["warnings"] = FrameWarnings(run.result);
+  return report;
+}
+
+// Step 7: the rescale, in place or into a copy.
+RescaleWorkspaceResult Rescale(const ScaleRunOptions& options,
+                               const std::string& root,
+                               double scale) {
+  LOG_HEADING2(options.output_path.empty() ? "Rescaling the workspace in place"
+                                           : "Writing a rescaled copy");
+  RescaleWorkspaceOptions rescale_options;
+  rescale_options.extra_model_dirs =
+      colmap::CSVToVector<std::string>(options.extra_model_paths);
+  rescale_options.force = options.force;
+  rescale_options.tool_version = "dp-sfm " + DPSFMVersion();
+  for (const std::string* input : {&options.workspace_path,
+                                   &options.input_path,
+                                   &options.dp_image_path,
+                                   &options.lens_path,
+                                   &options.image_path}) {
+    if (!input->empty()) rescale_options.inputs.push_back(*input);
+  }
+  const RescaleWorkspaceResult rescaled =
+      options.output_path.empty()
+          ? RescaleWorkspaceInPlace(root, scale, rescale_options)
+          : WriteRescaledCopy(
+                root, options.output_path, scale, rescale_options);
+  for (const std::string& file : rescaled.rescaled_files) {
+    VLOG(1) << "  rescaled " << file;
+  }
+  return rescaled;
+}
+
+}  // namespace
+
+ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
+                                          DPScaleOptions core_options) {
+  colmap::Timer total_timer;
+  total_timer.Start();
+  LOG_HEADING1("DP scale estimation");
+  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+  if (!core_options.Check()) {
+    throw InputError("invalid DPScaleEstimator option: " +
+                     OptionCheckFailure());
+  }
+  LOG(INFO) << "Model: " << layout.model_path << " ("
+            << (layout.dense ? "dense workspace" : "sparse model") << ")";
+
+  // The folder whose metric files are rescaled and which holds the record.
+  const std::string root =
+      layout.dense ? options.workspace_path : options.input_path;
+  const bool in_place = !options.dry_run && options.output_path.empty();
+  if (in_place && FinishInterruptedCommit(root)) {
+    return ScaleEstimationOutcome::Success();
+  }
+  CheckAlreadyRescaled(root, in_place, options.force);
+  if (!options.dry_run) {
+    // What the rescale at the end would refuse, refused now.
+    CheckRescaleIsPossible(
+        root,
+        colmap::CSVToVector<std::string>(options.extra_model_paths),
+        options.output_path);
+  }
+  const WorkspaceReader reader(options, layout);
+  const std::vector<ViewSource> sources = LogInputs(options, reader);
+
+  LOG_HEADING2("Per-patch DP blur estimation");
+  const ProfileChoice profile = ChooseProfile(options, sources);
+  const DPPsfField psf_field =
+      MakePsfField(profile.model, profile.path, &core_options);
+  LOG(INFO) << "DP PSF: " << profile.source << " (" << psf_field.Name()
+            << (core_options.psf_self_calibration
+                    ? ", self-calibrated from the data before the scale"
+                    : "")
+            << ")";
+
+  // Step 5: the view loop and the estimate. One thread asked for means no
+  // reading thread either.
+  DPScaleEstimator estimator(core_options, psf_field);
+  DPScaleController controller(
+      options.view_budget,
+      &reader,
+      &estimator,
+      !options.report_path.empty(),
+      options.num_threads == 1 ? 0 : options.prefetch_views);
+  ScaleRun run = controller.Run();
+  const DPScaleResult& result = run.result;
+  RunTimings& timings = run.timings;
+  LogResult(result);
+
+  // Without a rescale to follow, the report is complete now.
+  const bool rescale = result.success && !options.dry_run;
+  timings.total = total_timer.ElapsedSeconds();
+  if (!options.report_path.empty()) {
+    for (const std::string& plot : WriteReportPlots(
+             result,
+             run.overlay_images,
+             options.report_path,
+             run.summaries.empty() ? 0 : run.summaries[0].patch_size)) {
+      LOG(INFO) << "Plot: " << plot;
+    }
+  }
+  if (!options.report_path.empty() && !rescale) {
+    WriteJsonFile(options.report_path,
+                  RunReport(run, sources, reader, profile.source));
+    LOG(INFO) << "Report: " << options.report_path;
+  }
+  if (!result.success) {
+    return ScaleEstimationOutcome::Failure(
+        "no scale: " + result.failure_reason + "; nothing was changed");
+  }
+  LOG(INFO) << "Linear estimate s* = " << result.scale_initial
+            << ", final s = " << result.scale << " (95% interval "
+            << result.scale_ci_low << " .. " << result.scale_ci_high
+            << "; intensity stage: " << result.intensity_status << ")";
+  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
+            << Seconds(timings.read_wait) << " not overlapped), blur "
+            << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
+            << ", intensity " << Seconds(timings.intensity);
+  if (options.dry_run) {
+    LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed";
+    return ScaleEstimationOutcome::Success();
+  }
+
+  colmap::Timer rescale_timer;
+  rescale_timer.Start();
+  const RescaleWorkspaceResult rescaled = Rescale(options, root, result.scale);
+  timings.rescale = rescale_timer.ElapsedSeconds();
+  timings.total = total_timer.ElapsedSeconds();
+  if (!options.report_path.empty()) {
+    nlohmann::json report = RunReport(run, sources, reader, profile.source);
+    report["rescaled_files"] = rescaled.rescaled_files;
+    report["cumulative_scale"] = rescaled.entry.cumulative_scale;
+    report["record_path"] = rescaled.record_path;
+    WriteJsonFile(options.report_path, report);
+    LOG(INFO) << "Report: " << options.report_path;
+  }
+  LOG(INFO) << ScaleLine(result) << ": " << rescaled.rescaled_files.size()
+            << " files rescaled "
+            << (options.output_path.empty() ? "in place in " + root
+                                            : "into " + options.output_path)
+            << " (" << Seconds(timings.rescale)
+            << "); the model is now in metres. Record: "
+            << rescaled.record_path;
+  return ScaleEstimationOutcome::Success();
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,276 @@
+#include "dpsfm/colmap/io/dp_images.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <sstream>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <opencv2/imgproc.hpp>
+
+#include "colmap/util/string.h"
+#include "dpsfm/colmap/io/text.h"
+
+namespace dpsfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+}  // namespace
+
+DPImageIndex::Folder DPImageIndex::Scan(const std::string& root) {
+  Folder folder;
+  folder.root = root;
+  if (root.empty()) {
+    return folder;
+  }
+  for (fs::recursive_directory_iterator it(root), end; it != end; ++it) {
+    if (!fs::is_regular_file(it->path())) {
+      continue;
+    }
+    const std::string relative =
+        fs::relative(it->path(), root).generic_string();
+    folder.by_name[relative] = it->path().string();
+    folder.by_stem[StripExtension(relative)].push_back(it->path().string());
+  }
+  return folder;
+}
+
+DPImageIndex::DPImageIndex(const WorkspaceLayout& layout)
+    : left_(Scan(layout.left_path)),
+      right_(Scan(layout.right_path)),
+      sum_(Scan(layout.sum_path)),
+      has_right_(!layout.right_path.empty()) {}
+
+std::string DPImageIndex::Lookup(const Folder& folder,
+                                 const std::string& name,
+                                 const std::string& what) {
+  const auto exact = folder.by_name.find(name);
+  if (exact != folder.by_name.end()) {
+    return exact->second;
+  }
+  const auto stem = folder.by_stem.find(StripExtension(name));
+  if (stem == folder.by_stem.end() || stem->second.empty()) {
+    throw InputError("no " + what + " DP view for image " + name + " in " +
+                     folder.root);
+  }
+  if (stem->second.size() > 1) {
+    std::ostringstream message;
+    message << "ambiguous " << what << " DP view for image " << name << ": ";
+    for (size_t i = 0; i < stem->second.size(); ++i) {
+      message << (i > 0 ? ", " : "") << stem->second[i];
+    }
+    throw InputError(message.str());
+  }
+  return stem->second.front();
+}
+
+bool DPImageIndex::HasLeft(const std::string& image_name) const {
+  return left_.by_name.count(image_name) > 0 ||
+         left_.by_stem.count(StripExtension(image_name)) > 0;
+}
+
+DPFramePaths DPImageIndex::Find(const std::string& image_name) const {
+  DPFramePaths paths;
+  paths.left = Lookup(left_, image_name, "left");
+  if (has_right_) {
+    paths.right = Lookup(right_, image_name, "right");
+  } else {
+    paths.sum = Lookup(sum_, image_name, "sum");
+  }
+  return paths;
+}
+
+namespace {
+
+// Decodes an image file's bytes with OpenImageIO, the library COLMAP 4 reads
+// images with, so that any frame COLMAP reads, the plugin reads. Returns the
+// pixels as OpenCV's decoder would (8-bit, 16-bit or float; colour in BGR
+// order), or an empty matrix. The bytes are decoded in memory where the
+// format allows it; other formats are opened by name (a second read).
+cv::Mat DecodeImage(const std::string& bytes, const std::string& path) {
+  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
+  std::unique_ptr<OIIO::ImageInput> input =
+      OIIO::ImageInput::open(path, nullptr, &memory);
+  if (!input) input = OIIO::ImageInput::open(path);
+  if (!input) {
+    OIIO::geterror();  // clears OpenImageIO's per-thread error
+    return cv::Mat();
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  const int channels = spec.nchannels;
+  if (channels < 1 || channels > 4 || spec.width <= 0 || spec.height <= 0) {
+    return cv::Mat();
+  }
+  OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
+  int depth = CV_32F;
+  if (spec.format == OIIO::TypeDesc::UINT8) {
+    format = OIIO::TypeDesc::UINT8;
+    depth = CV_8U;
+  } else if (spec.format == OIIO::TypeDesc::UINT16) {
+    format = OIIO::TypeDesc::UINT16;
+    depth = CV_16U;
+  }
+  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, channels));
+  if (!input->read_image(0, 0, 0, channels, format, pixels.data)) {
+    input->geterror();
+    return cv::Mat();
+  }
+  if (channels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
+  if (channels == 4) cv::cvtColor(pixels, pixels, cv::COLOR_RGBA2BGRA);
+  return pixels;
+}
+
+}  // namespace
+
+DPFrameFile ReadDPFrameFile(const std::string& path) {
+  if (!fs::is_regular_file(path)) {
+    throw InputError("DP view does not exist: " + path);
+  }
+  // Read once: the pixels and what the file declares about its encoding
+  // come from the same bytes.
+  std::ifstream stream(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(stream)),
+                          std::istreambuf_iterator<char>());
+  const cv::Mat raw = bytes.empty() ? cv::Mat() : DecodeImage(bytes, path);
+  if (raw.empty()) {
+    throw InputError("cannot read DP view (corrupt or unsupported format): " +
+                     path);
+  }
+  DPFrameFile file;
+  file.declared = ParseDeclaredEncoding(bytes);
+  double unit;
+  switch (raw.depth()) {
+    case CV_8U:
+      unit = 255.0;
+      file.bits = 8;
+      break;
+    case CV_16U:
+      unit = 65535.0;
+      file.bits = 16;
+      break;
+    default:
+      // Floating point (EXR, float TIFF): values as stored.
+      unit = 1.0;
+      file.bits = 32;
+      break;
+  }
+  std::string extension = fs::path(path).extension().string();
+  colmap::StringToLower(&extension);
+  file.lossy = extension == ".jpg" || extension == ".jpeg";
+  cv::Mat image;
+  switch (raw.channels()) {
+    case 1:
+    case 3:
+      image = raw;
+      break;
+    case 4:
+      cv::cvtColor(raw, image, cv::COLOR_BGRA2BGR);
+      break;
+    case 2:
+      // Grey + alpha.
+      cv::extractChannel(raw, image, 0);
+      break;
+    default:
+      throw InputError("DP view has an unsupported channel count: " + path);
+  }
+  image.convertTo(
+      file.values, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
+  return file;
+}
+
+DPEncoding DecideEncoding(DPEncoding requested,
+                          const DPFrameFile& file,
+                          std::string* reason) {
+  if (requested != DPEncoding::kAuto) {
+    *reason = "--DPScaleEstimator.dp_encoding";
+    return requested;
+  }
+  if (file.declared.encoding != DPEncoding::kAuto) {
+    *reason = file.declared.evidence;
+    return file.declared.encoding;
+  }
+  *reason = std::to_string(file.bits) + "-bit file";
+  return file.bits <= 8 ? DPEncoding::kSrgb : DPEncoding::kLinear;
+}
+
+DPFrames LoadDPFrames(const DPFramePaths& paths,
+                      bool swap_views,
+                      DPEncoding encoding) {
+  const std::string& other_path = paths.right.empty() ? paths.sum : paths.right;
+  DPFrameFile first = ReadDPFrameFile(paths.left);
+  DPFrameFile second = ReadDPFrameFile(other_path);
+  if (second.values.size() != first.values.size() ||
+      second.values.channels() != first.values.channels()) {
+    std::ostringstream message;
+    message << "DP views differ in size or channels: " << paths.left << " is "
+            << first.values.cols << "x" << first.values.rows << "x"
+            << first.values.channels() << ", " << other_path << " is "
+            << second.values.cols << "x" << second.values.rows << "x"
+            << second.values.channels();
+    throw InputError(message.str());
+  }
+  DPFrames frames;
+  std::string other_reason;
+  frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
+  const DPEncoding other_encoding =
+      DecideEncoding(encoding, second, &other_reason);
+  if (other_encoding != frames.encoding) {
+    throw InputError("DP views encode light differently: " + paths.left +
+                     " is " + DPEncodingName(frames.encoding) + " (" +
+                     frames.encoding_reason + "), " + other_path + " is " +
+                     DPEncodingName(other_encoding) + " (" + other_reason +
+                     "); export both views the same way, or set "
+                     "--DPScaleEstimator.dp_encoding");
+  }
+  frames.bits = std::min(first.bits, second.bits);
+  frames.lossy = first.lossy || second.lossy;
+  DecodeToLinearLight(frames.encoding, &first.values);
+  DecodeToLinearLight(frames.encoding, &second.values);
+  frames.left = first.values;
+  if (paths.right.empty()) {
+    // right = sum - left. A "sum" frame darker than the left view means the
+    // files are not A and A+B.
+    frames.right = second.values - frames.left;
+    const double mean_right = cv::mean(frames.right)[0];
+    if (mean_right < 0.05 * cv::mean(frames.left)[0]) {
+      throw InputError("sum frame " + paths.sum +
+                       " is not brighter than its left view " + paths.left +
+                       "; expected A+B and A frames in the same units");
+    }
+    cv::max(frames.right, 0.0, frames.right);
+  } else {
+    frames.right = second.values;
+  }
+  if (swap_views) {
+    std::swap(frames.left, frames.right);
+  }
+  return frames;
+}
+
+int DPFrameDownsampling(const cv::Size& frame_size,
+                        int camera_width,
+                        int camera_height,
+                        const std::string& image_name) {
+  if (frame_size.width > 0 && frame_size.height > 0) {
+    for (int k = 1; k <= 8; ++k) {
+      // Allow rounding either way of an odd camera size.
+      if (std::abs(frame_size.width * k - camera_width) < k &&
+          std::abs(frame_size.height * k - camera_height) < k) {
+        return k;
+      }
+    }
+  }
+  std::ostringstream message;
+  message << "DP views of image " << image_name << " are " << frame_size.width
+          << "x" << frame_size.height << ", but the model's camera is "
+          << camera_width << "x" << camera_height
+          << " (expected the same size or an integer fraction of it)";
+  throw InputError(message.str());
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,104 @@
+// Finding and reading the DP views of a model's images.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dpsfm/colmap/io/exif.h"
+#include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/core/optics/encoding.h"
+
+namespace dpsfm {
+
+// The DP view files that belong to one model image.
+struct DPFramePaths {
+  std::string left;
+  std::string right;  // empty when the right view comes from sum - left
+  std::string sum;
+};
+
+// Index of the DP view folders, built once. A model image `<name>` (relative
+// path with sub-folders, as stored in the model) matches left/<name>; when
+// that file is absent, the file with the same path minus extension (e.g.
+// model IMG_1.JPG, DP view left/IMG_1.png).
+class DPImageIndex {
+ public:
+  explicit DPImageIndex(const WorkspaceLayout& layout);
+
+  // Throws InputError naming the image and the missing view.
+  DPFramePaths Find(const std::string& image_name) const;
+  // False if the image has no left view at all (lets the caller list every
+  // missing image in one message).
+  bool HasLeft(const std::string& image_name) const;
+
+ private:
+  struct Folder {
+    std::string root;
+    // relative path -> full path; relative path without extension -> paths.
+    std::map<std::string, std::string> by_name;
+    std::map<std::string, std::vector<std::string>> by_stem;
+  };
+  static Folder Scan(const std::string& root);
+  static std::string Lookup(const Folder& folder,
+                            const std::string& name,
+                            const std::string& what);
+
+  Folder left_;
+  Folder right_;
+  Folder sum_;
+  bool has_right_ = false;
+};
+
+// One DP frame file as encoded, decoded by OpenImageIO (as COLMAP 4 reads
+// images): CV_32FC1 or CV_32FC3, colour in B, G, R order; 16-bit values
+// divided by 65535, 8-bit by 255, floating-point ones as stored. Throws
+// InputError for a missing, unreadable or unsupported file.
+struct DPFrameFile {
+  cv::Mat values;
+  int bits = 0;               // 8, 16 or 32 (float) per channel
+  bool lossy = false;         // JPEG
+  DeclaredEncoding declared;  // ParseDeclaredEncoding of the same bytes
+};
+DPFrameFile ReadDPFrameFile(const std::string& path);
+
+// How a frame's values encode light (docs/user-guide.md, "DP frames"): the
+// requested encoding when it is not kAuto; otherwise what the file declares
+// (DPFrameFile::declared: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace
+// sRGB), else its bit depth: 8-bit files are sRGB (exports, phone
+// captures), 16-bit and floating-point ones linear (DPRSplit output, raw).
+// `reason` says which rule decided.
+DPEncoding DecideEncoding(DPEncoding requested,
+                          const DPFrameFile& file,
+                          std::string* reason);
+
+struct DPFrames {
+  // Linear light, [0, 1].
+  cv::Mat left;
+  cv::Mat right;
+  // What the files were, and why.
+  DPEncoding encoding = DPEncoding::kLinear;
+  std::string encoding_reason;
+  int bits = 0;
+  bool lossy = false;
+};
+
+// Loads one image's DP views and brings them to linear light. With a sum
+// frame, right = sum - left in linear light (Canon's DPRSplit gives A and
+// A+B in the same units). `swap_views` exchanges left and right for sensors
+// with the opposite naming. Throws InputError when the two files differ in
+// size, channels or encoding.
+DPFrames LoadDPFrames(const DPFramePaths& paths,
+                      bool swap_views,
+                      DPEncoding encoding = DPEncoding::kAuto);
+
+// The integer factor k with frame size = camera size / k (phones give half
+// size DP frames), or throws InputError naming the image and both sizes.
+int DPFrameDownsampling(const cv::Size& frame_size,
+                        int camera_width,
+                        int camera_height,
+                        const std::string& image_name);
+
+}  // namespace dpsfm

@@ -1,0 +1,362 @@
+#include "dpsfm/colmap/io/lens_data.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "dpsfm/colmap/io/text.h"
+#include "dpsfm/colmap/io/workspace.h"
+
+namespace dpsfm {
+namespace {
+
+// An empty cell is 0 ("not given"); anything else a positive number, which
+// may carry the column's own unit as people write it ("50mm", "5.9 um",
+// "1.2 m", "f/4"); another unit is an error that names the column's.
+double ParseCell(const CsvTable& table,
+                 const CsvTable::Row& row,
+                 const char* column) {
+  std::string cell = table.Cell(row, column);
+  if (cell.empty()) return 0;
+  const std::string name = column;
+  const std::string unit = name.substr(name.rfind('_') + 1);
+  if (name == "f_number" &&
+      (cell.rfind("f/", 0) == 0 || cell.rfind("F/", 0) == 0)) {
+    cell = Trim(cell.substr(2));
+  }
+  char* end = nullptr;
+  const double value = std::strtod(cell.c_str(), &end);
+  std::string rest = Trim(end == nullptr ? "" : std::string(end));
+  if (rest == "\xC2\xB5m" || rest == "\xCE\xBCm") rest = "um";  // micro sign
+  const bool own_unit = name != "f_number" && rest == unit;
+  if (end == cell.c_str() || !(rest.empty() || own_unit) ||
+      !std::isfinite(value) || value <= 0) {
+    throw InputError(table.Where(row) + column + " must be a positive number" +
+                     (name == "f_number" ? "" : " in " + unit) +
+                     " or empty, got '" + table.Cell(row, column) + "'");
+  }
+  return value;
+}
+
+// A word on the unit when an unknown column looks like a known one in
+// another unit.
+std::string LensColumnHint(const std::string& column) {
+  if (column.rfind("pixel_pitch", 0) == 0) {
+    return " (the pitch is given in micrometres, as pixel_pitch_um)";
+  }
+  if (column.rfind("focal_length", 0) == 0) {
+    return " (the focal length is given in millimetres, as focal_length_mm)";
+  }
+  if (column.rfind("focus_distance", 0) == 0) {
+    return " (the focus distance is given in metres, as focus_distance_m)";
+  }
+  return "";
+}
+
+}  // namespace
+
+const std::vector<std::string>& LensCsvColumns() {
+  static const std::vector<std::string> kColumns = {"name",
+                                                    "focal_length_mm",
+                                                    "f_number",
+                                                    "pixel_pitch_um",
+                                                    "focus_distance_m",
+                                                    "camera",
+                                                    "lens"};
+  return kColumns;
+}
+
+std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
+  const CsvTable table(path,
+                       LensCsvColumns(),
+                       {"name"},
+                       "IMG_1.JPG,50,4,5.93,1.2,Canon / Canon EOS R6m2,RF50mm "
+                       "F1.8 STM",
+                       LensColumnHint);
+  std::map<std::string, LensCsvRow> rows;
+  for (const CsvTable::Row& cells : table.rows()) {
+    const std::string name = table.Cell(cells, "name");
+    if (name.empty()) {
+      throw InputError(table.Where(cells) +
+                       "the name cell is empty (the image's name as the "
+                       "model stores it, e.g. IMG_1.JPG)");
+    }
+    LensCsvRow row;
+    row.focal_length_mm = ParseCell(table, cells, "focal_length_mm");
+    row.f_number = ParseCell(table, cells, "f_number");
+    row.pixel_pitch_um = ParseCell(table, cells, "pixel_pitch_um");
+    row.focus_distance_m = ParseCell(table, cells, "focus_distance_m");
+    row.camera = table.Cell(cells, "camera");
+    row.lens = table.Cell(cells, "lens");
+    row.line = cells.line;
+    if (!rows.emplace(name, row).second) {
+      throw InputError(table.Where(cells) + "image " + name +
+                       " is listed twice");
+    }
+  }
+  return rows;
+}
+
+const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
+                              const std::string& image_name,
+                              std::string* matched_name) {
+  auto found = csv.find(image_name);
+  if (found == csv.end()) {
+    // As DP views are matched: the same name with another extension, when
+    // exactly one row has it.
+    const std::string stem = StripExtension(image_name);
+    int matches = 0;
+    for (auto it = csv.begin(); it != csv.end(); ++it) {
+      if (StripExtension(it->first) == stem) {
+        found = it;
+        ++matches;
+      }
+    }
+    if (matches != 1) return nullptr;
+  }
+  if (matched_name != nullptr) *matched_name = found->first;
+  return &found->second;
+}
+
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const ExifLens* exif,
+                         double camera_focal_px) {
+  ResolvedLens resolved;
+  const LensCsvRow* csv_row = FindLensRow(csv, image_name, nullptr);
+  const std::string csv_source =
+      csv_row == nullptr  ? ""
+      : csv_row->line > 0 ? "lens.csv line " + std::to_string(csv_row->line)
+                          : "lens.csv";
+
+  auto pick = [&](double csv_value,
+                  double flag_value,
+                  double exif_value,
+                  double* out,
+                  std::string* source) {
+    if (csv_value > 0) {
+      *out = csv_value;
+      *source = csv_source;
+    } else if (flag_value > 0) {
+      *out = flag_value;
+      *source = "flag";
+    } else if (exif_value > 0) {
+      *out = exif_value;
+      *source = "EXIF";
+    }
+  };
+  pick(csv_row ? csv_row->focal_length_mm : 0,
+       flags.focal_length_mm,
+       exif ? exif->focal_length_mm : 0,
+       &resolved.lens.focal_length_mm,
+       &resolved.focal_length_source);
+  pick(csv_row ? csv_row->f_number : 0,
+       flags.f_number,
+       exif ? exif->f_number : 0,
+       &resolved.lens.f_number,
+       &resolved.f_number_source);
+  pick(csv_row ? csv_row->pixel_pitch_um : 0,
+       flags.pixel_pitch_um,
+       0,
+       &resolved.lens.pixel_pitch_um,
+       &resolved.pixel_pitch_source);
+
+  if (csv_row && csv_row->focus_distance_m > 0) {
+    resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
+    resolved.focus_source = csv_source;
+  } else if (exif && exif->focus_distance_mm > 0) {
+    resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
+    resolved.lens.recorded_focus_bracket = exif->focus_bracket;
+    resolved.focus_source = "EXIF " + exif->focus_source;
+  }
+  resolved.camera = csv_row && !csv_row->camera.empty()
+                        ? csv_row->camera
+                        : (exif ? exif->camera : "");
+  resolved.lens_model = csv_row && !csv_row->lens.empty()
+                            ? csv_row->lens
+                            : (exif ? exif->lens : "");
+
+  const char* kHowTo =
+      " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "
+      "the EXIF of the original image under --image_path)";
+  char how[256];
+  if (resolved.lens.focal_length_mm <= 0) {
+    std::snprintf(how, sizeof(how), kHowTo, "focal_length_mm");
+    throw InputError("no focal length for image " + image_name + how);
+  }
+  if (resolved.lens.f_number <= 0) {
+    std::snprintf(how, sizeof(how), kHowTo, "f_number");
+    throw InputError("no f-number for image " + image_name + how);
+  }
+  if (resolved.lens.pixel_pitch_um <= 0) {
+    if (!(camera_focal_px > 0)) {
+      throw InputError("no pixel pitch for image " + image_name +
+                       " and its camera has no focal length to derive it from");
+    }
+    // f_mm / f_px is the physical size of one model camera pixel.
+    resolved.lens.pixel_pitch_um =
+        1000.0 * resolved.lens.focal_length_mm / camera_focal_px;
+    resolved.pixel_pitch_source = "derived f_mm/f_px";
+  }
+  return resolved;
+}
+
+namespace {
+
+std::string Number(double value) {
+  std::ostringstream s;
+  s.precision(4);
+  s << value;
+  return s.str();
+}
+
+// Where a number can be corrected, in the words of its source.
+std::string FixFor(const std::string& source, const char* column) {
+  if (source.rfind("lens.csv", 0) == 0) {
+    return "correct " + std::string(column) + " in " + source;
+  }
+  if (source == "flag") {
+    return "correct --DPScaleEstimator." + std::string(column);
+  }
+  if (source == "EXIF") {
+    return "the original image's EXIF is wrong here: override it with "
+           "--DPScaleEstimator." +
+           std::string(column) + " or lens.csv";
+  }
+  return "give " + std::string(column) + " in lens.csv or as a flag";
+}
+
+// v / f of a lens of focal length f focused at `focus_mm` from the sensor.
+double Breathing(double focus_mm, double f_mm) {
+  const double u = FocusObjectDistanceMm(focus_mm, f_mm);
+  return (focus_mm - u) / f_mm;
+}
+
+void CheckRanges(const std::string& image_name,
+                 const ResolvedLens& resolved,
+                 const LensCheckOptions& options) {
+  const DPLensData& lens = resolved.lens;
+  const std::string prefix = "image " + image_name + ": ";
+  if (lens.focal_length_mm > options.max_focal_length_mm) {
+    throw InputError(prefix + "focal length " + Number(lens.focal_length_mm) +
+                     " mm (" + resolved.focal_length_source +
+                     ") is beyond any lens: is it in pixels? Give it in "
+                     "millimetres; " +
+                     FixFor(resolved.focal_length_source, "focal_length_mm"));
+  }
+  if (lens.f_number < options.min_f_number ||
+      lens.f_number > options.max_f_number) {
+    throw InputError(prefix + "f-number " + Number(lens.f_number) + " (" +
+                     resolved.f_number_source + ") is outside [" +
+                     Number(options.min_f_number) + ", " +
+                     Number(options.max_f_number) + "]; " +
+                     FixFor(resolved.f_number_source, "f_number"));
+  }
+  const double focus_mm = lens.recorded_focus_mm;
+  if (std::isfinite(focus_mm)) {
+    if (focus_mm < 4 * lens.focal_length_mm) {
+      throw InputError(
+          prefix + "recorded focus distance " + Number(focus_mm / 1000) +
+          " m (" + resolved.focus_source + ") is nearer than a " +
+          Number(lens.focal_length_mm) +
+          " mm lens can focus (4 f): is it in the wrong unit? lens.csv's "
+          "focus_distance_m is in metres from the focal-plane mark");
+    }
+    if (focus_mm >= 1000 * options.max_recorded_focus_m &&
+        resolved.focus_source.rfind("lens.csv", 0) == 0) {
+      throw InputError(prefix + "recorded focus distance " +
+                       Number(focus_mm / 1000) + " m (" +
+                       resolved.focus_source +
+                       ") looks like millimetres: focus_distance_m is in "
+                       "metres (leave it empty for a focus at infinity)");
+    }
+  }
+}
+
+}  // namespace
+
+void CheckLensAgainstCamera(const std::string& image_name,
+                            const ResolvedLens& resolved,
+                            const CameraGeometry& camera,
+                            const LensCheckOptions& options) {
+  CheckRanges(image_name, resolved, options);
+  const DPLensData& lens = resolved.lens;
+  const std::string prefix = "image " + image_name + ": ";
+  const int long_side = std::max(camera.width, camera.height);
+  const double sensor_mm = lens.pixel_pitch_um * long_side / 1000;
+  const std::string pitch_text = "pixel pitch " + Number(lens.pixel_pitch_um) +
+                                 " um (" + resolved.pixel_pitch_source + ")";
+  const double implied_pitch_um =
+      camera.focal_px > 0 ? 1000 * lens.focal_length_mm / camera.focal_px : 0;
+  const std::string implied =
+      implied_pitch_um > 0 ? " (f_mm / f_px gives " + Number(implied_pitch_um) +
+                                 " um; leave the pitch out to use that)"
+                           : "";
+  if (sensor_mm < options.min_sensor_mm || sensor_mm > options.max_sensor_mm) {
+    const bool derived = resolved.pixel_pitch_source.rfind("derived", 0) == 0;
+    // A pitch in mm makes the sensor 1000 times too small.
+    const bool in_mm = 1000 * sensor_mm >= options.min_sensor_mm &&
+                       1000 * sensor_mm <= options.max_sensor_mm;
+    const std::string cause =
+        derived
+            ? "the focal length " + Number(lens.focal_length_mm) + " mm (" +
+                  resolved.focal_length_source + ") and the camera's " +
+                  Number(camera.focal_px) +
+                  " px disagree: is the focal length in " +
+                  (sensor_mm > options.max_sensor_mm ? "pixels" : "metres") +
+                  " (it is in millimetres), or the camera's calibration "
+                  "wrong? " +
+                  FixFor(resolved.focal_length_source, "focal_length_mm")
+            : (in_mm ? "is the pitch in millimetres? Give micrometres; " : "") +
+                  FixFor(resolved.pixel_pitch_source, "pixel_pitch_um") +
+                  " (the pitch is of the model camera's pixels)" + implied;
+    throw InputError(prefix + pitch_text + " x the camera's " +
+                     std::to_string(long_side) + " px makes a sensor of " +
+                     Number(sensor_mm) + " mm, outside [" +
+                     Number(options.min_sensor_mm) + ", " +
+                     Number(options.max_sensor_mm) + "] mm: " + cause);
+  }
+  if (resolved.pixel_pitch_source.rfind("derived", 0) == 0 ||
+      !(camera.focal_px > 0)) {
+    return;
+  }
+  // The calibrated f_px is the image distance v over the pitch; v >= f.
+  const double ratio =
+      camera.focal_px * lens.pixel_pitch_um / (1000 * lens.focal_length_mm);
+  const bool focus = std::isfinite(lens.recorded_focus_mm);
+  const double breathing =
+      focus ? Breathing(lens.recorded_focus_mm, lens.focal_length_mm)
+            : options.breathing_without_focus;
+  const double low = 1 / (1 + options.tolerance);
+  const double high = (1 + options.tolerance) * breathing;
+  if (ratio >= low && ratio <= high) return;
+
+  std::string hint;
+  // ratio = given pitch / the pitch f_mm / f_px implies.
+  const double nearest = std::round(ratio);
+  if (nearest >= 2 && std::abs(ratio / nearest - 1) < options.tolerance) {
+    hint = "; if " + Number(lens.pixel_pitch_um) +
+           " um is the pitch of the DP frames' pixels (" + Number(nearest) +
+           " model pixels each), give the model camera's";
+  } else if (std::abs(ratio * 1000 - 1) < 0.5) {
+    hint = "; is the pitch in millimetres? Give micrometres";
+  }
+  throw InputError(
+      prefix + "focal length " + Number(lens.focal_length_mm) + " mm (" +
+      resolved.focal_length_source + ") / " + pitch_text + " = " +
+      Number(1000 * lens.focal_length_mm / lens.pixel_pitch_um) +
+      " px, but the model's camera has f = " + Number(camera.focal_px) +
+      " px (ratio " + Number(ratio) + ", accepted " + Number(low) + "-" +
+      Number(high) +
+      (focus ? " with the recorded focus" : " without a recorded focus") +
+      "). The pitch is of the model camera's pixels" + implied + hint + "; " +
+      FixFor(resolved.pixel_pitch_source, "pixel_pitch_um") +
+      " or the focal length (" +
+      FixFor(resolved.focal_length_source, "focal_length_mm") +
+      "), or allow more with --DPScaleEstimator.lens_check_tolerance");
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,114 @@
+// Per-image lens data (focal length, f-number, pixel pitch) with the
+// contract's precedence: lens.csv row > explicit flag > EXIF of the original
+// image > derived (pitch only, f_mm / f_px of the calibrated camera). The
+// recorded focus distance: lens.csv > EXIF (Canon maker note, then
+// SubjectDistance). Whatever their source, the numbers are checked against
+// the model's camera before they are used (CheckLensAgainstCamera).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "dpsfm/colmap/io/exif.h"
+#include "dpsfm/core/optics/lens_model.h"
+
+namespace dpsfm {
+
+// One row of lens.csv; zero means "empty cell".
+struct LensCsvRow {
+  double focal_length_mm = 0;
+  double f_number = 0;
+  double pixel_pitch_um = 0;
+  double focus_distance_m = 0;  // recorded, from the focal-plane mark
+  std::string camera, lens;     // for the DP profile library
+  int line = 0;                 // line number in the file, for messages
+};
+
+// The columns lens.csv may have, in the order the docs list them; `name`
+// is required, every other column is optional and each appears once.
+const std::vector<std::string>& LensCsvColumns();
+
+// Reads lens.csv. Columns are found by their header names (any order, see
+// LensCsvColumns); every row has as many cells as the header, and any cell
+// but the name may be empty. Throws InputError naming the file, the line and
+// the fix (an unknown column, a row with too few or too many cells, a cell
+// that is not a positive number).
+std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path);
+
+// The row of an image: its exact name, else the one row whose name differs
+// only in the extension (IMG_1.png for a model image IMG_1.JPG, as DP views
+// are matched); null if none. `matched_name` (optional) gets the row's name.
+const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
+                              const std::string& image_name,
+                              std::string* matched_name);
+
+// Lens data of one image and where each number came from ("lens.csv line
+// N", "flag", "EXIF", "derived"), for the log, the report and the errors.
+struct ResolvedLens {
+  DPLensData lens;  // pitch is of the MODEL camera's pixels
+  std::string focal_length_source;
+  std::string f_number_source;
+  std::string pixel_pitch_source;
+  // Where DPLensData::recorded_focus_mm came from ("lens.csv line N", "EXIF
+  // Canon maker note", "EXIF SubjectDistance"), empty if none.
+  std::string focus_source;
+  // The DP profile library's keys (lens.csv > EXIF; empty if unknown).
+  std::string camera, lens_model;
+};
+
+struct LensFlags {
+  double focal_length_mm = 0;
+  double f_number = 0;
+  double pixel_pitch_um = 0;
+};
+
+// Applies the precedence for one image. `exif` may be null (no original
+// image); `camera_focal_px` is the calibrated focal length in pixels (used to
+// derive the pitch). Throws InputError naming the image and the three ways
+// to supply a missing focal length or f-number.
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const ExifLens* exif,
+                         double camera_focal_px);
+
+// The model camera an image's lens data are checked against.
+struct CameraGeometry {
+  double focal_px = 0;  // mean focal length in pixels
+  int width = 0, height = 0;
+};
+
+// Bounds of the lens check (see CheckLensAgainstCamera).
+struct LensCheckOptions {
+  // Relative tolerance of f_mm / pitch against the camera's f_px, on top of
+  // focus breathing (a lens focused at D images at v = f D_u / (D_u - f) >=
+  // f, so the calibrated f_px is up to v / f times f_mm / pitch).
+  double tolerance = 0.1;
+  // v / f allowed when no focus distance is recorded: a lens focused no
+  // nearer than about 9 focal lengths (0.45 m for 50 mm).
+  double breathing_without_focus = 1.15;
+  // The sensor's long side (pitch x the camera's long side in pixels) in mm:
+  // from small phone sensors to medium format.
+  double min_sensor_mm = 1.0;
+  double max_sensor_mm = 70.0;
+  double max_focal_length_mm = 2000.0;
+  double min_f_number = 0.5;
+  double max_f_number = 128.0;
+  // Recorded focus distances beyond this (in m) look like millimetres.
+  double max_recorded_focus_m = 1000.0;
+};
+
+// Checks one image's resolved lens data against the model's camera and
+// physical bounds: f_mm / pitch against f_px (allowing for focus breathing
+// and the tolerance), the sensor size the pitch implies, the focal length,
+// the f-number and the recorded focus (nearer than 4 f cannot be in focus).
+// Throws InputError with one line that names the image, the numbers and
+// their sources, and the fix (wrong units included: a pitch in mm, a focal
+// length in px, the DP frames' pitch instead of the model camera's).
+void CheckLensAgainstCamera(const std::string& image_name,
+                            const ResolvedLens& resolved,
+                            const CameraGeometry& camera,
+                            const LensCheckOptions& options);
+
+}  // namespace dpsfm

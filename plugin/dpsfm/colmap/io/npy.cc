@@ -1,0 +1,167 @@
+#include "dpsfm/colmap/io/npy.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "dpsfm/colmap/io/workspace.h"
+
+namespace dpsfm {
+namespace {
+
+bool HostIsLittleEndian() {
+  const uint16_t one = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+}  // namespace
+
+NpyArray ReadNpy(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError("cannot read " + path);
+  auto fail = [&](const std::string& what) {
+    return InputError(path + " is not a readable .npy array: " + what);
+  };
+  char magic[8];
+  if (!file.read(magic, 8) || std::memcmp(magic, "\x93NUMPY", 6) != 0) {
+    throw fail("no NUMPY magic");
+  }
+  const int major = static_cast<unsigned char>(magic[6]);
+  uint32_t header_length = 0;
+  if (major == 1) {
+    unsigned char b[2];
+    if (!file.read(reinterpret_cast<char*>(b), 2)) throw fail("truncated");
+    header_length = b[0] | (b[1] << 8);
+  } else if (major == 2 || major == 3) {
+    unsigned char b[4];
+    if (!file.read(reinterpret_cast<char*>(b), 4)) throw fail("truncated");
+    header_length =
+        b[0] | (b[1] << 8) | (b[2] << 16) | (static_cast<uint32_t>(b[3]) << 24);
+  } else {
+    throw fail("format version " + std::to_string(major));
+  }
+  if (header_length > (1u << 20)) throw fail("header too long");
+  std::string header(header_length, '\0');
+  if (!file.read(&header[0], header_length)) throw fail("truncated header");
+
+  std::smatch m;
+  if (!std::regex_search(
+          header, m, std::regex("'descr'\\s*:\\s*'([<>|=])([fi])(\\d+)'"))) {
+    throw fail("no dtype in the header");
+  }
+  const char order = m[1].str()[0];
+  const int bytes = std::stoi(m[3].str());
+  if (m[2].str() != "f" || (bytes != 4 && bytes != 8)) {
+    throw fail("dtype " + m[0].str() + " (need float32 or float64)");
+  }
+  const bool little = order == '<' || (order == '=' && HostIsLittleEndian());
+  if (!std::regex_search(
+          header, m, std::regex("'fortran_order'\\s*:\\s*(True|False)"))) {
+    throw fail("no fortran_order in the header");
+  }
+  const bool fortran = m[1].str() == "True";
+  if (!std::regex_search(
+          header, m, std::regex("'shape'\\s*:\\s*\\(([^)]*)\\)"))) {
+    throw fail("no shape in the header");
+  }
+  NpyArray array;
+  size_t count = 1;
+  {
+    std::stringstream dims(m[1].str());
+    std::string item;
+    while (std::getline(dims, item, ',')) {
+      if (item.find_first_not_of(" \t") == std::string::npos) continue;
+      const long n = std::stol(item);
+      if (n < 0 || n > (1 << 24)) throw fail("bad shape");
+      array.shape.push_back(static_cast<int>(n));
+      count *= static_cast<size_t>(n);
+    }
+  }
+  if (count > (size_t{1} << 28)) throw fail("array too large");
+  std::vector<unsigned char> raw(count * bytes);
+  if (!file.read(reinterpret_cast<char*>(raw.data()), raw.size())) {
+    throw fail("truncated data (" + std::to_string(count) +
+               " values expected)");
+  }
+  const bool swap = little != HostIsLittleEndian();
+  std::vector<double> values(count);
+  for (size_t i = 0; i < count; ++i) {
+    unsigned char* p = raw.data() + i * bytes;
+    if (swap) std::reverse(p, p + bytes);
+    if (bytes == 4) {
+      float v;
+      std::memcpy(&v, p, 4);
+      values[i] = v;
+    } else {
+      double v;
+      std::memcpy(&v, p, 8);
+      values[i] = v;
+    }
+  }
+  if (fortran && array.shape.size() > 1) {
+    // Column-major -> row-major: the first index varies fastest in `values`.
+    const int dims = static_cast<int>(array.shape.size());
+    array.values.resize(count);
+    std::vector<int> index(dims, 0);
+    for (size_t c = 0; c < count; ++c) {
+      size_t f = 0, stride = 1;
+      for (int d = 0; d < dims; ++d) {
+        f += index[d] * stride;
+        stride *= array.shape[d];
+      }
+      array.values[c] = values[f];
+      for (int d = dims - 1; d >= 0; --d) {
+        if (++index[d] < array.shape[d]) break;
+        index[d] = 0;
+      }
+    }
+  } else {
+    array.values = std::move(values);
+  }
+  return array;
+}
+
+void WriteNpyFloat32(const std::string& path, const NpyArray& array) {
+  size_t count = 1;
+  std::ostringstream shape;
+  shape << "(";
+  for (const int n : array.shape) {
+    shape << n << ", ";
+    count *= n;
+  }
+  shape << ")";
+  if (count != array.values.size()) {
+    throw InputError("cannot write " + path + ": shape and values disagree");
+  }
+  std::string header =
+      "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape.str() +
+      ", }";
+  // Magic (6) + version (2) + length (2) + header + '\n', padded to 64.
+  const size_t unpadded = 10 + header.size() + 1;
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header.push_back('\n');
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw InputError("cannot write " + path);
+  file.write("\x93NUMPY\x01\x00", 8);
+  const unsigned char length[2] = {
+      static_cast<unsigned char>(header.size() & 0xff),
+      static_cast<unsigned char>(header.size() >> 8)};
+  file.write(reinterpret_cast<const char*>(length), 2);
+  file.write(header.data(), header.size());
+  const bool swap = !HostIsLittleEndian();
+  for (const double v : array.values) {
+    const float f = static_cast<float>(v);
+    unsigned char b[4];
+    std::memcpy(b, &f, 4);
+    if (swap) std::reverse(b, b + 4);
+    file.write(reinterpret_cast<const char*>(b), 4);
+  }
+  if (!file) throw InputError("cannot write " + path);
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,569 @@
+#include "dpsfm/colmap/io/psf_profile.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "colmap/util/string.h"
+#include "dpsfm/colmap/io/npy.h"
+#include "dpsfm/colmap/io/text.h"
+#include "dpsfm/colmap/io/workspace.h"
+
+namespace fs = std::filesystem;
+
+namespace dpsfm {
+namespace {
+
+double ParseNumber(const std::string& text, const std::string& where) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || *end != '\0' ||
+      !std::isfinite(value)) {
+    throw InputError(where + ": expected a number, got '" + text + "'");
+  }
+  return value;
+}
+
+}  // namespace
+
+namespace {
+
+// The kernels of a measured profile: (rows*cols, K, K), (rows, cols, K, K)
+// as grid calibrations are often saved, or (K, K) for one cell.
+std::vector<cv::Mat> ReadKernelStack(const std::string& path,
+                                     const DPPsfLayout& layout,
+                                     const std::string& where) {
+  const int cells = layout.NumCells();
+  const NpyArray array = ReadNpy(path);
+  const std::vector<int>& shape = array.shape;
+  const bool single = shape.size() == 2 && cells == 1;
+  const bool stacked = shape.size() == 3 && shape[0] == cells;
+  const bool grid =
+      shape.size() == 4 && shape[0] == layout.rows && shape[1] == layout.cols;
+  if (!(single || stacked || grid)) {
+    std::ostringstream s;
+    s << where << ": " << path << " has shape (";
+    for (size_t i = 0; i < shape.size(); ++i) s << (i ? ", " : "") << shape[i];
+    s << "); the grid needs (" << cells << ", K, K) or (" << layout.rows << ", "
+      << layout.cols << ", K, K)";
+    throw InputError(s.str());
+  }
+  const int rows = shape[shape.size() - 2], cols = shape.back();
+  if (rows != cols || rows % 2 == 0 || rows < 1) {
+    throw InputError(where + ": " + path + " holds kernels of " +
+                     std::to_string(cols) + "x" + std::to_string(rows) +
+                     "; they must be square with an odd side (centre pixel = "
+                     "origin)");
+  }
+  std::vector<cv::Mat> kernels;
+  const size_t per = static_cast<size_t>(rows) * cols;
+  for (int c = 0; c < cells; ++c) {
+    cv::Mat k(rows, cols, CV_32FC1);
+    for (size_t i = 0; i < per; ++i) {
+      k.at<float>(static_cast<int>(i / cols), static_cast<int>(i % cols)) =
+          static_cast<float>(array.values[c * per + i]);
+    }
+    kernels.push_back(k);
+  }
+  return kernels;
+}
+
+std::vector<double> ParseNumbers(const std::string& text,
+                                 const std::string& where) {
+  std::istringstream stream(text);
+  std::string item;
+  std::vector<double> numbers;
+  while (stream >> item) numbers.push_back(ParseNumber(item, where));
+  return numbers;
+}
+
+}  // namespace
+
+PsfProfileFile ReadPsfProfile(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw InputError("cannot read DP PSF profile " + path);
+  PsfProfileFile profile;
+  std::map<std::string, std::string> values;
+  std::map<std::string, int> lines;
+  std::string line;
+  int number = 0;
+  const std::set<std::string> known = {"format",
+                                       "model",
+                                       "split_exponent",
+                                       "crosstalk",
+                                       "rim_softness",
+                                       "rim_brightness",
+                                       "band_split_exponents",
+                                       "reference_radius_px",
+                                       "side",
+                                       "grid",
+                                       "region",
+                                       "left",
+                                       "right",
+                                       "camera",
+                                       "lens",
+                                       "uncertainty",
+                                       "light"};
+  while (std::getline(file, line)) {
+    ++number;
+    const std::string where = path + ":" + std::to_string(number);
+    const std::string text = Trim(line.substr(0, line.find('#')));
+    if (text.empty()) continue;
+    const size_t space = text.find_first_of(" \t");
+    if (space == std::string::npos) {
+      throw InputError(where + ": expected 'key value', got '" + text + "'");
+    }
+    const std::string key = text.substr(0, space);
+    const std::string value = Trim(text.substr(space));
+    if (key.compare(0, 4, "fit_") == 0) {
+      profile.fit_info.emplace_back(key, value);
+      continue;
+    }
+    if (known.count(key) == 0) {
+      throw InputError(where + ": unknown key '" + key + "'");
+    }
+    if (!values.emplace(key, value).second) {
+      throw InputError(where + ": '" + key + "' is given twice");
+    }
+    lines[key] = number;
+  }
+  auto where = [&](const std::string& key) {
+    return path + ":" + std::to_string(lines[key]);
+  };
+  if (values.count("format") == 0 || values["format"] != "1") {
+    throw InputError(path +
+                     " is not a dp-sfm DP PSF profile (needs 'format 1'; "
+                     "write one with colmap dp_psf_calibrator)");
+  }
+  profile.camera = values["camera"];
+  if (values.count("light")) {
+    profile.light = values["light"];
+    if (profile.light != "linear" && profile.light != "srgb") {
+      throw InputError(where("light") +
+                       ": 'light' must be linear or srgb, got '" +
+                       profile.light + "'");
+    }
+  }
+  profile.lens = values["lens"];
+  if (values.count("uncertainty")) {
+    profile.uncertainty =
+        ParseNumber(values["uncertainty"], where("uncertainty"));
+    if (!(profile.uncertainty >= 0 && profile.uncertainty < 1)) {
+      throw InputError(where("uncertainty") +
+                       ": the relative uncertainty must lie in [0, 1)");
+    }
+  }
+  const std::string model = values["model"];
+  auto refuse_keys = [&](const std::vector<std::string>& keys) {
+    for (const std::string& key : keys) {
+      if (values.count(key)) {
+        throw InputError(where(key) + ": '" + key +
+                         "' does not belong to "
+                         "model " +
+                         model);
+      }
+    }
+  };
+  if (model == "measured_kernels") {
+    profile.model = model;
+    refuse_keys({"split_exponent",
+                 "crosstalk",
+                 "rim_softness",
+                 "rim_brightness",
+                 "band_split_exponents"});
+    for (const char* key : {"reference_radius_px", "side", "left", "right"}) {
+      if (values.count(key) == 0) {
+        throw InputError(path + ": model measured_kernels needs '" + key + "'");
+      }
+    }
+    profile.reference_radius_px = ParseNumber(values["reference_radius_px"],
+                                              where("reference_radius_px"));
+    if (!(profile.reference_radius_px > 0.5)) {
+      throw InputError(where("reference_radius_px") +
+                       ": the reference radius must exceed 0.5 px");
+    }
+    if (values["side"] != "far" && values["side"] != "near") {
+      throw InputError(where("side") + ": side must be far or near, got '" +
+                       values["side"] + "'");
+    }
+    profile.far_side = values["side"] == "far";
+    if (values.count("grid")) {
+      const std::vector<double> g = ParseNumbers(values["grid"], where("grid"));
+      if (g.size() != 2 || g[0] < 1 || g[1] < 1 || g[0] != std::floor(g[0]) ||
+          g[1] != std::floor(g[1]) || g[0] * g[1] > 10000) {
+        throw InputError(where("grid") + ": expected 'grid ROWS COLS'");
+      }
+      profile.layout.rows = static_cast<int>(g[0]);
+      profile.layout.cols = static_cast<int>(g[1]);
+    }
+    if (values.count("region")) {
+      const std::vector<double> r =
+          ParseNumbers(values["region"], where("region"));
+      if (r.size() != 4) {
+        throw InputError(where("region") + ": expected 'region x0 y0 x1 y1'");
+      }
+      profile.layout.x0 = r[0];
+      profile.layout.y0 = r[1];
+      profile.layout.x1 = r[2];
+      profile.layout.y1 = r[3];
+    }
+    if (!profile.layout.Check()) {
+      throw InputError(where("region") +
+                       ": the region must satisfy 0 <= x0 < x1 <= 1 and 0 <= "
+                       "y0 < y1 <= 1");
+    }
+    const fs::path dir = fs::path(path).parent_path();
+    auto resolve = [&](const std::string& name) {
+      const fs::path p(name);
+      return (p.is_absolute() ? p : dir / p).string();
+    };
+    profile.left_kernels =
+        ReadKernelStack(resolve(values["left"]), profile.layout, where("left"));
+    profile.right_kernels = ReadKernelStack(
+        resolve(values["right"]), profile.layout, where("right"));
+    if (profile.left_kernels[0].size() != profile.right_kernels[0].size()) {
+      throw InputError(path + ": the left and right kernels differ in size");
+    }
+    profile.MakeField(path);  // the conventions, checked once here
+    return profile;
+  }
+  if (model != "split_profile") {
+    throw InputError(path +
+                     ": needs 'model split_profile' or 'model "
+                     "measured_kernels'");
+  }
+  refuse_keys(
+      {"reference_radius_px", "side", "grid", "region", "left", "right"});
+  if (values.count("split_exponent") == 0) {
+    throw InputError(path + ": needs 'split_exponent'");
+  }
+  profile.params.split_exponent =
+      ParseNumber(values["split_exponent"], where("split_exponent"));
+  if (values.count("crosstalk")) {
+    profile.params.crosstalk =
+        ParseNumber(values["crosstalk"], where("crosstalk"));
+  }
+  if (values.count("rim_softness")) {
+    profile.params.rim_softness =
+        ParseNumber(values["rim_softness"], where("rim_softness"));
+  }
+  if (values.count("rim_brightness")) {
+    profile.params.rim_brightness =
+        ParseNumber(values["rim_brightness"], where("rim_brightness"));
+  }
+  if (values.count("band_split_exponents")) {
+    for (const double p : ParseNumbers(values["band_split_exponents"],
+                                       where("band_split_exponents"))) {
+      profile.band_split_exponents.push_back(p);
+      SplitProfileParams band = profile.params;
+      band.split_exponent = p;
+      if (!band.Check()) {
+        throw InputError(where("band_split_exponents") +
+                         ": split exponents must lie in [0.05, 8]");
+      }
+    }
+    if (profile.band_split_exponents.size() < 2) {
+      throw InputError(where("band_split_exponents") +
+                       ": needs two or more bands");
+    }
+  }
+  if (!profile.params.Check()) {
+    throw InputError(path + ": profile out of range (" +
+                     profile.params.ToString() +
+                     "; split_exponent in [0.05, 8], crosstalk in [0, "
+                     "0.45], rim_softness in [0, 0.5], rim_brightness in "
+                     "[0, 4])");
+  }
+  return profile;
+}
+
+DPPsfField PsfProfileFile::MakeField(const std::string& path) const {
+  DPPsfField field;
+  if (model == "measured_kernels") {
+    field.layout = layout;
+    for (size_t c = 0; c < left_kernels.size(); ++c) {
+      try {
+        field.cells.push_back(std::make_shared<MeasuredKernelPsf>(
+            left_kernels[c], right_kernels[c], reference_radius_px, far_side));
+      } catch (const std::invalid_argument& e) {
+        std::string what = e.what();
+        const size_t colon = what.find("): ");
+        if (colon != std::string::npos) what = what.substr(colon + 3);
+        throw InputError(path + ", grid cell " + std::to_string(c) + " (row " +
+                         std::to_string(c / layout.cols) + ", column " +
+                         std::to_string(c % layout.cols) + "): " + what);
+      }
+    }
+    return field;
+  }
+  if (band_split_exponents.empty()) {
+    return DPPsfField::Uniform(std::make_shared<SplitProfilePsf>(params));
+  }
+  field.layout =
+      DPPsfLayout::ColumnBands(static_cast<int>(band_split_exponents.size()));
+  for (const double p : band_split_exponents) {
+    SplitProfileParams band = params;
+    band.split_exponent = p;
+    field.cells.push_back(std::make_shared<SplitProfilePsf>(band));
+  }
+  return field;
+}
+
+void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
+  std::ofstream file(path);
+  if (!file) throw InputError("cannot write DP PSF profile " + path);
+  file << "# dp-sfm DP PSF profile (colmap dp_psf_calibrator)\n"
+       << "# Use: colmap dp_scale_estimator ... "
+          "--DPScaleEstimator.psf_model calibrated "
+          "--DPScaleEstimator.psf_path "
+       << path << "\n"
+       << "format 1\n"
+       << "model " << profile.model << "\n";
+  if (!profile.camera.empty()) file << "camera " << profile.camera << "\n";
+  if (!profile.lens.empty()) file << "lens " << profile.lens << "\n";
+  file << std::setprecision(6);
+  if (!profile.light.empty()) {
+    file << "light " << profile.light
+         << "  # the light the kernels were measured in\n";
+  }
+  if (profile.uncertainty > 0) {
+    file << "uncertainty " << profile.uncertainty
+         << "  # relative (95 %) uncertainty of the profile's strength\n";
+  }
+  if (profile.model == "measured_kernels") {
+    const fs::path p(path);
+    const std::string stem = p.stem().string();
+    file << "reference_radius_px " << profile.reference_radius_px << "\n"
+         << "side " << (profile.far_side ? "far" : "near") << "\n"
+         << "grid " << profile.layout.rows << " " << profile.layout.cols << "\n"
+         << "region " << profile.layout.x0 << " " << profile.layout.y0 << " "
+         << profile.layout.x1 << " " << profile.layout.y1 << "\n"
+         << "left " << stem << "_left.npy\n"
+         << "right " << stem << "_right.npy\n";
+    for (const bool left : {true, false}) {
+      const std::vector<cv::Mat>& kernels =
+          left ? profile.left_kernels : profile.right_kernels;
+      NpyArray array;
+      const int k = kernels.empty() ? 0 : kernels[0].rows;
+      array.shape = {static_cast<int>(kernels.size()), k, k};
+      for (const cv::Mat& m : kernels) {
+        for (int i = 0; i < m.rows; ++i) {
+          for (int j = 0; j < m.cols; ++j) {
+            array.values.push_back(m.at<float>(i, j));
+          }
+        }
+      }
+      WriteNpyFloat32(
+          (p.parent_path() / (stem + (left ? "_left.npy" : "_right.npy")))
+              .string(),
+          array);
+    }
+  } else {
+    file << "split_exponent " << profile.params.split_exponent << "\n"
+         << "crosstalk " << profile.params.crosstalk << "\n"
+         << "rim_softness " << profile.params.rim_softness << "\n";
+    if (profile.params.rim_brightness > 0) {
+      file << "rim_brightness " << profile.params.rim_brightness << "\n";
+    }
+    if (!profile.band_split_exponents.empty()) {
+      file << "band_split_exponents";
+      for (const double p : profile.band_split_exponents) file << " " << p;
+      file << "\n";
+    }
+  }
+  for (const auto& entry : profile.fit_info) {
+    file << entry.first << " " << entry.second << "\n";
+  }
+  if (!file) throw InputError("cannot write DP PSF profile " + path);
+}
+
+void CheckProfileLight(const PsfProfileFile& profile, const std::string& path) {
+  // The estimator reads blur in linear light; a profile measured on
+  // sRGB-encoded values reads it differently (the encoding bends blurred
+  // edges), so it is never applied silently.
+  if (profile.light == "srgb") {
+    throw InputError(
+        "DP PSF profile " + path +
+        " was measured on sRGB-encoded values ('light srgb'), but frames are "
+        "brought to linear light before the blur search; re-run colmap "
+        "dp_psf_calibrator on the calibration captures to measure it in "
+        "linear light");
+  }
+  if (profile.light.empty() && !profile.fit_info.empty()) {
+    throw InputError(
+        "DP PSF profile " + path +
+        " was written by a dp_psf_calibrator that read the frames as "
+        "encoded (it records no 'light'), and the estimator now reads blur "
+        "in linear light; re-run colmap dp_psf_calibrator on the "
+        "calibration captures");
+  }
+}
+
+DPPsfField MakePsfField(const std::string& psf_model,
+                        const std::string& psf_path,
+                        DPScaleOptions* core) {
+  if (psf_model == "translating_disk" || psf_model == "auto") {
+    if (!psf_path.empty()) {
+      throw InputError(
+          "--DPScaleEstimator.psf_path is only used with "
+          "--DPScaleEstimator.psf_model calibrated (got " +
+          psf_model + ")");
+    }
+    core->psf_self_calibration = psf_model == "auto";
+    return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  }
+  if (psf_model == "calibrated") {
+    if (psf_path.empty()) {
+      throw InputError(
+          "--DPScaleEstimator.psf_model calibrated needs "
+          "--DPScaleEstimator.psf_path (a profile written by colmap "
+          "dp_psf_calibrator, or measured kernels)");
+    }
+    core->psf_self_calibration = false;
+    const PsfProfileFile profile = ReadPsfProfile(psf_path);
+    CheckProfileLight(profile, psf_path);
+    core->profile_relative_uncertainty = profile.uncertainty;
+    // The blur the profile was measured at bounds the automatic search
+    // from below (a profile calibrated at 10 px on a camera whose frames
+    // the frame-size rule gives 3.5 px).
+    if (profile.model == "measured_kernels") {
+      core->min_auto_radius_px =
+          std::max(core->min_auto_radius_px, profile.reference_radius_px);
+    }
+    return profile.MakeField(psf_path);
+  }
+  throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
+                   "' (translating_disk, calibrated or auto)");
+}
+
+namespace {
+
+std::string Key(const std::string& text) {
+  std::string key = Trim(text);
+  colmap::StringToLower(&key);
+  return key;
+}
+
+}  // namespace
+
+std::string FindLibraryProfile(const std::string& library_dir,
+                               const std::string& camera,
+                               const std::string& lens,
+                               std::vector<std::string>* skipped) {
+  if (Key(camera).empty() || Key(lens).empty() ||
+      !fs::is_directory(library_dir)) {
+    return "";
+  }
+  std::vector<std::string> files;
+  for (fs::directory_iterator it(library_dir), end; it != end; ++it) {
+    if (fs::is_regular_file(it->path()) && it->path().extension() == ".dpsf") {
+      files.push_back(it->path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  for (const std::string& file : files) {
+    try {
+      const PsfProfileFile profile = ReadPsfProfile(file);
+      if (Key(profile.camera) == Key(camera) &&
+          Key(profile.lens) == Key(lens)) {
+        return file;
+      }
+    } catch (const InputError& e) {
+      if (skipped) skipped->push_back(e.what());
+    }
+  }
+  return "";
+}
+
+std::string DefaultProfileLibrary() {
+  if (const char* env = std::getenv("DPSFM_PROFILE_LIBRARY")) return env;
+  if (const char* data = std::getenv("XDG_DATA_HOME")) {
+    return (fs::path(data) / "dp-sfm/profiles").string();
+  }
+  const char* home = std::getenv("HOME");
+  return (fs::path(home ? home : ".") / ".local/share/dp-sfm/profiles")
+      .string();
+}
+
+std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
+  const CsvTable table(path,
+                       {"name",
+                        "target_distance_m",
+                        "focus_distance_m",
+                        "focal_length_mm",
+                        "f_number",
+                        "pixel_pitch_um",
+                        "left",
+                        "right"},
+                       {"name",
+                        "target_distance_m",
+                        "focal_length_mm",
+                        "f_number",
+                        "pixel_pitch_um"},
+                       "near_f4,0.6,1.0,49.57,4,46.875,0600/f4/l.png,"
+                       "0600/f4/r.png");
+  if (table.Has("left") != table.Has("right")) {
+    throw InputError(path +
+                     ":1: give both left and right columns (each capture's "
+                     "DP view files, relative to --dp_image_path) or neither");
+  }
+  std::vector<CalibrationTarget> targets;
+  for (const CsvTable::Row& row : table.rows()) {
+    const std::string where = table.Where(row);
+    auto number = [&](const char* column) {
+      const std::string cell = table.Cell(row, column);
+      if (cell.empty()) {
+        throw InputError(where + column + " is empty");
+      }
+      return ParseNumber(cell, where + column);
+    };
+    CalibrationTarget target;
+    target.name = table.Cell(row, "name");
+    if (target.name.empty()) {
+      throw InputError(where + "the name cell is empty");
+    }
+    target.target_distance_m = number("target_distance_m");
+    // Empty = unknown: dp_psf_calibrator fits it.
+    target.focus_distance_m = table.Cell(row, "focus_distance_m").empty()
+                                  ? std::numeric_limits<double>::quiet_NaN()
+                                  : number("focus_distance_m");
+    target.lens.focal_length_mm = number("focal_length_mm");
+    target.lens.f_number = number("f_number");
+    target.lens.pixel_pitch_um = number("pixel_pitch_um");
+    target.left = table.Cell(row, "left");
+    target.right = table.Cell(row, "right");
+    if (table.Has("left") && (target.left.empty() || target.right.empty())) {
+      throw InputError(where +
+                       "left and right name the capture's DP view "
+                       "files and may not be empty");
+    }
+    const bool focus_known = !std::isnan(target.focus_distance_m);
+    if (!target.lens.Check() || !(target.target_distance_m > 0) ||
+        (focus_known && !(target.focus_distance_m > 0))) {
+      throw InputError(where + "distances and lens data must be positive");
+    }
+    // Distances are from the focal-plane mark: a lens focuses no nearer
+    // than 4 f from the sensor.
+    for (const double d : {target.target_distance_m, target.focus_distance_m}) {
+      if (!std::isnan(d) && d * 1000 < 4 * target.lens.focal_length_mm) {
+        throw InputError(where +
+                         "distances from the focal-plane mark must "
+                         "be at least 4 focal lengths (they are in metres)");
+      }
+    }
+    targets.push_back(target);
+  }
+  if (targets.empty()) {
+    throw InputError("calibration targets " + path + " list no capture");
+  }
+  return targets;
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,135 @@
+// DP PSF profiles on disk, and the PSF a run uses.
+//
+// A profile file is plain text, one "key value" pair per line, '#' starts a
+// comment (docs/user-guide.md, "DP PSF profiles"). Two models:
+//
+//   format 1
+//   model split_profile
+//   split_exponent 0.62
+//   crosstalk 0
+//   rim_softness 0
+//   rim_brightness 0      (optional: light weighted by 1 + b (rho / R)^2)
+//   band_split_exponents 0.45 0.62 0.80   (optional: the split exponent of
+//                          each equal-width column band, left to right, for
+//                          a profile that changes across the frame)
+//
+//   format 1
+//   model measured_kernels
+//   reference_radius_px 11.5      the |r| at which the kernels were measured
+//   side far                      far or near: the side of focus they are for
+//   grid 6 8                      rows cols, row-major (default 1 1)
+//   region 0.1667 0.1667 0.8333 0.8333   x0 y0 x1 y1 of the grid, fractions
+//                                 of the frame (default 0 0 1 1)
+//   left kernels_left.npy         float32/float64 (rows*cols, K, K),
+//                                 (rows, cols, K, K) or
+//   right kernels_right.npy       (K, K) for one cell; relative to the file
+//
+// (docs/user-guide.md, "Profile files": published calibrations import as
+// they are). Both may carry
+//   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
+// for the profile library, uncertainty <relative 95 % of the strength>,
+// light <linear|srgb> (what the kernels were measured in), and
+// fit_<anything> lines (how it was made; kept for people, ignored by the
+// estimator).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+
+namespace dpsfm {
+
+struct PsfProfileFile {
+  std::string model = "split_profile";  // or "measured_kernels"
+  // split_profile.
+  SplitProfileParams params;
+  // Empty = one profile for the whole frame.
+  std::vector<double> band_split_exponents;
+  // measured_kernels: one CV_32FC1 pair per layout cell (row-major).
+  double reference_radius_px = 0;
+  bool far_side = true;
+  DPPsfLayout layout;
+  std::vector<cv::Mat> left_kernels, right_kernels;
+  // For the profile library (may be empty).
+  std::string camera, lens;
+  // Relative 95 % uncertainty of the profile's strength (the calibration's
+  // interval): the scale inherits it (DPScaleOptions::
+  // profile_relative_uncertainty). 0 = not given.
+  double uncertainty = 0;
+  // The light the profile was measured in: "linear" (dp_psf_calibrator
+  // brings frames to linear light, as the estimator does), "srgb" (measured
+  // on sRGB-encoded values), or "" when the file does not say (hand-written
+  // or imported kernels; profiles written before frames were linearised
+  // carry fit_ lines but no `light`, and are refused).
+  std::string light;
+  // The fit_* lines, in file order.
+  std::vector<std::pair<std::string, std::string>> fit_info;
+
+  // The PSF of every stage. Throws InputError (naming `path`) for kernels
+  // that are no PSF pair under the DP conventions.
+  DPPsfField MakeField(const std::string& path) const;
+};
+
+// Throws InputError naming the file and line of what is wrong.
+PsfProfileFile ReadPsfProfile(const std::string& path);
+// measured_kernels writes <stem>_left.npy and <stem>_right.npy beside it.
+void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
+
+// Throws InputError (naming `path` and the fix) for a profile measured in
+// other than linear light: `light srgb`, or a calibrator's profile that
+// records no light (written before frames were linearised).
+void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
+
+// The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
+// model), "calibrated" (the profile in psf_path: a split profile from
+// dp_psf_calibrator, one per column band if it has bands, or measured
+// kernels), or "auto" (the translating disk, self-calibrated from the data:
+// sets core->psf_self_calibration). Throws InputError for an unknown model,
+// a missing or malformed psf_path, or a psf_path the model does not use.
+DPPsfField MakePsfField(const std::string& psf_model,
+                        const std::string& psf_path,
+                        DPScaleOptions* core);
+
+// The profile library: a folder of profile files (`*.dpsf`) keyed by their
+// `camera` and `lens` lines, the way lensfun keys lens corrections. Returns
+// the path of the first file (by name) whose keys equal `camera` and
+// `lens` (case and surrounding blanks ignored), or "" if none does or a key
+// is empty. Files that are not readable profiles are skipped (and listed in
+// *skipped when given).
+std::string FindLibraryProfile(const std::string& library_dir,
+                               const std::string& camera,
+                               const std::string& lens,
+                               std::vector<std::string>* skipped = nullptr);
+
+// The library folder: --DPScaleEstimator.psf_library if given, else
+// $DPSFM_PROFILE_LIBRARY, else
+// ${XDG_DATA_HOME:-~/.local/share}/dp-sfm/profiles.
+std::string DefaultProfileLibrary();
+
+// One row of a calibration targets file (dp_psf_calibrator): a DP capture
+// of a planar, fronto-parallel textured target.
+struct CalibrationTarget {
+  std::string name;  // DP view file name (as under left/)
+  // From the camera's focal-plane mark (the sensor plane); the calibration
+  // turns them into the thin lens's object distances.
+  double target_distance_m = 0;
+  double focus_distance_m = 0;  // NaN = unknown (an empty cell): fitted
+  DPLensData lens;              // pitch: of the DP frame's pixels
+  // The capture's DP view files, relative to the captures folder; empty:
+  // left/<name> with right/<name> (or sum/<name>).
+  std::string left, right;
+};
+
+// A CSV whose header names its columns (text.h, CsvTable): name,
+// target_distance_m, focal_length_mm, f_number and pixel_pitch_um required;
+// focus_distance_m (empty cells: fitted) and left, right (both or neither)
+// optional.
+std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path);
+
+}  // namespace dpsfm

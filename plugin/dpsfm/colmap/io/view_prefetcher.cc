@@ -1,0 +1,79 @@
+#include "dpsfm/colmap/io/view_prefetcher.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include "colmap/util/threading.h"
+#include "colmap/util/timer.h"
+
+namespace dpsfm {
+namespace {
+
+ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader, int index) {
+  colmap::Timer timer;
+  timer.Start();
+  ViewPrefetcher::Read read;
+  try {
+    read.view = reader->LoadView(index);
+  } catch (...) {
+    read.error = std::current_exception();
+  }
+  read.seconds = timer.ElapsedSeconds();
+  return read;
+}
+
+}  // namespace
+
+ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
+                               std::vector<int> order,
+                               int depth)
+    : reader_(reader), order_(std::move(order)), depth_(depth) {
+  if (depth_ < 0) {
+    throw std::invalid_argument("prefetch depth must be >= 0");
+  }
+  if (depth_ > 0) {
+    pool_ = std::make_unique<colmap::ThreadPool>(depth_);
+    while (static_cast<int>(in_flight_.size()) < depth_ &&
+           launched_ < order_.size()) {
+      Launch();
+    }
+  }
+}
+
+ViewPrefetcher::~ViewPrefetcher() {
+  for (std::shared_future<Read>& read : in_flight_) {
+    if (read.valid()) read.wait();
+  }
+}
+
+void ViewPrefetcher::Launch() {
+  const int index = order_[launched_++];
+  const WorkspaceReader* reader = reader_;
+  in_flight_.emplace_back(
+      pool_->AddTask([reader, index]() { return TimedRead(reader, index); }));
+}
+
+ViewPrefetcher::Read ViewPrefetcher::Next() {
+  colmap::Timer timer;
+  timer.Start();
+  Read read;
+  if (depth_ == 0) {
+    if (launched_ >= order_.size()) {
+      throw std::out_of_range("no more views to read");
+    }
+    read = TimedRead(reader_, order_[launched_++]);
+  } else {
+    if (in_flight_.empty()) throw std::out_of_range("no more views to read");
+    std::shared_future<Read> next = std::move(in_flight_.front());
+    in_flight_.pop_front();
+    read = next.get();
+    // The next read starts once this one is out, so reads stay in order
+    // and at most depth views wait in memory.
+    if (launched_ < order_.size()) Launch();
+  }
+  if (read.error) std::rethrow_exception(read.error);
+  read.waited = timer.ElapsedSeconds();
+  return read;
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,58 @@
+// Reading views ahead of the blur search: decoding the DP frames and reading
+// (and resampling) the depth map of the next views overlaps with the current
+// view's AddView, so on a long run the reads cost only what they do not hide.
+#pragma once
+
+#include <deque>
+#include <exception>
+#include <future>
+#include <memory>
+#include <vector>
+
+#include "dpsfm/colmap/io/workspace_reader.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+
+namespace colmap {
+class ThreadPool;
+}  // namespace colmap
+
+namespace dpsfm {
+
+class ViewPrefetcher {
+ public:
+  // Reads reader->LoadView(order[k]) for k = 0, 1, ... in that order on
+  // `depth` worker threads, at most `depth` views ahead of the one Next()
+  // returned last (so memory holds at most depth + 1 views). depth 0 reads
+  // in Next() itself. The reader must outlive the prefetcher.
+  ViewPrefetcher(const WorkspaceReader* reader,
+                 std::vector<int> order,
+                 int depth);
+  // Waits for the reads in flight (their views are dropped).
+  ~ViewPrefetcher();
+
+  struct Read {
+    DPView view;
+    double seconds = 0;  // the read itself
+    double waited = 0;   // how long Next() blocked for it
+    // The read's error, rethrown by Next(). Tasks never throw: COLMAP 4's
+    // thread pool treats an exception no one collected through Wait() as
+    // fatal when it is destroyed.
+    std::exception_ptr error;
+  };
+  // The next view in order; rethrows its read's error (InputError).
+  Read Next();
+
+ private:
+  void Launch();
+
+  const WorkspaceReader* reader_;
+  const std::vector<int> order_;
+  const int depth_;
+  size_t launched_ = 0;
+  std::unique_ptr<colmap::ThreadPool> pool_;
+  // Shared futures: COLMAP 4's ThreadPool::AddTask returns them (3.10's a
+  // std::future, which converts).
+  std::deque<std::shared_future<Read>> in_flight_;
+};
+
+}  // namespace dpsfm

@@ -1,0 +1,500 @@
+#include "dpsfm/colmap/io/workspace_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "colmap/util/logging.h"
+#include "colmap/util/threading.h"
+#include "dpsfm/colmap/rescale/rescale.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/colmap/util/durable_file.h"
+
+namespace dpsfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+// True if two cameras map pixels to rays identically (no distortion to
+// undo between them).
+bool SameGeometry(const colmap::Camera& a, const colmap::Camera& b) {
+  if (a.width != b.width || a.height != b.height) return false;
+  for (const double x : {0.0, 0.5, 1.0}) {
+    for (const double y : {0.0, 0.5, 1.0}) {
+      const Eigen::Vector2d pixel(x * a.width, y * a.height);
+      const std::optional<Eigen::Vector2d> ray_a = CamFromImg(a, pixel);
+      const std::optional<Eigen::Vector2d> ray_b = CamFromImg(b, pixel);
+      if (ray_a.has_value() != ray_b.has_value()) return false;
+      if (ray_a && (*ray_a - *ray_b).norm() > 1e-6) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+cv::Mat ReadColmapDepthMap(const std::string& path) {
+  if (!fs::is_regular_file(path)) {
+    throw InputError("cannot read depth map " + path);
+  }
+  const std::string bytes = ReadFileBytes(path);
+  DepthMapLayout layout;
+  std::string problem;
+  if (!ParseDepthMapLayout(bytes, &layout, &problem)) {
+    throw InputError("depth map is corrupt or truncated (" + problem +
+                     "): " + path);
+  }
+  if (layout.channels != 1) {
+    throw InputError("depth map has " + std::to_string(layout.channels) +
+                     " channels, expected 1: " + path);
+  }
+  // Row-major, width varying fastest (mvs::Mat<T>: data[row * width + col]).
+  cv::Mat depth(static_cast<int>(layout.height),
+                static_cast<int>(layout.width),
+                CV_32FC1);
+  std::memcpy(depth.data,
+              bytes.data() + layout.data_offset,
+              layout.width * layout.height * sizeof(float));
+  for (int r = 0; r < depth.rows; ++r) {
+    const float* row = depth.ptr<float>(r);
+    for (int c = 0; c < depth.cols; ++c) {
+      if (!std::isfinite(row[c])) {
+        std::ostringstream message;
+        message << "depth map has a non-finite value at column " << c
+                << ", row " << r << ": " << path;
+        throw InputError(message.str());
+      }
+    }
+  }
+  return depth;
+}
+
+namespace {
+
+// cameras.bin's structure: count, then per camera id, model, width,
+// height and the model's number of parameters.
+void CheckCamerasBinary(const std::string& path) {
+  const std::string bytes = ReadFileBytes(path);
+  auto truncated = [&](const std::string& what) {
+    throw InputError("cannot read the model: " + path +
+                     " is truncated or "
+                     "corrupt (" +
+                     what + ")");
+  };
+  if (bytes.size() < 8) truncated("camera count");
+  uint64_t count = 0;
+  std::memcpy(&count, bytes.data(), 8);
+  size_t pos = 8;
+  for (uint64_t i = 0; i < count; ++i) {
+    if (bytes.size() - pos < 24) truncated("camera " + std::to_string(i + 1));
+    int model = 0;
+    std::memcpy(&model, bytes.data() + pos + 4, 4);
+    if (!colmap::ExistsCameraModelWithId(
+            static_cast<colmap::CameraModelId>(model))) {
+      truncated("camera " + std::to_string(i + 1) + " has unknown model id " +
+                std::to_string(model));
+    }
+    const size_t params =
+        colmap::CameraModelNumParams(static_cast<colmap::CameraModelId>(model));
+    pos += 24;
+    if ((bytes.size() - pos) / 8 < params) {
+      truncated("parameters of camera " + std::to_string(i + 1));
+    }
+    pos += 8 * params;
+  }
+  if (pos != bytes.size()) {
+    truncated(std::to_string(bytes.size() - pos) +
+              " unexpected bytes after the last camera");
+  }
+}
+
+// Reads a model with COLMAP after checking the structure of the files it
+// will read (the ones the rescaler parses, and cameras.bin): COLMAP's own
+// readers turn a truncated file into "std::bad_alloc" or worse.
+void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
+  const std::filesystem::path root(dir);
+  const bool binary = std::filesystem::is_regular_file(root / "cameras.bin") &&
+                      std::filesystem::is_regular_file(root / "images.bin") &&
+                      std::filesystem::is_regular_file(root / "points3D.bin");
+  if (binary) CheckCamerasBinary((root / "cameras.bin").string());
+  const std::vector<std::pair<const char*, ArtefactType>> files =
+      binary ? std::vector<
+                   std::pair<const char*,
+                             ArtefactType>>{{"images.bin",
+                                             ArtefactType::kImagesBinary},
+                                            {"points3D.bin",
+                                             ArtefactType::kPoints3DBinary}}
+             : std::vector<std::pair<const char*, ArtefactType>>{
+                   {"images.txt", ArtefactType::kImagesText},
+                   {"points3D.txt", ArtefactType::kPoints3DText}};
+  for (const auto& file : files) {
+    const std::string path = (root / file.first).string();
+    if (!std::filesystem::is_regular_file(path)) continue;
+    std::string bytes = ReadFileBytes(path);
+    try {
+      RescaleContents(file.second, 1.0, path, &bytes);  // parses, all checked
+    } catch (const InputError& error) {
+      std::string what = error.what();
+      const std::string prefix = "cannot rescale ";
+      if (what.compare(0, prefix.size(), prefix) == 0) {
+        what = what.substr(prefix.size());
+      }
+      throw InputError("cannot read the model: " + what);
+    }
+  }
+  try {
+    model->Read(dir);
+  } catch (const std::exception& error) {
+    throw InputError("cannot read the model in " + dir + ": " + error.what());
+  }
+}
+
+// Sparse mode takes each view's depths from its triangulated points: every
+// point an image refers to must exist (COLMAP's readers do not check), and
+// a view without any has no depth and is left out.
+std::vector<colmap::image_t> ImagesWithTriangulatedPoints(
+    const colmap::Reconstruction& model,
+    const std::vector<colmap::image_t>& image_ids,
+    const std::string& model_path) {
+  std::vector<colmap::image_t> kept;
+  std::vector<std::string> without;
+  for (const colmap::image_t image_id : image_ids) {
+    const colmap::Image& image = model.Image(image_id);
+    int points = 0;
+    for (const colmap::Point2D& point2D : image.Points2D()) {
+      if (!point2D.HasPoint3D()) continue;
+      if (!model.ExistsPoint3D(point2D.point3D_id)) {
+        throw InputError(
+            "the model in " + model_path + " is inconsistent: image " +
+            image.Name() + " refers to 3D point " +
+            std::to_string(point2D.point3D_id) +
+            ", which its points3D file does not hold (files of two "
+            "different runs?): export the model again with colmap "
+            "model_converter");
+      }
+      ++points;
+    }
+    if (points == 0) {
+      without.push_back(image.Name());
+    } else {
+      kept.push_back(image_id);
+    }
+  }
+  if (kept.empty()) {
+    throw InputError(
+        "the sparse model in " + model_path +
+        " has no triangulated 3D points, and --input_path takes each "
+        "view's depths from them: run colmap point_triangulator (or the "
+        "mapper) to triangulate it, or give a dense workspace with "
+        "--workspace_path");
+  }
+  if (!without.empty()) {
+    LOG(WARNING) << without.size() << " of " << image_ids.size()
+                 << " images have no triangulated 3D points and are left "
+                    "out of the estimate (e.g. "
+                 << without[0] << ")";
+  }
+  return kept;
+}
+
+// lens.csv rows that match no image of the model are not used: a typo in a
+// name would otherwise pass in silence (the image's numbers then come from
+// the flags or EXIF).
+void WarnUnmatchedLensRows(const colmap::Reconstruction& model,
+                           const std::vector<colmap::image_t>& image_ids,
+                           const std::map<std::string, LensCsvRow>& csv) {
+  std::set<std::string> matched;
+  for (const colmap::image_t image_id : image_ids) {
+    std::string name;
+    if (FindLensRow(csv, model.Image(image_id).Name(), &name) != nullptr) {
+      matched.insert(name);
+    }
+  }
+  std::vector<std::string> unmatched;
+  for (const auto& row : csv) {
+    if (matched.count(row.first) == 0) unmatched.push_back(row.first);
+  }
+  if (!unmatched.empty()) {
+    LOG(WARNING) << unmatched.size() << " of " << csv.size()
+                 << " lens.csv rows name no image of the model (e.g. "
+                 << unmatched[0] << ", line " << csv.at(unmatched[0]).line
+                 << "); names are the model's, e.g. "
+                 << model.Image(image_ids[0]).Name();
+  }
+}
+
+}  // namespace
+
+WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
+                                 const WorkspaceLayout& layout)
+    : options_(options), layout_(layout) {
+  ReadModel(layout_.model_path, &reconstruction_);
+  std::vector<colmap::image_t> image_ids = reconstruction_.RegImageIds();
+  if (image_ids.empty()) {
+    throw InputError("the model has no registered images: " +
+                     layout_.model_path);
+  }
+  // Name order: deterministic logs and reports whatever the file order.
+  std::sort(image_ids.begin(),
+            image_ids.end(),
+            [this](colmap::image_t a, colmap::image_t b) {
+              return reconstruction_.Image(a).Name() <
+                     reconstruction_.Image(b).Name();
+            });
+  if (!layout_.dense) {
+    image_ids = ImagesWithTriangulatedPoints(
+        reconstruction_, image_ids, layout_.model_path);
+  }
+
+  if (!options_.database_path.empty()) {
+    database_check_ =
+        CheckModelAgainstDatabase(options_.database_path, reconstruction_);
+  }
+  if (!options_.original_model_path.empty()) {
+    colmap::Reconstruction original;
+    ReadModel(options_.original_model_path, &original);
+    for (const auto& entry : original.Images()) {
+      original_model_cameras_[entry.second.Name()] =
+          original.Camera(entry.second.CameraId());
+    }
+    std::vector<std::string> missing;
+    for (const colmap::image_t image_id : image_ids) {
+      const std::string& name = reconstruction_.Image(image_id).Name();
+      if (original_model_cameras_.count(name) == 0) missing.push_back(name);
+    }
+    if (!missing.empty()) {
+      throw InputError(std::to_string(missing.size()) + " images of " +
+                       layout_.model_path + " are not in " +
+                       options_.original_model_path + " (e.g. " + missing[0] +
+                       "): pass the model image_undistorter was run on");
+    }
+  }
+
+  dp_index_.reset(new DPImageIndex(layout_));
+  std::vector<std::string> missing;
+  for (const colmap::image_t image_id : image_ids) {
+    if (!dp_index_->HasLeft(reconstruction_.Image(image_id).Name())) {
+      missing.push_back(reconstruction_.Image(image_id).Name());
+    }
+  }
+  if (!missing.empty()) {
+    std::ostringstream message;
+    message << missing.size() << " of " << image_ids.size()
+            << " images have no DP view in " << layout_.left_path << ": ";
+    for (size_t i = 0; i < missing.size() && i < 5; ++i) {
+      message << (i > 0 ? ", " : "") << missing[i];
+    }
+    if (missing.size() > 5) message << ", ...";
+    throw InputError(message.str());
+  }
+
+  std::map<std::string, LensCsvRow> lens_csv;
+  if (!options_.lens_path.empty()) {
+    lens_csv = ReadLensCsv(options_.lens_path);
+  }
+  LensFlags flags;
+  flags.focal_length_mm = options_.focal_length_mm;
+  flags.f_number = options_.f_number;
+  flags.pixel_pitch_um = options_.pixel_pitch_um;
+
+  WarnUnmatchedLensRows(reconstruction_, image_ids, lens_csv);
+  for (const colmap::image_t image_id : image_ids) {
+    const colmap::Image& image = reconstruction_.Image(image_id);
+    const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
+    ViewSource source;
+    source.image_name = image.Name();
+    source.image_id = image_id;
+    source.dp = dp_index_->Find(image.Name());
+
+    ExifLens exif;
+    const ExifLens* exif_ptr = nullptr;
+    if (!options_.image_path.empty()) {
+      const std::string original =
+          (fs::path(options_.image_path) / image.Name()).string();
+      if (fs::is_regular_file(original)) {
+        exif = ReadExifLens(original);
+        exif_ptr = &exif;
+      }
+    }
+    source.lens = ResolveLens(
+        image.Name(), lens_csv, flags, exif_ptr, camera.MeanFocalLength());
+    CameraGeometry geometry;
+    geometry.focal_px = camera.MeanFocalLength();
+    geometry.width = static_cast<int>(camera.width);
+    geometry.height = static_cast<int>(camera.height);
+    LensCheckOptions check;
+    check.tolerance = options_.lens_check_tolerance;
+    CheckLensAgainstCamera(image.Name(), source.lens, geometry, check);
+
+    if (layout_.dense) {
+      source.depth_source = DepthMapPath(image.Name());
+    } else {
+      source.depth_source =
+          std::to_string(image.NumPoints3D()) + " triangulated points";
+    }
+    sources_.push_back(source);
+  }
+}
+
+std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
+  const fs::path base = fs::path(layout_.depth_maps_path) / image_name;
+  const std::string preferred =
+      base.string() + "." + options_.input_type + ".bin";
+  if (fs::is_regular_file(preferred)) {
+    return preferred;
+  }
+  // geometric falls back to photometric (the contract's default).
+  if (options_.input_type == "geometric") {
+    const std::string photometric = base.string() + ".photometric.bin";
+    if (fs::is_regular_file(photometric)) {
+      return photometric;
+    }
+  }
+  throw InputError("no " + options_.input_type + " depth map for image " +
+                   image_name + " (expected " + preferred +
+                   "): run colmap patch_match_stereo over every image of "
+                   "the workspace, or, without CUDA, give the sparse model "
+                   "with --input_path instead of --workspace_path");
+}
+
+cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
+                             const colmap::Camera& undistorted,
+                             const colmap::Camera& original,
+                             const cv::Size& frame_size,
+                             int k,
+                             int num_threads) {
+  cv::Mat mapped(frame_size, CV_32FC1, cv::Scalar(0));
+#ifdef _OPENMP
+  const int threads = colmap::GetEffectiveNumThreads(num_threads);
+#endif
+  const double sx = static_cast<double>(depth.cols) / undistorted.width;
+  const double sy = static_cast<double>(depth.rows) / undistorted.height;
+#ifdef _OPENMP
+#pragma omp parallel for schedule(static) num_threads(threads)
+#endif
+  for (int y = 0; y < frame_size.height; ++y) {
+    for (int x = 0; x < frame_size.width; ++x) {
+      // COLMAP puts the top-left pixel centre at 0.5.
+      const std::optional<Eigen::Vector2d> ray =
+          CamFromImg(original, Eigen::Vector2d((x + 0.5) * k, (y + 0.5) * k));
+      if (!ray) continue;
+      const std::optional<Eigen::Vector2d> uv =
+          ImgFromCam(undistorted, ray->homogeneous());
+      if (!uv) continue;
+      const int col = static_cast<int>(std::floor(uv->x() * sx));
+      const int row = static_cast<int>(std::floor(uv->y() * sy));
+      if (col >= 0 && row >= 0 && col < depth.cols && row < depth.rows) {
+        mapped.at<float>(y, x) = depth.at<float>(row, col);
+      }
+    }
+  }
+  return mapped;
+}
+
+DPView WorkspaceReader::LoadView(size_t index) const {
+  const ViewSource& source = sources_.at(index);
+  const colmap::Image& image = reconstruction_.Image(source.image_id);
+  const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
+
+  const DPFrames frames = LoadDPFrames(
+      source.dp, options_.swap_dp_views, ParseDPEncoding(options_.dp_encoding));
+  // A dense workspace's model is undistorted; the DP frames keep the
+  // geometry of the original images. With the original camera known (from
+  // the database) and different, depths are mapped through both cameras.
+  const colmap::Camera* original = nullptr;
+  if (layout_.dense) {
+    const auto from_model = original_model_cameras_.find(source.image_name);
+    const auto from_database =
+        database_check_.original_cameras.find(source.image_name);
+    if (from_model != original_model_cameras_.end()) {
+      if (!SameGeometry(from_model->second, camera)) {
+        original = &from_model->second;
+      }
+    } else if (from_database != database_check_.original_cameras.end() &&
+               !SameGeometry(from_database->second, camera)) {
+      original = &from_database->second;
+    }
+  }
+  const colmap::Camera& frame_camera = original ? *original : camera;
+  int k = 0;
+  try {
+    k = DPFrameDownsampling(frames.left.size(),
+                            static_cast<int>(frame_camera.width),
+                            static_cast<int>(frame_camera.height),
+                            source.image_name);
+  } catch (const InputError& error) {
+    if (layout_.dense && original == nullptr &&
+        options_.database_path.empty() &&
+        options_.original_model_path.empty()) {
+      throw InputError(std::string(error.what()) +
+                       "; if the DP views keep the geometry of distorted "
+                       "original images, pass --original_model_path (the "
+                       "model image_undistorter was run on) so their "
+                       "cameras can be mapped");
+    }
+    throw;
+  }
+  DPView view;
+  view.name = source.image_name;
+  view.left = frames.left;
+  view.right = frames.right;
+  view.frames.encoding = frames.encoding;
+  view.frames.encoding_reason = frames.encoding_reason;
+  view.frames.bits = frames.bits;
+  view.frames.lossy = frames.lossy;
+  view.lens = source.lens.lens;
+  // A DP-frame pixel covers k x k model camera pixels.
+  view.lens.pixel_pitch_um *= k;
+
+  if (layout_.dense) {
+    view.depth = ReadColmapDepthMap(source.depth_source);
+    if (original != nullptr) {
+      view.depth = ResampleDepthToFrame(view.depth,
+                                        camera,
+                                        *original,
+                                        frames.left.size(),
+                                        k,
+                                        options_.num_threads);
+    }
+    // The depth map covers the camera's field at its own resolution; it
+    // must keep the camera's aspect (PatchMatch scales both sides alike).
+    const double aspect_camera =
+        static_cast<double>(camera.width) / camera.height;
+    const double aspect_depth =
+        static_cast<double>(view.depth.cols) / view.depth.rows;
+    if (std::abs(aspect_camera - aspect_depth) > 0.02 * aspect_camera) {
+      std::ostringstream message;
+      message << "depth map is " << view.depth.cols << "x" << view.depth.rows
+              << " but image " << source.image_name << " is " << camera.width
+              << "x" << camera.height
+              << " (different aspect): " << source.depth_source;
+      throw InputError(message.str());
+    }
+  } else {
+    const Eigen::Matrix3x4d cam_from_world = image.CamFromWorld().ToMatrix();
+    for (const colmap::Point2D& point2D : image.Points2D()) {
+      if (!point2D.HasPoint3D()) continue;
+      const Eigen::Vector3d xyz =
+          reconstruction_.Point3D(point2D.point3D_id).xyz;
+      const double depth = cam_from_world.row(2).dot(xyz.homogeneous());
+      if (!(depth > 0) || !std::isfinite(depth)) continue;
+      DepthPoint sample;
+      // COLMAP's 2D points put the top-left pixel centre at (0.5, 0.5); the
+      // core puts it at (0, 0), in DP-frame pixels: a DP pixel covers k x k
+      // model pixels, so model u is u / k in the frame's continuous
+      // coordinates (the inverse of the dense path's (x + 0.5) k).
+      sample.x = point2D.xy.x() / k - 0.5;
+      sample.y = point2D.xy.y() / k - 0.5;
+      sample.depth = depth;
+      view.depth_points.push_back(sample);
+    }
+  }
+  return view;
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,77 @@
+// Turns a COLMAP workspace (model, depth maps or tracks, DP views, lens data)
+// into the core's per-view inputs. All cheap checks run in the constructor,
+// so a missing DP view or lens value is reported before any heavy work.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/io/database_check.h"
+#include "dpsfm/colmap/io/dp_images.h"
+#include "dpsfm/colmap/io/lens_data.h"
+#include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+
+namespace dpsfm {
+
+// Reads a COLMAP depth map (ASCII header "W&H&C&", then float32 LE) as
+// CV_32FC1. Throws InputError naming the file if it is missing, malformed,
+// truncated, multi-channel or holds non-finite values.
+cv::Mat ReadColmapDepthMap(const std::string& path);
+
+// A dense workspace's depth map (in the undistorted camera's geometry, at
+// any resolution) resampled into a DP frame of the original, distorted
+// camera downsampled by k: frame pixel -> original image -> ray ->
+// undistorted image -> depth pixel (nearest, so depths never blend across
+// edges). Pixels that map outside the depth map get 0 (invalid).
+// num_threads: -1 = all cores.
+cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
+                             const colmap::Camera& undistorted,
+                             const colmap::Camera& original,
+                             const cv::Size& frame_size,
+                             int k,
+                             int num_threads = -1);
+
+// Where one view's inputs come from, for the log and the report.
+struct ViewSource {
+  std::string image_name;
+  colmap::image_t image_id = 0;
+  DPFramePaths dp;
+  ResolvedLens lens;         // pitch of the model camera's pixels
+  std::string depth_source;  // depth map path, or "N triangulated points"
+};
+
+class WorkspaceReader {
+ public:
+  WorkspaceReader(const ScaleRunOptions& options,
+                  const WorkspaceLayout& layout);
+
+  const colmap::Reconstruction& reconstruction() const {
+    return reconstruction_;
+  }
+  // The cross-check against --database_path (empty without one).
+  const DatabaseCheck& database_check() const { return database_check_; }
+  size_t NumViews() const { return sources_.size(); }
+  const ViewSource& Source(size_t index) const { return sources_[index]; }
+
+  // Loads the DP frames, depth and lens data of one view. Throws InputError
+  // naming the file for unreadable or inconsistent data.
+  DPView LoadView(size_t index) const;
+
+ private:
+  std::string DepthMapPath(const std::string& image_name) const;
+
+  ScaleRunOptions options_;
+  WorkspaceLayout layout_;
+  colmap::Reconstruction reconstruction_;
+  std::unique_ptr<DPImageIndex> dp_index_;
+  std::vector<ViewSource> sources_;
+  DatabaseCheck database_check_;
+  // Image name -> its camera in --original_model_path.
+  std::map<std::string, colmap::Camera> original_model_cameras_;
+};
+
+}  // namespace dpsfm

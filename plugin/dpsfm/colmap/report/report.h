@@ -1,0 +1,37 @@
+// The JSON report of a run (shared cli-contract "Outputs", plus what helps a
+// user judge the result: intervals, per-view reasons, lens sources, timings).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "dpsfm/colmap/io/workspace_reader.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+
+namespace dpsfm {
+
+// Version of the plugin, written into reports and the scale record.
+std::string DPSFMVersion();
+
+struct RunTimings {
+  double read = 0;       // loading DP views and depths (the reads' own time)
+  double read_wait = 0;  // of it, not hidden behind the blur search
+  double blur = 0;       // per-patch blur estimation (inside AddView)
+  double linear = 0;
+  double intensity = 0;
+  double rescale = 0;
+  double total = 0;
+};
+
+nlohmann::json MakeReport(const DPScaleResult& result,
+                          const std::vector<ViewSource>& sources,
+                          const std::vector<DPViewSummary>& summaries,
+                          const RunTimings& timings);
+
+// Writes JSON to `path` atomically (temporary file, then rename), so a
+// reader never sees half a report. Throws InputError on failure.
+void WriteJsonFile(const std::string& path, const nlohmann::json& json);
+
+}  // namespace dpsfm

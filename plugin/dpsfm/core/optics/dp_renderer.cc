@@ -1,0 +1,146 @@
+#include "dpsfm/core/optics/dp_renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/util/check.h"
+
+namespace dpsfm {
+
+bool DPRenderOptions::Check() const {
+  DPSFM_CHECK_OPTION_GT(radius_step_px, 0.0);
+  return true;
+}
+
+void RenderDPViews(const cv::Mat& sharp,
+                   const cv::Mat& depth,
+                   const cv::Mat& radius_px,
+                   const DPPsfModel& psf,
+                   const DPRenderOptions& options,
+                   cv::Mat* left,
+                   cv::Mat* right) {
+  DPSFM_CHECK_OPTIONS(options, "DPRenderOptions");
+  DPSFM_CHECK(sharp.type() == CV_32FC1 || sharp.type() == CV_32FC3)
+      << "sharp image must be CV_32FC1 or CV_32FC3";
+  DPSFM_CHECK(depth.type() == CV_32FC1 && depth.size() == sharp.size())
+      << "depth must be CV_32FC1 of the image's size";
+  DPSFM_CHECK(radius_px.type() == CV_32FC1 && radius_px.size() == sharp.size())
+      << "radius map must be CV_32FC1 of the image's size";
+  DPSFM_CHECK(left != nullptr && right != nullptr);
+
+  for (int y = 0; y < sharp.rows; ++y) {
+    for (int x = 0; x < sharp.cols; ++x) {
+      DPSFM_CHECK(std::isfinite(radius_px.at<float>(y, x)))
+          << "non-finite blur radius at " << x << "," << y;
+    }
+  }
+  const int channels = sharp.channels();
+  *left = cv::Mat::zeros(sharp.size(), sharp.type());
+  *right = cv::Mat::zeros(sharp.size(), sharp.type());
+  const bool additive =
+      options.compositing == DPRenderOptions::Compositing::kAdditive;
+
+  // Radius bins. Additive: each pixel's light is split between the two
+  // nearest bins in proportion to its position between them (linear
+  // interpolation of the kernel in r), so the DP disparity, which grows with
+  // r, varies smoothly across a slanted surface instead of jumping at bin
+  // edges (a jump of 0.3 x step px would show as a bright or dark line).
+  // Layers: each pixel belongs to its nearest bin, bins ordered far to near.
+  const cv::Mat position = radius_px / options.radius_step_px;
+  cv::Mat bin_low(sharp.size(), CV_32SC1);
+  cv::Mat fraction(sharp.size(), CV_32FC1);
+  struct Layer {
+    double depth_sum = 0;
+    int count = 0;
+  };
+  std::map<int, Layer> layers;
+  for (int y = 0; y < sharp.rows; ++y) {
+    for (int x = 0; x < sharp.cols; ++x) {
+      const float p = position.at<float>(y, x);
+      const int low = additive ? static_cast<int>(std::floor(p))
+                               : static_cast<int>(std::lround(p));
+      bin_low.at<int>(y, x) = low;
+      fraction.at<float>(y, x) = additive ? p - low : 0.f;
+      const float d = depth.at<float>(y, x);
+      for (const int bin : {low, low + 1}) {
+        if (bin > low && !additive) break;
+        Layer& layer = layers[bin];
+        layer.depth_sum += d > 0 ? d : 1e30;
+        ++layer.count;
+      }
+    }
+  }
+  // Far to near (background at depth <= 0 first of all); for the additive
+  // mode the order does not matter.
+  std::vector<std::pair<double, int>> order;
+  for (const auto& entry : layers) {
+    order.emplace_back(entry.second.depth_sum / entry.second.count,
+                       entry.first);
+  }
+  std::sort(order.rbegin(), order.rend());
+
+  const cv::Rect image_rect(0, 0, sharp.cols, sharp.rows);
+  const cv::Mat one_minus_fraction = 1.0 - fraction;
+  for (const auto& entry : order) {
+    const int bin = entry.second;
+    const double radius = bin * options.radius_step_px;
+    const cv::Mat lower = (bin_low == bin);      // weight 1 - fraction (or 1)
+    const cv::Mat upper = (bin_low == bin - 1);  // weight fraction
+    const cv::Mat support = additive ? (lower | upper) : lower;
+    // Layers are compact (one surface at one depth), so convolve only around
+    // the layer: its bounding box grown by the kernel radius plus a margin
+    // for the reflected border.
+    const int margin = psf.KernelRadius(radius) + 2;
+    cv::Rect roi = cv::boundingRect(support);
+    roi.x -= 2 * margin;
+    roi.y -= 2 * margin;
+    roi.width += 4 * margin;
+    roi.height += 4 * margin;
+    roi &= image_rect;
+    cv::Mat weight;
+    if (additive) {
+      cv::Mat low_weight, high_weight;
+      one_minus_fraction(roi).copyTo(low_weight);
+      low_weight.setTo(0, ~lower(roi));
+      fraction(roi).copyTo(high_weight);
+      high_weight.setTo(0, ~upper(roi));
+      weight = low_weight + high_weight;
+    } else {
+      lower(roi).convertTo(weight, CV_32F, 1.0 / 255.0);
+    }
+    cv::Mat weight_c = weight;
+    if (channels == 3) {
+      cv::merge(std::vector<cv::Mat>(3, weight), weight_c);
+    }
+    const cv::Mat layer = sharp(roi).mul(weight_c);
+    const DPKernels kernels = psf.Kernels(radius);
+    for (int view = 0; view < 2; ++view) {
+      const cv::Mat& kernel = view == 0 ? kernels.left : kernels.right;
+      cv::Mat out = (view == 0 ? *left : *right)(roi);
+      if (additive) {
+        out += ConvolvePsf(layer, kernel);
+        continue;
+      }
+      // Coverage of this layer in this view: the layer's mask blurred by the
+      // view's kernel, rescaled to [0, 1] by the view's share of the light.
+      const double share = cv::sum(kernel)[0];
+      cv::Mat coverage = ConvolvePsf(weight, kernel) / share;
+      cv::min(coverage, 1.0, coverage);
+      cv::Mat coverage_c = coverage;
+      if (channels == 3) {
+        cv::merge(std::vector<cv::Mat>(3, coverage), coverage_c);
+      }
+      // "Over" compositing: the nearer layer hides what lies behind it. Both
+      // terms are at the view's share of the light.
+      const cv::Mat composite = out.mul(cv::Scalar::all(1.0) - coverage_c) +
+                                ConvolvePsf(layer, kernel);
+      composite.copyTo(out);
+    }
+  }
+}
+
+}  // namespace dpsfm

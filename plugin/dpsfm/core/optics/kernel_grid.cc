@@ -1,0 +1,114 @@
+#include "dpsfm/core/optics/kernel_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "dpsfm/core/util/check.h"
+
+namespace dpsfm {
+cv::Mat EmbedKernel(const cv::Mat& kernel, int half) {
+  cv::Mat frame = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32FC1);
+  const int oy = half - kernel.rows / 2;
+  const int ox = half - kernel.cols / 2;
+  kernel.copyTo(frame(cv::Rect(ox, oy, kernel.cols, kernel.rows)));
+  return frame;
+}
+
+cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
+  cv::Mat wrapped = cv::Mat::zeros(size, CV_32FC1);
+  const int cy = kernel.rows / 2;
+  const int cx = kernel.cols / 2;
+  for (int i = 0; i < kernel.rows; ++i) {
+    const int y = ((i - cy) % size.height + size.height) % size.height;
+    for (int j = 0; j < kernel.cols; ++j) {
+      const int x = ((j - cx) % size.width + size.width) % size.width;
+      wrapped.at<float>(y, x) += kernel.at<float>(i, j);
+    }
+  }
+  return wrapped;
+}
+
+double DPKernelGrid::BoundFor(double step_px, double max_radius_px) {
+  return step_px *
+         std::max(1,
+                  static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9)));
+}
+
+DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
+                           double step_px,
+                           double max_radius_px,
+                           const cv::Size& dft_size)
+    : step_(step_px), dft_size_(dft_size) {
+  DPSFM_CHECK(step_px > 0 && std::isfinite(step_px))
+      << "kernel grid step must be positive, got " << step_px;
+  DPSFM_CHECK(max_radius_px >= 0 && std::isfinite(max_radius_px))
+      << "kernel grid bound must be >= 0, got " << max_radius_px;
+  half_nodes_ =
+      std::max(1, static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9)));
+  num_nodes_ = 2 * half_nodes_ + 1;
+  border_ = psf.KernelRadius(Bound());
+  left_kernels_.resize(num_nodes_);
+  right_kernels_.resize(num_nodes_);
+  left_energy_.resize(num_nodes_);
+  right_energy_.resize(num_nodes_);
+  left_cross_.assign(num_nodes_, 0.0);
+  right_cross_.assign(num_nodes_, 0.0);
+  const bool spectra = dft_size.area() > 0;
+  if (spectra) {
+    left_spectra_.resize(num_nodes_);
+    right_spectra_.resize(num_nodes_);
+  }
+  cv::Mat previous_left, previous_right;
+  for (int n = 0; n < num_nodes_; ++n) {
+    const DPKernels kernels = psf.Kernels(Radius(n));
+    DPSFM_CHECK(kernels.left.type() == CV_32FC1 &&
+                kernels.right.type() == CV_32FC1 &&
+                kernels.left.size() == kernels.right.size() &&
+                kernels.left.rows % 2 == 1 && kernels.left.cols % 2 == 1)
+        << psf.Name() << ": kernels must be CV_32FC1, odd, of equal size";
+    DPSFM_CHECK(kernels.left.rows <= 2 * border_ + 1 &&
+                kernels.left.cols <= 2 * border_ + 1)
+        << psf.Name() << ": kernel at r = " << Radius(n)
+        << " exceeds KernelRadius(" << Bound() << ")";
+    left_kernels_[n] = kernels.left;
+    right_kernels_[n] = kernels.right;
+    const cv::Mat left = EmbedKernel(kernels.left, border_);
+    const cv::Mat right = EmbedKernel(kernels.right, border_);
+    left_energy_[n] = left.dot(left);
+    right_energy_[n] = right.dot(right);
+    if (n > 0) {
+      left_cross_[n - 1] = left.dot(previous_left);
+      right_cross_[n - 1] = right.dot(previous_right);
+    }
+    previous_left = left;
+    previous_right = right;
+    if (spectra) {
+      DPSFM_CHECK(dft_size.width > 2 * border_ && dft_size.height > 2 * border_)
+          << "DFT size " << dft_size.width << "x" << dft_size.height
+          << " too small for kernels of radius " << border_;
+      cv::dft(WrapKernel(kernels.left, dft_size), left_spectra_[n]);
+      cv::dft(WrapKernel(kernels.right, dft_size), right_spectra_[n]);
+    }
+  }
+}
+
+double DPKernelGridBound(double max_radius_px, double step_px) {
+  return std::max(1,
+                  static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9))) *
+         step_px;
+}
+
+void DPKernelGrid::Locate(double signed_radius_px, int* node, double* t) const {
+  const double bound = Bound();
+  double r = std::isfinite(signed_radius_px)
+                 ? signed_radius_px
+                 : (signed_radius_px > 0 ? bound : -bound);
+  r = std::max(-bound, std::min(bound, r));
+  const double position = r / step_ + half_nodes_;
+  int n = static_cast<int>(std::floor(position));
+  n = std::max(0, std::min(num_nodes_ - 2, n));
+  *node = n;
+  *t = std::max(0.0, std::min(1.0, position - n));
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,657 @@
+#include "dpsfm/core/scale/linear_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+#include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/curve_math.h"
+#include "dpsfm/core/util/statistics.h"
+
+namespace dpsfm {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string FormatDouble(double v, int precision = 3) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+// Minimiser of sum_k w_k |gamma_k x - c_k| over x: a weighted median of
+// c_k / gamma_k with weights w_k |gamma_k| (exact 1-D L1).
+double WeightedL1Fit1D(const std::vector<double>& gamma,
+                       const std::vector<double>& c) {
+  std::vector<std::pair<double, double>> items;
+  double total = 0;
+  for (size_t k = 0; k < gamma.size(); ++k) {
+    if (gamma[k] == 0 || !std::isfinite(gamma[k]) || !std::isfinite(c[k])) {
+      continue;
+    }
+    items.emplace_back(c[k] / gamma[k], std::abs(gamma[k]));
+    total += std::abs(gamma[k]);
+  }
+  if (items.empty()) return kNaN;
+  std::sort(items.begin(), items.end());
+  double acc = 0;
+  for (const auto& item : items) {
+    acc += item.second;
+    if (acc >= 0.5 * total) return item.first;
+  }
+  return items.back().first;
+}
+
+}  // namespace
+
+bool IrlsOptions::Check() const {
+  DPSFM_CHECK_OPTION_GT(max_iterations, 0);
+  DPSFM_CHECK_OPTION_GT(epsilon, 0);
+  DPSFM_CHECK_OPTION_GT(tolerance, 0);
+  return true;
+}
+
+bool LinearEstimatorOptions::Check() const {
+  DPSFM_CHECK_OPTION_GE(min_blur_range_px, 0);
+  DPSFM_CHECK_OPTION_GT(num_selected_views, 0);
+  DPSFM_CHECK_OPTION_GT(max_residual_to_range, 0);
+  // A single-view solve has two unknowns.
+  DPSFM_CHECK_OPTION_GE(min_samples_per_view, 2);
+  DPSFM_CHECK_OPTION_GE(min_rcond, 0);
+  DPSFM_CHECK_OPTION_GE(min_relative_depth_range, 0);
+  DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
+  DPSFM_CHECK_OPTION_VALUE(confidence_level > 0 && confidence_level < 1,
+                           confidence_level);
+  DPSFM_CHECK_NESTED_OPTIONS(irls);
+  return true;
+}
+
+const char* ViewRejectionPhrase(ViewRejection rejection) {
+  switch (rejection) {
+    case ViewRejection::kNone:
+      return "used";
+    case ViewRejection::kTooFewPatches:
+      return "with too few reliable patches";
+    case ViewRejection::kDegenerate:
+      return "without depth variation among their patches";
+    case ViewRejection::kNonPositiveScale:
+      return "with s <= 0";
+    case ViewRejection::kNonPositiveFocus:
+      return "with focus distance <= 0 (or at infinity)";
+    case ViewRejection::kFocusBelowFocalLength:
+      return "with focus distance below the focal length";
+    case ViewRejection::kSmallBlurRange:
+      return "with blur range <= T_p (too little blur)";
+    case ViewRejection::kPoorFit:
+      return "whose blur does not follow their depth (poor single-view fit)";
+    case ViewRejection::kFarFromMedian:
+      return "farther from the median scale than the N_v kept";
+  }
+  return "?";
+}
+
+IrlsResult SolveL1Irls(const DPLinearSystem& system,
+                       const IrlsOptions& options,
+                       const std::vector<double>* row_weights) {
+  DPSFM_CHECK_OPTIONS(options, "IrlsOptions");
+  const int n = system.num_views;
+  const int m = n + 1;
+  const int num_rows = system.NumRows();
+  DPSFM_CHECK_EQ(system.row_view.size(), system.rows.size());
+  if (row_weights != nullptr) {
+    DPSFM_CHECK_EQ(static_cast<int>(row_weights->size()), num_rows);
+  }
+  IrlsResult result;
+  if (n <= 0 || num_rows < m) return result;
+
+  auto row_weight = [&](int k) {
+    return row_weights == nullptr ? 1.0 : (*row_weights)[k];
+  };
+
+  // Column scaling: unit (weighted) L2 norm per column.
+  Eigen::VectorXd col_norm = Eigen::VectorXd::Zero(m);
+  for (int k = 0; k < num_rows; ++k) {
+    const int v = system.row_view[k];
+    DPSFM_CHECK(v >= 0 && v < n) << "row " << k << " has view " << v;
+    const double w = row_weight(k);
+    col_norm[v] += w * system.rows[k].gamma * system.rows[k].gamma;
+    col_norm[n] += w * system.rows[k].minus_l * system.rows[k].minus_l;
+  }
+  for (int c = 0; c < m; ++c) {
+    if (!(col_norm[c] > 0) || !std::isfinite(col_norm[c])) return result;
+    col_norm[c] = std::sqrt(col_norm[c]);
+  }
+
+  // Normal equations of the weighted, column-scaled system; each row touches
+  // only (v, v), (v, n), (n, n).
+  Eigen::MatrixXd normal(m, m);
+  Eigen::VectorXd rhs(m);
+  auto assemble = [&](const Eigen::VectorXd* weights) {
+    normal.setZero();
+    rhs.setZero();
+    for (int k = 0; k < num_rows; ++k) {
+      const int v = system.row_view[k];
+      const double w = weights == nullptr ? row_weight(k) : (*weights)[k];
+      if (w == 0) continue;
+      const double a0 = system.rows[k].gamma / col_norm[v];
+      const double a1 = system.rows[k].minus_l / col_norm[n];
+      const double b = system.rows[k].rhs;
+      normal(v, v) += w * a0 * a0;
+      normal(v, n) += w * a0 * a1;
+      normal(n, n) += w * a1 * a1;
+      rhs[v] += w * a0 * b;
+      rhs[n] += w * a1 * b;
+    }
+    for (int v = 0; v < n; ++v) normal(n, v) = normal(v, n);
+  };
+
+  assemble(nullptr);
+  {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(normal,
+                                                       Eigen::EigenvaluesOnly);
+    const double lmax = eig.eigenvalues().maxCoeff();
+    const double lmin = eig.eigenvalues().minCoeff();
+    result.rcond = lmax > 0 ? std::max(0.0, lmin / lmax) : 0.0;
+  }
+  if (!(result.rcond > 1e-15)) return result;
+
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
+  Eigen::VectorXd y = ldlt.solve(rhs);  // first pass: plain least squares
+  if (!y.allFinite()) return result;
+
+  auto residuals_of = [&](const Eigen::VectorXd& ys) {
+    Eigen::VectorXd r(num_rows);
+    for (int k = 0; k < num_rows; ++k) {
+      const int v = system.row_view[k];
+      r[k] = system.rows[k].gamma / col_norm[v] * ys[v] +
+             system.rows[k].minus_l / col_norm[n] * ys[n] - system.rows[k].rhs;
+    }
+    return r;
+  };
+
+  Eigen::VectorXd weights(num_rows);
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    const Eigen::VectorXd r = residuals_of(y);
+    for (int k = 0; k < num_rows; ++k) {
+      weights[k] = row_weight(k) / std::max(std::abs(r[k]), options.epsilon);
+    }
+    assemble(&weights);
+    ldlt.compute(normal);
+    const Eigen::VectorXd y_new = ldlt.solve(rhs);
+    result.iterations = it;
+    if (!y_new.allFinite()) break;  // keep the last finite iterate
+    const double step = (y_new - y).norm();
+    y = y_new;
+    if (step <= options.tolerance * std::max(y.norm(), 1e-300)) {
+      result.converged = true;
+      break;
+    }
+  }
+
+  result.x = y.cwiseQuotient(col_norm);
+  result.residuals = residuals_of(y);
+  result.success = result.x.allFinite();
+  return result;
+}
+
+std::vector<int> SelectTopFraction(const std::vector<double>& confidence,
+                                   double fraction,
+                                   int min_count) {
+  DPSFM_CHECK(fraction > 0 && fraction <= 1) << "fraction " << fraction;
+  const int n = static_cast<int>(confidence.size());
+  int count = static_cast<int>(std::ceil(fraction * n - 1e-9));
+  count = std::min(n, std::max(count, min_count));
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  auto key = [&](int i) {
+    return std::isfinite(confidence[i])
+               ? confidence[i]
+               : -std::numeric_limits<double>::infinity();
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return key(a) > key(b);
+  });
+  order.resize(count);
+  std::sort(order.begin(), order.end());
+  return order;
+}
+
+std::vector<int> SelectTopFractionStratified(
+    const std::vector<double>& confidence,
+    const std::vector<double>& key,
+    double fraction,
+    int min_count,
+    int strata) {
+  DPSFM_CHECK_EQ(confidence.size(), key.size());
+  if (strata <= 1) return SelectTopFraction(confidence, fraction, min_count);
+  const int n = static_cast<int>(confidence.size());
+  const int count = static_cast<int>(
+      SelectTopFraction(confidence, fraction, min_count).size());
+  if (count == 0) return {};
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (double k : key) {
+    if (std::isfinite(k)) {
+      lo = std::min(lo, k);
+      hi = std::max(hi, k);
+    }
+  }
+  auto conf = [&](int i) {
+    return std::isfinite(confidence[i])
+               ? confidence[i]
+               : -std::numeric_limits<double>::infinity();
+  };
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return conf(a) > conf(b);
+  });
+  std::vector<std::vector<int>> bins(strata);
+  for (int i : order) {
+    if (!std::isfinite(key[i])) continue;
+    const int b =
+        hi > lo ? std::min(strata - 1,
+                           static_cast<int>((key[i] - lo) / (hi - lo) * strata))
+                : 0;
+    bins[b].push_back(i);
+  }
+  int nonempty = 0;
+  for (const auto& b : bins) nonempty += !b.empty();
+  std::vector<bool> taken(n, false);
+  int num_taken = 0;
+  // Round-robin over the bins, best first inside each, up to an even share.
+  const int share = nonempty > 0 ? count / nonempty : 0;
+  for (const auto& b : bins) {
+    for (int q = 0; q < std::min<int>(share, b.size()); ++q) {
+      taken[b[q]] = true;
+      ++num_taken;
+    }
+  }
+  for (int i : order) {
+    if (num_taken >= count) break;
+    if (!taken[i]) {
+      taken[i] = true;
+      ++num_taken;
+    }
+  }
+  std::vector<int> selected;
+  for (int i = 0; i < n; ++i) {
+    if (taken[i]) selected.push_back(i);
+  }
+  return selected;
+}
+
+std::vector<int> SelectViewsNearMedian(const std::vector<double>& scales,
+                                       const std::vector<bool>& eligible,
+                                       int count) {
+  DPSFM_CHECK_EQ(scales.size(), eligible.size());
+  DPSFM_CHECK_GT(count, 0);
+  std::vector<int> candidates;
+  std::vector<double> log_scales;
+  for (size_t i = 0; i < scales.size(); ++i) {
+    if (eligible[i] && scales[i] > 0 && std::isfinite(scales[i])) {
+      candidates.push_back(static_cast<int>(i));
+      log_scales.push_back(std::log(scales[i]));
+    }
+  }
+  if (static_cast<int>(candidates.size()) <= count) return candidates;
+  // Scales are ratios, so "nearest" is measured in log ratio; the median is
+  // the same in either space up to the even-count midpoint.
+  const double median = Median(log_scales);
+  std::vector<int> order(candidates.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return std::abs(log_scales[a] - median) < std::abs(log_scales[b] - median);
+  });
+  std::vector<int> selected;
+  for (int k = 0; k < count; ++k) selected.push_back(candidates[order[k]]);
+  std::sort(selected.begin(), selected.end());
+  return selected;
+}
+
+namespace {
+
+DPLinearSystem BuildSystem(const std::vector<LinearViewData>& views,
+                           const std::vector<int>& subset) {
+  DPLinearSystem system;
+  system.num_views = static_cast<int>(subset.size());
+  for (size_t c = 0; c < subset.size(); ++c) {
+    const LinearViewData& view = views[subset[c]];
+    for (const LinearSample& sample : view.samples) {
+      system.AddRow(
+          static_cast<int>(c),
+          MakeLinearRow(
+              view.lens, view.pixel_pitch_mm, sample.radius_px, sample.depth));
+    }
+  }
+  return system;
+}
+
+std::string FailureFromCounts(const std::vector<LinearViewResult>& results,
+                              const LinearEstimatorOptions& options) {
+  std::map<ViewRejection, int> counts;
+  for (const auto& r : results) counts[r.rejection]++;
+  std::vector<std::pair<int, ViewRejection>> sorted;
+  for (const auto& kv : counts) sorted.emplace_back(kv.second, kv.first);
+  std::stable_sort(
+      sorted.begin(),
+      sorted.end(),
+      [](const std::pair<int, ViewRejection>& a,
+         const std::pair<int, ViewRejection>& b) { return a.first > b.first; });
+  std::ostringstream s;
+  s << "no view passed selection:";
+  bool first = true;
+  for (const auto& item : sorted) {
+    s << (first ? " " : ", ") << item.first
+      << (first ? (item.first == 1 ? " view " : " views ") : " ");
+    if (item.second == ViewRejection::kSmallBlurRange) {
+      s << "with blur range <= " << options.min_blur_range_px
+        << " px (too little blur: depth range too shallow for the aperture, "
+           "stopped down too far, or subject far beyond the focus)";
+    } else {
+      s << ViewRejectionPhrase(item.second);
+    }
+    first = false;
+  }
+  if (!sorted.empty() && sorted[0].second == ViewRejection::kNonPositiveScale) {
+    s << ". Blur that shrinks with depth in most views usually means the "
+         "left and right DP views are swapped: run again with "
+         "--DPScaleEstimator.swap_dp_views flipped (1 if it was 0)";
+  }
+  return s.str();
+}
+
+}  // namespace
+
+LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
+                                   const LinearEstimatorOptions& options) {
+  DPSFM_CHECK_OPTIONS(options, "LinearEstimatorOptions");
+  LinearEstimate estimate;
+  const int num_views = static_cast<int>(views.size());
+  estimate.views.resize(num_views);
+  if (num_views == 0) {
+    estimate.failure_reason = "no views";
+    return estimate;
+  }
+
+  // --- Per-view solves. ---
+  std::vector<double> single_scales(num_views, kNaN);
+  std::vector<bool> eligible(num_views, false);
+  for (int i = 0; i < num_views; ++i) {
+    const LinearViewData& view = views[i];
+    LinearViewResult& out = estimate.views[i];
+    DPSFM_CHECK(view.lens.Check())
+        << "view '" << view.name << "' has invalid lens data ("
+        << view.lens.ToString() << ")";
+    DPSFM_CHECK_GT(view.pixel_pitch_mm, 0);
+    out.num_samples = static_cast<int>(view.samples.size());
+    out.focus_model = kNaN;
+    if (out.num_samples < options.min_samples_per_view) {
+      out.rejection = ViewRejection::kTooFewPatches;
+      out.reason = std::to_string(out.num_samples) +
+                   " selected patches, need at least " +
+                   std::to_string(options.min_samples_per_view);
+      continue;
+    }
+    // Depth variation: with one depth, eq. (one_pixel) is still solvable when
+    // the blur varies (b sits in gamma) but only by g = f, a meaningless fit.
+    {
+      double imin = std::numeric_limits<double>::infinity(), imax = 0;
+      for (const LinearSample& sample : view.samples) {
+        imin = std::min(imin, 1.0 / sample.depth);
+        imax = std::max(imax, 1.0 / sample.depth);
+      }
+      if (!(imax - imin > options.min_relative_depth_range * imax)) {
+        out.rejection = ViewRejection::kDegenerate;
+        out.reason =
+            "no depth variation among its selected patches "
+            "(inverse-depth range " +
+            FormatDouble(100 * (imax - imin) / imax) + " %)";
+        continue;
+      }
+    }
+    // T_p on the measured blur first (the paper's test): a view whose
+    // patches all show about the same blur cannot separate s from g_i, and
+    // its fit would only report noise (e.g. a random sign of s).
+    {
+      double rmin = std::numeric_limits<double>::infinity(), rmax = -rmin;
+      for (const LinearSample& sample : view.samples) {
+        rmin = std::min(rmin, sample.radius_px);
+        rmax = std::max(rmax, sample.radius_px);
+      }
+      if (!(rmax - rmin > options.min_blur_range_px)) {
+        out.rejection = ViewRejection::kSmallBlurRange;
+        out.predicted_blur_range_px = rmax - rmin;
+        out.reason = "measured blur range " + FormatDouble(rmax - rmin) +
+                     " px <= T_p = " + FormatDouble(options.min_blur_range_px) +
+                     " px (too little blur or depth variation)";
+        continue;
+      }
+    }
+    const IrlsResult fit = SolveL1Irls(BuildSystem(views, {i}), options.irls);
+    if (!fit.success || fit.rcond < options.min_rcond) {
+      out.rejection = ViewRejection::kDegenerate;
+      out.reason =
+          "single-view system is rank deficient (no depth variation among "
+          "its patches; rcond " +
+          FormatDouble(fit.rcond) + ")";
+      continue;
+    }
+    const double gbar = fit.x[0];
+    const double sbar = fit.x[1];
+    if (!(sbar > 0)) {
+      out.rejection = ViewRejection::kNonPositiveScale;
+      out.reason =
+          "single-view fit gives s <= 0 (blur does not grow with "
+          "depth as the lens model predicts)";
+      continue;
+    }
+    out.single_solved = true;
+    out.single_scale = ScaleFromSbar(sbar);
+    single_scales[i] = out.single_scale;
+    if (!(gbar > 0)) {
+      out.rejection = ViewRejection::kNonPositiveFocus;
+      out.reason = "single-view fit gives focus distance <= 0 or at infinity";
+      continue;
+    }
+    out.single_focus_model = FocusModelFromUnknowns(gbar, sbar);
+    if (gbar >= 1.0 / view.lens.focal_length_mm) {
+      out.rejection = ViewRejection::kFocusBelowFocalLength;
+      out.reason =
+          "single-view fit puts the focus closer than the focal "
+          "length";
+      continue;
+    }
+    double rmin = std::numeric_limits<double>::infinity();
+    double rmax = -rmin;
+    for (const LinearSample& sample : view.samples) {
+      const double r = PredictBlurRadiusPx(view.lens,
+                                           view.pixel_pitch_mm,
+                                           out.single_scale,
+                                           out.single_focus_model,
+                                           sample.depth);
+      rmin = std::min(rmin, r);
+      rmax = std::max(rmax, r);
+    }
+    out.predicted_blur_range_px = rmax - rmin;
+    if (!(out.predicted_blur_range_px > options.min_blur_range_px)) {
+      out.rejection = ViewRejection::kSmallBlurRange;
+      out.reason =
+          "predicted blur range " + FormatDouble(out.predicted_blur_range_px) +
+          " px <= T_p = " + FormatDouble(options.min_blur_range_px) + " px";
+      continue;
+    }
+    {
+      std::vector<double> abs_res(fit.residuals.size());
+      for (int k = 0; k < fit.residuals.size(); ++k) {
+        abs_res[k] = std::abs(fit.residuals[k]);
+      }
+      const double median_res = Median(abs_res);
+      if (!(median_res <=
+            options.max_residual_to_range * out.predicted_blur_range_px)) {
+        out.rejection = ViewRejection::kPoorFit;
+        out.reason = "blur does not follow depth: median residual " +
+                     FormatDouble(median_res) + " px against a blur range of " +
+                     FormatDouble(out.predicted_blur_range_px) + " px";
+        continue;
+      }
+    }
+    eligible[i] = true;
+  }
+
+  // --- N_v views nearest the median; the joint solve. ---
+  std::vector<int> selected = SelectViewsNearMedian(
+      single_scales, eligible, options.num_selected_views);
+  {
+    std::vector<double> eligible_scales;
+    for (int i = 0; i < num_views; ++i) {
+      if (eligible[i]) eligible_scales.push_back(single_scales[i]);
+    }
+    const double median = Median(eligible_scales);
+    for (int i = 0; i < num_views; ++i) {
+      if (eligible[i] &&
+          !std::binary_search(selected.begin(), selected.end(), i)) {
+        estimate.views[i].rejection = ViewRejection::kFarFromMedian;
+        estimate.views[i].reason =
+            "single-view scale " + FormatDouble(single_scales[i]) +
+            " is not among the " + std::to_string(options.num_selected_views) +
+            " nearest the median " + FormatDouble(median);
+      }
+    }
+  }
+  if (selected.empty()) {
+    estimate.failure_reason = FailureFromCounts(estimate.views, options);
+    return estimate;
+  }
+
+  IrlsResult joint;
+  // A kept view whose joint focus comes out non-physical is dropped and the
+  // solve repeated (at most once per view).
+  while (!selected.empty()) {
+    joint = SolveL1Irls(BuildSystem(views, selected), options.irls);
+    if (!joint.success) break;
+    const int n = static_cast<int>(selected.size());
+    int worst = -1;
+    for (int c = 0; c < n; ++c) {
+      const double gbar = joint.x[c];
+      if (!(gbar > 0) ||
+          gbar >= 1.0 / views[selected[c]].lens.focal_length_mm) {
+        worst = c;
+        break;
+      }
+    }
+    if (worst < 0 || !(joint.x[n] > 0)) break;
+    const int view = selected[worst];
+    estimate.views[view].rejection = ViewRejection::kNonPositiveFocus;
+    estimate.views[view].reason =
+        "joint fit gives a non-physical focus distance for this view";
+    selected.erase(selected.begin() + worst);
+  }
+  if (selected.empty()) {
+    estimate.failure_reason = FailureFromCounts(estimate.views, options);
+    return estimate;
+  }
+  const int n = static_cast<int>(selected.size());
+  if (!joint.success || !(joint.x[n] > 0)) {
+    estimate.failure_reason =
+        !joint.success
+            ? "the joint linear system of the selected views is rank deficient"
+            : "the joint linear fit gives s <= 0";
+    return estimate;
+  }
+  estimate.success = true;
+  estimate.selected_views = selected;
+  estimate.scale = ScaleFromSbar(joint.x[n]);
+  estimate.num_rows = static_cast<int>(joint.residuals.size());
+  estimate.irls_iterations = joint.iterations;
+  {
+    const Eigen::VectorXd abs_res = joint.residuals.cwiseAbs();
+    estimate.median_abs_residual_px = Median(
+        std::vector<double>(abs_res.data(), abs_res.data() + abs_res.size()));
+  }
+  const double sbar = joint.x[n];
+
+  // Focus distances and residuals of every view under the joint scale.
+  for (int i = 0; i < num_views; ++i) {
+    LinearViewResult& out = estimate.views[i];
+    const auto it = std::lower_bound(selected.begin(), selected.end(), i);
+    const bool used = it != selected.end() && *it == i;
+    out.used = used;
+    if (used) {
+      out.rejection = ViewRejection::kNone;
+      out.reason = "used";
+    }
+    if (views[i].samples.empty()) continue;
+    const DPLinearSystem system = BuildSystem(views, {i});
+    std::vector<double> gamma, c;
+    for (const LinearRow& row : system.rows) {
+      gamma.push_back(row.gamma);
+      c.push_back(row.rhs - row.minus_l * sbar);
+    }
+    const double gbar =
+        used ? joint.x[it - selected.begin()] : WeightedL1Fit1D(gamma, c);
+    out.focus_model = gbar > 0 ? FocusModelFromUnknowns(gbar, sbar) : kNaN;
+    std::vector<double> abs_res;
+    for (size_t k = 0; k < gamma.size(); ++k) {
+      abs_res.push_back(std::abs(gamma[k] * gbar - c[k]));
+    }
+    out.median_abs_residual_px = Median(abs_res);
+  }
+
+  // Bootstrap: resample rows within each kept view (stratified, so every
+  // column keeps its rows) and re-solve.
+  estimate.scale_ci_low = estimate.scale_ci_high = kNaN;
+  estimate.interval_status = "num_bootstrap is 0";
+  if (options.num_bootstrap > 0) {
+    const DPLinearSystem system = BuildSystem(views, selected);
+    std::vector<std::vector<int>> rows_of_view(n);
+    for (int k = 0; k < system.NumRows(); ++k) {
+      rows_of_view[system.row_view[k]].push_back(k);
+    }
+    std::mt19937_64 rng(options.seed);
+    IrlsOptions irls = options.irls;
+    irls.max_iterations = std::min(irls.max_iterations, 200);
+    irls.tolerance = std::max(irls.tolerance, 1e-7);
+    std::vector<double> samples;
+    std::vector<double> weights(system.NumRows());
+    for (int b = 0; b < options.num_bootstrap; ++b) {
+      std::fill(weights.begin(), weights.end(), 0.0);
+      for (const auto& rows : rows_of_view) {
+        std::uniform_int_distribution<size_t> pick(0, rows.size() - 1);
+        for (size_t k = 0; k < rows.size(); ++k) weights[rows[pick(rng)]] += 1;
+      }
+      const IrlsResult fit = SolveL1Irls(system, irls, &weights);
+      const bool solved = fit.success && fit.x[n] > 0;
+      if (solved) {
+        samples.push_back(ScaleFromSbar(fit.x[n]));
+      }
+      for (int j = 0; j < n; ++j) {
+        estimate.views[selected[j]].focus_model_samples.push_back(
+            solved && fit.x[j] > 0 ? FocusModelFromUnknowns(fit.x[j], fit.x[n])
+                                   : kNaN);
+      }
+    }
+    if (samples.size() >= 10) {
+      const double alpha = 0.5 * (1.0 - options.confidence_level);
+      estimate.scale_ci_low =
+          std::min(estimate.scale, Percentile(samples, alpha));
+      estimate.scale_ci_high =
+          std::max(estimate.scale, Percentile(samples, 1.0 - alpha));
+      estimate.interval_status.clear();
+    } else {
+      estimate.interval_status = "only " + std::to_string(samples.size()) +
+                                 " of " +
+                                 std::to_string(options.num_bootstrap) +
+                                 " bootstrap resamples solved, need 10";
+    }
+  }
+  return estimate;
+}
+
+}  // namespace dpsfm

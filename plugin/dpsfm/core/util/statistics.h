@@ -1,0 +1,54 @@
+// Sample statistics, in one place for every stage: medians, quantiles and the
+// robust noise scale. Each variant is named for what it computes, because the
+// stages use different ones on purpose (an interpolated percentile for
+// bootstrap intervals, the upper median where a rank is enough and the sample
+// is large, the nearest rank for plot ranges).
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace dpsfm {
+
+// Median: the middle value, or the mean of the two middle values for an even
+// count. NaN for no values.
+double Median(std::vector<double> values);
+
+// Median of the finite values only; NaN when there are none.
+double FiniteMedian(std::vector<double> values);
+
+// Percentile (q in 0..1) by linear interpolation between the sorted values
+// (the "type 7" estimator of R and NumPy's default). NaN for no values.
+double Percentile(std::vector<double> values, double q);
+
+// The finite value of rank round(q (n - 1)) (q in 0..1): a quantile that is
+// always one of the samples. NaN when there are no finite values.
+double NearestRankQuantile(std::vector<double> values, double q);
+
+// The value of rank k (0-based) in linear time; reorders *values.
+// RankInPlace(v, v->size() / 2) is UpperMedianInPlace.
+//
+// The value of rank n / 2 (the median for an odd count, the upper of the two
+// middle values for an even one), found in linear time. Reorders *values,
+// which must not be empty.
+template <typename T>
+T RankInPlace(std::vector<T>* values, size_t k) {
+  std::nth_element(values->begin(), values->begin() + k, values->end());
+  return (*values)[k];
+}
+template <typename T>
+T UpperMedianInPlace(std::vector<T>* values) {
+  return RankInPlace(values, values->size() / 2);
+}
+
+// The noise sigma behind the median of absolute filter responses: for a
+// filter of gain g (the norm of its taps) on N(0, sigma^2) noise, the
+// responses are N(0, g^2 sigma^2) and median |x| = Phi^-1(3/4) g sigma.
+constexpr double kHalfNormalMedian = 0.67449;
+inline double SigmaFromMedianAbsolute(double median_absolute,
+                                      double filter_gain = 1.0) {
+  return median_absolute / (kHalfNormalMedian * filter_gain);
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,150 @@
+// Profile files: measured kernels in the contract's form, read from .npy
+// files written here byte by byte (independently of the project's writer).
+#include "dpsfm/colmap/io/psf_profile.h"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dpsfm/colmap/io/workspace.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace {
+
+// A .npy file of float64 values in Fortran order (version 1): `values` are
+// given in C order and written column-major, as numpy.asfortranarray would.
+void WriteFortranFloat64(const std::string& path,
+                         const std::vector<int>& shape,
+                         const std::vector<double>& values) {
+  std::string dims;
+  for (const int n : shape) dims += std::to_string(n) + ", ";
+  std::string header =
+      "{'descr': '<f8', 'fortran_order': True, 'shape': (" + dims + "), }";
+  while ((10 + header.size() + 1) % 64 != 0) header += ' ';
+  header += '\n';
+  std::ofstream file(path, std::ios::binary);
+  file.write("\x93NUMPY\x01\x00", 8);
+  const uint16_t length = static_cast<uint16_t>(header.size());
+  const char bytes[2] = {static_cast<char>(length & 0xff),
+                         static_cast<char>(length >> 8)};
+  file.write(bytes, 2);
+  file.write(header.data(), header.size());
+  const int dims_count = static_cast<int>(shape.size());
+  std::vector<int> index(dims_count, 0);
+  for (size_t f = 0; f < values.size(); ++f) {
+    // Fortran order: the first index varies fastest.
+    size_t c = 0;
+    for (int d = 0; d < dims_count; ++d) c = c * shape[d] + index[d];
+    const double v = values[c];
+    file.write(reinterpret_cast<const char*>(&v), 8);  // little-endian host
+    for (int d = 0; d < dims_count; ++d) {
+      if (++index[d] < shape[d]) break;
+      index[d] = 0;
+    }
+  }
+}
+
+// A 5x5 split kernel for the far side: the left view leans towards -x by
+// `lean` per column.
+cv::Mat Split(bool left, double lean) {
+  cv::Mat k(5, 5, CV_32FC1);
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      const double x = j - 2;
+      k.at<float>(i, j) =
+          static_cast<float>(1 + (left ? -lean : lean) * x + 0.01 * i);
+    }
+  }
+  return k;
+}
+
+std::vector<double> Values(const std::vector<cv::Mat>& kernels) {
+  std::vector<double> v;
+  for (const cv::Mat& k : kernels) {
+    for (int i = 0; i < k.rows; ++i) {
+      for (int j = 0; j < k.cols; ++j) v.push_back(k.at<float>(i, j));
+    }
+  }
+  return v;
+}
+
+TEST(PsfProfileFile, MeasuredKernelGridFromFortranFloat64) {
+  test::TempDir dir;
+  const std::vector<cv::Mat> left = {Split(true, 0.1), Split(true, 0.2)};
+  const std::vector<cv::Mat> right = {Split(false, 0.1), Split(false, 0.2)};
+  // (rows, cols, K, K) = (1, 2, 5, 5), the layout of grid calibrations.
+  WriteFortranFloat64(dir / "l.npy", {1, 2, 5, 5}, Values(left));
+  WriteFortranFloat64(dir / "r.npy", {1, 2, 5, 5}, Values(right));
+  {
+    std::ofstream file(dir / "sensor.dpsf");
+    file << "format 1\nmodel measured_kernels\nreference_radius_px 2.5\n"
+            "side far\ngrid 1 2\nregion 0 0.1 1 0.9\nleft l.npy\n"
+            "right r.npy\nuncertainty 0.03\ncamera Google / Pixel 4\n"
+            "lens Pixel 4 main\nfit_source a published calibration\n";
+  }
+  const PsfProfileFile profile = ReadPsfProfile(dir / "sensor.dpsf");
+  EXPECT_EQ(profile.model, "measured_kernels");
+  EXPECT_DOUBLE_EQ(profile.uncertainty, 0.03);
+  EXPECT_EQ(profile.camera, "Google / Pixel 4");
+  EXPECT_EQ(profile.lens, "Pixel 4 main");
+  ASSERT_EQ(profile.left_kernels.size(), 2u);
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_EQ(cv::norm(profile.left_kernels[c], left[c], cv::NORM_INF), 0.0)
+        << c;
+    EXPECT_EQ(cv::norm(profile.right_kernels[c], right[c], cv::NORM_INF), 0.0)
+        << c;
+  }
+  // The field: each half of the frame its own cell, the stronger split on
+  // the right; at the reference radius each cell is its normalised pair.
+  const DPPsfField field = profile.MakeField(dir / "sensor.dpsf");
+  ASSERT_EQ(field.cells.size(), 2u);
+  EXPECT_EQ(&field.At(0.2, 0.5), field.cells[0].get());
+  EXPECT_EQ(&field.At(0.8, 0.02), field.cells[1].get());
+  EXPECT_GT(CentroidOffsetPerRadius(*field.cells[1], 2.5),
+            CentroidOffsetPerRadius(*field.cells[0], 2.5));
+  const DPKernels k = field.cells[0]->Kernels(2.5);
+  cv::Mat expected = left[0] * (0.5 / cv::sum(left[0])[0]);
+  EXPECT_LT(cv::norm(k.left, expected, cv::NORM_INF), 1e-6);
+}
+
+TEST(PsfProfileFile, MeasuredKernelsThatAreNoPsfPairAreRefused) {
+  test::TempDir dir;
+  auto write_profile = [&](const std::string& extra) {
+    std::ofstream file(dir / "p.dpsf");
+    file << "format 1\nmodel measured_kernels\nreference_radius_px 2.5\n"
+            "side far\nleft l.npy\nright r.npy\n"
+         << extra;
+  };
+  // Views swapped: the left kernel leans +x for a far point.
+  WriteFortranFloat64(dir / "l.npy", {5, 5}, Values({Split(false, 0.1)}));
+  WriteFortranFloat64(dir / "r.npy", {5, 5}, Values({Split(true, 0.1)}));
+  write_profile("");
+  try {
+    ReadPsfProfile(dir / "p.dpsf");
+    ADD_FAILURE() << "a swapped pair was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("grid cell 0"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("swap"), std::string::npos)
+        << e.what();
+  }
+  // A grid the arrays do not hold.
+  WriteFortranFloat64(dir / "l.npy", {5, 5}, Values({Split(true, 0.1)}));
+  WriteFortranFloat64(dir / "r.npy", {5, 5}, Values({Split(false, 0.1)}));
+  write_profile("grid 2 2\n");
+  EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
+  // A key of the other model, and a missing file.
+  write_profile("split_exponent 1\n");
+  EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
+  std::filesystem::remove(dir / "r.npy");
+  write_profile("");
+  EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
+}
+
+}  // namespace
+}  // namespace dpsfm

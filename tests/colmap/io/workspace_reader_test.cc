@@ -1,0 +1,792 @@
+// The COLMAP layer's readers: DP view lookup and loading, lens data with its
+// precedence (lens.csv > flag > EXIF > derived), and depth maps.
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "dpsfm/colmap/io/dp_images.h"
+#include "dpsfm/colmap/io/lens_data.h"
+#include "dpsfm/colmap/io/workspace_reader.h"
+#include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/util/check.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A TIFF block written byte by byte, in either byte order: IFD0, an Exif
+// IFD (pointed to from IFD0) and optionally a maker-note IFD (the value of
+// the Exif IFD's MakerNote entry, offsets from the TIFF header as Canon
+// writes them). Values longer than 4 bytes go into a data area at the end.
+class TiffWriter {
+ public:
+  explicit TiffWriter(bool big_endian) : big_(big_endian) {}
+
+  struct Entry {
+    uint16_t tag, type;
+    uint32_t count;
+    std::string value;  // already in the file's byte order
+  };
+  std::vector<Entry> ifd0, exif, maker_note;
+
+  std::string U16(uint16_t v) const {
+    std::string out(2, '\0');
+    out[big_ ? 0 : 1] = static_cast<char>(v >> 8);
+    out[big_ ? 1 : 0] = static_cast<char>(v & 0xff);
+    return out;
+  }
+  std::string U32(uint32_t v) const {
+    std::string out(4, '\0');
+    for (int i = 0; i < 4; ++i) {
+      out[big_ ? 3 - i : i] = static_cast<char>((v >> (8 * i)) & 0xff);
+    }
+    return out;
+  }
+  Entry Ascii(uint16_t tag, const std::string& text) const {
+    return {tag,
+            2,
+            static_cast<uint32_t>(text.size() + 1),
+            text + std::string(1, '\0')};
+  }
+  Entry Rational(uint16_t tag, uint32_t num, uint32_t den) const {
+    return {tag, 5, 1, U32(num) + U32(den)};
+  }
+  Entry Shorts(uint16_t tag, const std::vector<uint16_t>& values) const {
+    std::string bytes;
+    for (uint16_t v : values) bytes += U16(v);
+    return {tag, 3, static_cast<uint32_t>(values.size()), bytes};
+  }
+
+  std::string Bytes() const {
+    auto ifd_size = [](const std::vector<Entry>& e) {
+      return static_cast<uint32_t>(2 + 12 * e.size() + 4);
+    };
+    std::vector<Entry> ifd0_entries = ifd0;
+    const bool with_exif = !exif.empty() || !maker_note.empty();
+    if (with_exif) ifd0_entries.push_back({0x8769, 4, 1, ""});
+    std::vector<Entry> exif_entries = exif;
+    if (!maker_note.empty()) exif_entries.push_back({0x927C, 7, 0, ""});
+    const uint32_t ifd0_at = 8;
+    const uint32_t exif_at = ifd0_at + ifd_size(ifd0_entries);
+    const uint32_t note_at = exif_at + ifd_size(exif_entries);
+    const uint32_t note_size = ifd_size(maker_note);
+    uint32_t data_at = note_at + (maker_note.empty() ? 0 : note_size);
+    std::string data;
+    auto write_ifd = [&](std::vector<Entry> entries) {
+      std::string out = U16(static_cast<uint16_t>(entries.size()));
+      for (Entry& e : entries) {
+        if (e.tag == 0x8769) e.value = U32(exif_at);
+        out += U16(e.tag) + U16(e.type);
+        if (e.tag == 0x927C && e.type == 7) {
+          out += U32(note_size) + U32(note_at);
+          continue;
+        }
+        out += U32(e.count);
+        if (e.value.size() <= 4) {
+          out += e.value + std::string(4 - e.value.size(), '\0');
+        } else {
+          out += U32(data_at + static_cast<uint32_t>(data.size()));
+          data += e.value;
+        }
+      }
+      return out + U32(0);
+    };
+    std::string out = big_ ? "MM" : "II";
+    out += U16(42) + U32(ifd0_at);
+    out += write_ifd(ifd0_entries);
+    if (with_exif) out += write_ifd(exif_entries);
+    if (!maker_note.empty()) out += write_ifd(maker_note);
+    return out + data;
+  }
+
+ private:
+  bool big_;
+};
+
+// A small JPEG with `tiff` as its APP1 Exif segment (inserted after SOI).
+std::string JpegWithExif(const std::string& tiff) {
+  const std::string payload = std::string("Exif\0\0", 6) + tiff;
+  std::string app1 = "\xFF\xE1";
+  const uint16_t length = static_cast<uint16_t>(payload.size() + 2);
+  app1.push_back(static_cast<char>(length >> 8));
+  app1.push_back(static_cast<char>(length & 0xff));
+  app1 += payload;
+  std::vector<uchar> jpeg;
+  cv::imencode(
+      ".jpg", cv::Mat(16, 16, CV_8UC3, cv::Scalar(90, 120, 200)), jpeg);
+  const std::string bytes(jpeg.begin(), jpeg.end());
+  return bytes.substr(0, 2) + app1 + bytes.substr(2);
+}
+
+// A small PNG with `tiff` as an eXIf chunk after IHDR (CRC not checked by
+// readers of metadata; written as zeros).
+std::string PngWithExif(const std::string& tiff) {
+  std::vector<uchar> png;
+  cv::imencode(".png", cv::Mat(8, 8, CV_8UC1, cv::Scalar(7)), png);
+  const std::string bytes(png.begin(), png.end());
+  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
+  std::string chunk;
+  const uint32_t n = static_cast<uint32_t>(tiff.size());
+  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
+  chunk += "eXIf" + tiff + std::string(4, '\0');
+  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
+}
+
+// An image encoded as PNG with one more chunk (type, data) after IHDR, its
+// CRC-32 computed bit by bit (PNG's polynomial 0xEDB88320).
+std::string PngWithChunk(const cv::Mat& image,
+                         const std::string& type,
+                         const std::string& data) {
+  std::vector<uchar> png;
+  cv::imencode(".png", image, png);
+  const std::string bytes(png.begin(), png.end());
+  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
+  std::string chunk;
+  const uint32_t n = static_cast<uint32_t>(data.size());
+  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
+  uint32_t crc = 0xFFFFFFFFu;
+  for (const char c : type + data) {
+    crc ^= static_cast<uint8_t>(c);
+    for (int k = 0; k < 8; ++k)
+      crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  chunk += type + data;
+  for (int i = 3; i >= 0; --i)
+    chunk.push_back(static_cast<char>(crc >> (8 * i)));
+  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
+}
+
+std::string BigEndian(uint32_t v) {
+  std::string s;
+  for (int i = 3; i >= 0; --i) s.push_back(static_cast<char>(v >> (8 * i)));
+  return s;
+}
+
+TEST(ExifLens, ReadsExactRationals) {
+  TempDir dir;
+  const std::string path = dir / "IMG_1.JPG";
+  TiffWriter tiff(false);
+  tiff.exif = {tiff.Rational(0x829D, 28, 10), tiff.Rational(0x920A, 2347, 100)};
+  WriteTextFile(path, JpegWithExif(tiff.Bytes()));
+  const ExifLens exif = ReadExifLens(path);
+  // 23.47 mm would read as 23.5 through a library's string form.
+  EXPECT_DOUBLE_EQ(exif.f_number, 2.8);
+  EXPECT_DOUBLE_EQ(exif.focal_length_mm, 23.47);
+  EXPECT_EQ(exif.focus_distance_mm, 0);
+  EXPECT_TRUE(exif.camera.empty());
+}
+
+// Make / Model / LensModel and the focus distance, in both byte orders and
+// in the three containers: the Canon maker note's window (ShotInfo [19]
+// upper, [20] lower, cm) wins over SubjectDistance.
+TEST(ExifLens, CameraLensAndFocusDistance) {
+  for (const bool big : {false, true}) {
+    TiffWriter tiff(big);
+    tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"),
+                 tiff.Ascii(0x0110, "Canon EOS R6m2")};
+    tiff.exif = {tiff.Rational(0x829D, 4, 1),
+                 tiff.Rational(0x920A, 50, 1),
+                 tiff.Rational(0x9206, 1230, 1000),
+                 tiff.Ascii(0xA434, "RF50mm F1.8 STM")};
+    std::vector<uint16_t> shot(34, 0);
+    shot[0] = 68;
+    shot[19] = 98;  // upper, cm
+    shot[20] = 94;  // lower
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    TempDir dir;
+    for (const std::string& name : {"a.jpg", "a.tif", "a.png"}) {
+      const std::string bytes = name == "a.jpg"   ? JpegWithExif(tiff.Bytes())
+                                : name == "a.png" ? PngWithExif(tiff.Bytes())
+                                                  : tiff.Bytes();
+      WriteTextFile(dir / name, bytes);
+      const ExifLens exif = ReadExifLens(dir / name);
+      SCOPED_TRACE(name + (big ? " MM" : " II"));
+      EXPECT_EQ(exif.camera, "Canon / Canon EOS R6m2");
+      EXPECT_EQ(exif.lens, "RF50mm F1.8 STM");
+      EXPECT_DOUBLE_EQ(exif.f_number, 4);
+      EXPECT_DOUBLE_EQ(exif.focal_length_mm, 50);
+      EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 960);
+      // The window [940, 980] mm is +-20 mm around 960: 4 / 192.
+      EXPECT_DOUBLE_EQ(exif.focus_bracket, 4.0 / 192);
+      EXPECT_EQ(exif.focus_source, "Canon maker note");
+    }
+    // A window of a factor 3 is still a distance (its middle, +-50 %)...
+    shot[19] = 150;
+    shot[20] = 50;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    ExifLens wide = ParseExifLens(tiff.Bytes());
+    EXPECT_DOUBLE_EQ(wide.focus_distance_mm, 1000);
+    EXPECT_DOUBLE_EQ(wide.focus_bracket, 0.5);
+    // ...a wider one is not.
+    shot[19] = 151;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    wide = ParseExifLens(tiff.Bytes());
+    EXPECT_EQ(wide.focus_source, "SubjectDistance");
+    EXPECT_EQ(wide.focus_bracket, 0);
+    shot[19] = 98;
+    shot[20] = 94;
+    // An open window (infinity as upper) is no distance: SubjectDistance.
+    shot[19] = 65535;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    ExifLens exif = ParseExifLens(tiff.Bytes());
+    EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 1230);
+    EXPECT_EQ(exif.focus_source, "SubjectDistance");
+    // Another make's maker note is not read as Canon's.
+    tiff.ifd0[0] = tiff.Ascii(0x010F, "NIKON");
+    shot[19] = 98;
+    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
+    exif = ParseExifLens(tiff.Bytes());
+    EXPECT_EQ(exif.focus_source, "SubjectDistance");
+    // SubjectDistance 0 (unknown) and 0xFFFFFFFF (infinity) are no distance.
+    tiff.exif[2] = tiff.Rational(0x9206, 0, 1);
+    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
+    tiff.exif[2] = tiff.Rational(0x9206, 0xFFFFFFFFu, 1);
+    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
+  }
+}
+
+// Cut or corrupted blocks read as "no EXIF" or partial, never crash: every
+// prefix of a valid file, and every single-byte corruption of its TIFF.
+TEST(ExifLens, TruncatedAndCorruptNeverCrash) {
+  TiffWriter tiff(false);
+  tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"), tiff.Ascii(0x0110, "R5")};
+  tiff.exif = {tiff.Rational(0x829D, 4, 1), tiff.Ascii(0xA434, "RF")};
+  tiff.maker_note = {tiff.Shorts(0x0004, std::vector<uint16_t>(34, 100))};
+  const std::string bytes = tiff.Bytes();
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    ParseExifLens(bytes.substr(0, n));
+    ParseExifLens(JpegWithExif(bytes.substr(0, n)));
+  }
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    for (const char c : {'\0', '\xff', '\x7f'}) {
+      std::string corrupt = bytes;
+      corrupt[i] = c;
+      ParseExifLens(corrupt);
+    }
+  }
+  EXPECT_DOUBLE_EQ(ParseExifLens(bytes).focus_distance_mm, 1000);
+}
+
+TEST(ExifLens, NoExifGivesZeros) {
+  TempDir dir;
+  const std::string path = dir / "plain.png";
+  cv::imwrite(path, cv::Mat(8, 8, CV_8UC1, cv::Scalar(7)));
+  const ExifLens exif = ReadExifLens(path);
+  EXPECT_EQ(exif.f_number, 0);
+  EXPECT_EQ(exif.focal_length_mm, 0);
+  EXPECT_EQ(ReadExifLens(dir / "missing.jpg").f_number, 0);
+}
+
+TEST(LensCsv, ParsesRowsAndEmptyPitch) {
+  TempDir dir;
+  WriteTextFile(dir / "lens.csv",
+                "name,focal_length_mm,f_number,pixel_pitch_um\n"
+                "a/IMG_1.JPG,50,2.8,5.36\n"
+                "IMG_2.JPG, 35 ,4,\n");
+  const auto rows = ReadLensCsv(dir / "lens.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_DOUBLE_EQ(rows.at("a/IMG_1.JPG").pixel_pitch_um, 5.36);
+  EXPECT_DOUBLE_EQ(rows.at("IMG_2.JPG").focal_length_mm, 35);
+  EXPECT_EQ(rows.at("IMG_2.JPG").pixel_pitch_um, 0);
+}
+
+TEST(LensCsv, BadFilesNameTheLine) {
+  TempDir dir;
+  WriteTextFile(dir / "header.csv", "image,f,N,p\nIMG,1,2,3\n");
+  EXPECT_THROW(ReadLensCsv(dir / "header.csv"), InputError);
+  WriteTextFile(dir / "bad.csv",
+                "name,focal_length_mm,f_number,pixel_pitch_um\nIMG,50,-2,\n");
+  try {
+    ReadLensCsv(dir / "bad.csv");
+    FAIL();
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("bad.csv:2"), std::string::npos)
+        << error.what();
+  }
+  WriteTextFile(dir / "twice.csv",
+                "name,focal_length_mm,f_number,pixel_pitch_um\n"
+                "IMG,50,2,\nIMG,50,2,\n");
+  EXPECT_THROW(ReadLensCsv(dir / "twice.csv"), InputError);
+}
+
+TEST(ResolveLens, Precedence) {
+  std::map<std::string, LensCsvRow> csv;
+  csv["IMG"] = LensCsvRow{50, 0, 0};
+  csv["IMG"].f_number = 2.8;
+  LensFlags flags;
+  flags.focal_length_mm = 35;
+  flags.f_number = 4;
+  ExifLens exif;
+  exif.focal_length_mm = 85;
+  exif.f_number = 1.8;
+  // lens.csv wins over flags and EXIF; pitch derived from f_mm / f_px.
+  ResolvedLens lens = ResolveLens("IMG", csv, flags, &exif, 10000.0);
+  EXPECT_EQ(lens.lens.focal_length_mm, 50);
+  EXPECT_EQ(lens.focal_length_source, "lens.csv");
+  EXPECT_EQ(lens.lens.f_number, 2.8);
+  EXPECT_DOUBLE_EQ(lens.lens.pixel_pitch_um, 5.0);
+  EXPECT_EQ(lens.pixel_pitch_source, "derived f_mm/f_px");
+  // Flags win over EXIF.
+  lens = ResolveLens("OTHER", csv, flags, &exif, 10000.0);
+  EXPECT_EQ(lens.lens.focal_length_mm, 35);
+  EXPECT_EQ(lens.f_number_source, "flag");
+  // EXIF when nothing else.
+  lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
+  EXPECT_EQ(lens.lens.f_number, 1.8);
+  EXPECT_EQ(lens.f_number_source, "EXIF");
+  // The recorded focus: lens.csv, else EXIF, else none (NaN).
+  EXPECT_TRUE(std::isnan(lens.lens.recorded_focus_mm));
+  EXPECT_TRUE(lens.focus_source.empty());
+  exif.focus_distance_mm = 960;
+  exif.focus_source = "Canon maker note";
+  lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
+  EXPECT_EQ(lens.lens.recorded_focus_mm, 960);
+  EXPECT_EQ(lens.focus_source, "EXIF Canon maker note");
+  csv["IMG"].focus_distance_m = 1.25;
+  lens = ResolveLens("IMG", csv, LensFlags(), &exif, 10000.0);
+  EXPECT_EQ(lens.lens.recorded_focus_mm, 1250);
+  EXPECT_EQ(lens.focus_source, "lens.csv");
+  // Nothing: the error names the image and the three ways.
+  try {
+    ResolveLens("OTHER", csv, LensFlags(), nullptr, 10000.0);
+    FAIL();
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("OTHER"), std::string::npos);
+    EXPECT_NE(message.find("--lens_path"), std::string::npos);
+    EXPECT_NE(message.find("--DPScaleEstimator.focal_length_mm"),
+              std::string::npos);
+    EXPECT_NE(message.find("EXIF"), std::string::npos);
+  }
+}
+
+WorkspaceLayout DPLayout(const TempDir& dir, bool sum) {
+  WorkspaceLayout layout;
+  layout.left_path = dir / "dp/left";
+  (sum ? layout.sum_path : layout.right_path) =
+      dir / (sum ? "dp/sum" : "dp/right");
+  fs::create_directories(layout.left_path);
+  fs::create_directories(sum ? layout.sum_path : layout.right_path);
+  return layout;
+}
+
+TEST(DPImageIndex, MatchesExactNameThenStem) {
+  TempDir dir;
+  const WorkspaceLayout layout = DPLayout(dir, false);
+  for (const char* side : {"left", "right"}) {
+    WriteTextFile(dir / (std::string("dp/") + side + "/sub/IMG_1.png"), "x");
+    WriteTextFile(dir / (std::string("dp/") + side + "/IMG_2.JPG"), "x");
+  }
+  const DPImageIndex index(layout);
+  // Model IMG_1.JPG in sub/ matches sub/IMG_1.png; exact names win.
+  EXPECT_EQ(index.Find("sub/IMG_1.JPG").left, dir / "dp/left/sub/IMG_1.png");
+  EXPECT_EQ(index.Find("IMG_2.JPG").right, dir / "dp/right/IMG_2.JPG");
+  EXPECT_FALSE(index.HasLeft("IMG_1.JPG"));  // sub-folders are kept
+  try {
+    index.Find("IMG_3.JPG");
+    FAIL();
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("IMG_3.JPG"), std::string::npos);
+  }
+}
+
+TEST(DPImageIndex, AmbiguousStemIsAnError) {
+  TempDir dir;
+  const WorkspaceLayout layout = DPLayout(dir, false);
+  WriteTextFile(dir / "dp/left/IMG.png", "x");
+  WriteTextFile(dir / "dp/left/IMG.tif", "x");
+  WriteTextFile(dir / "dp/right/IMG.png", "x");
+  const DPImageIndex index(layout);
+  EXPECT_THROW(index.Find("IMG.JPG"), InputError);
+}
+
+TEST(LoadDPFrames, SixteenBitSumFrameAndSwap) {
+  TempDir dir;
+  cv::Mat left(10, 12, CV_16UC1, cv::Scalar(10000));
+  cv::Mat sum(10, 12, CV_16UC1, cv::Scalar(30000));
+  cv::imwrite(dir / "left.png", left);
+  cv::imwrite(dir / "sum.tif", sum);
+  DPFramePaths paths;
+  paths.left = dir / "left.png";
+  paths.sum = dir / "sum.tif";
+  DPFrames frames = LoadDPFrames(paths, false);
+  ASSERT_EQ(frames.left.type(), CV_32FC1);
+  EXPECT_NEAR(frames.left.at<float>(3, 4), 10000 / 65535.0, 1e-6);
+  EXPECT_NEAR(frames.right.at<float>(3, 4), 20000 / 65535.0, 1e-6);
+  frames = LoadDPFrames(paths, true);
+  EXPECT_NEAR(frames.left.at<float>(3, 4), 20000 / 65535.0, 1e-6);
+  // A "sum" darker than the left view is not a sum.
+  cv::imwrite(dir / "dark.png", cv::Mat(10, 12, CV_16UC1, cv::Scalar(9000)));
+  paths.sum = dir / "dark.png";
+  EXPECT_THROW(LoadDPFrames(paths, false), InputError);
+}
+
+// What a file says about its encoding: PNG sRGB / iCCP / gAMA chunks and
+// EXIF ColorSpace; nothing said = kAuto.
+TEST(DeclaredEncoding, ChunksAndExif) {
+  const cv::Mat image(4, 4, CV_16UC1, cv::Scalar(1000));
+  auto declared = [](const std::string& bytes) {
+    return ParseDeclaredEncoding(bytes).encoding;
+  };
+  EXPECT_EQ(declared(PngWithChunk(image, "tEXt", std::string("a\0b", 3))),
+            DPEncoding::kAuto);
+  EXPECT_EQ(declared(PngWithChunk(image, "sRGB", std::string(1, '\0'))),
+            DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(100000))),
+            DPEncoding::kLinear);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(45455))),
+            DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(70000))),
+            DPEncoding::kAuto);
+  EXPECT_EQ(declared(PngWithChunk(
+                image, "iCCP", std::string("Linear Rec2020\0\0x", 17))),
+            DPEncoding::kLinear);
+  EXPECT_EQ(
+      declared(PngWithChunk(image, "iCCP", std::string("Display P3\0\0x", 13))),
+      DPEncoding::kSrgb);
+  TiffWriter tiff(false);
+  tiff.exif = {tiff.Shorts(0xA001, {1})};
+  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kSrgb);
+  EXPECT_EQ(declared(JpegWithExif(tiff.Bytes())), DPEncoding::kSrgb);
+  EXPECT_EQ(declared(PngWithExif(tiff.Bytes())), DPEncoding::kSrgb);
+  tiff.exif = {tiff.Shorts(0xA001, {0xFFFF})};  // uncalibrated
+  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kAuto);
+}
+
+// Frames reach the core in linear light: 8-bit code 128 is sRGB by default
+// (0.2158605 by the standard's curve), 16-bit files are linear, a gAMA 1.0
+// chunk makes an 8-bit file linear, the flag overrides the file, a sum
+// frame is subtracted in linear light, and two views that encode light
+// differently are refused.
+TEST(LoadDPFrames, BroughtToLinearLight) {
+  TempDir dir;
+  const cv::Mat grey8(6, 6, CV_8UC1, cv::Scalar(128));
+  cv::imwrite(dir / "l8.png", grey8);
+  cv::imwrite(dir / "r8.png", grey8);
+  DPFramePaths paths;
+  paths.left = dir / "l8.png";
+  paths.right = dir / "r8.png";
+  DPFrames frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kSrgb);
+  EXPECT_EQ(frames.encoding_reason, "8-bit file");
+  EXPECT_EQ(frames.bits, 8);
+  EXPECT_FALSE(frames.lossy);
+  EXPECT_NEAR(frames.left.at<float>(2, 2), 0.2158605, 1e-6);
+  frames = LoadDPFrames(paths, false, DPEncoding::kLinear);
+  EXPECT_NEAR(frames.right.at<float>(2, 2), 128 / 255.0, 1e-6);
+  EXPECT_EQ(frames.encoding_reason, "--DPScaleEstimator.dp_encoding");
+
+  const cv::Mat grey16(6, 6, CV_16UC1, cv::Scalar(32768));
+  cv::imwrite(dir / "l16.png", grey16);
+  cv::imwrite(dir / "r16.png", grey16);
+  paths.left = dir / "l16.png";
+  paths.right = dir / "r16.png";
+  frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kLinear);
+  EXPECT_NEAR(frames.left.at<float>(0, 0), 32768 / 65535.0, 1e-6);
+
+  WriteTextFile(dir / "g8.png", PngWithChunk(grey8, "gAMA", BigEndian(100000)));
+  paths.left = dir / "g8.png";
+  paths.right = dir / "r8.png";
+  EXPECT_THROW(LoadDPFrames(paths, false), InputError);  // linear vs sRGB
+  paths.right = dir / "g8.png";
+  frames = LoadDPFrames(paths, false);
+  EXPECT_EQ(frames.encoding, DPEncoding::kLinear);
+  EXPECT_EQ(frames.encoding_reason, "PNG gAMA 1");
+  EXPECT_NEAR(frames.left.at<float>(1, 1), 128 / 255.0, 1e-6);
+
+  // A + B = code 200, A = code 128, both sRGB: B = lin(200) - lin(128)
+  // = 0.5775804 - 0.2158605.
+  cv::imwrite(dir / "sum8.png", cv::Mat(6, 6, CV_8UC1, cv::Scalar(200)));
+  DPFramePaths sum_paths;
+  sum_paths.left = dir / "l8.png";
+  sum_paths.sum = dir / "sum8.png";
+  frames = LoadDPFrames(sum_paths, false);
+  EXPECT_NEAR(frames.right.at<float>(3, 3), 0.5775804 - 0.2158605, 1e-6);
+}
+
+TEST(LoadDPFrames, EightBitColour) {
+  TempDir dir;
+  cv::imwrite(dir / "l.jpg", cv::Mat(8, 8, CV_8UC3, cv::Scalar(255, 0, 51)));
+  cv::imwrite(dir / "r.png", cv::Mat(8, 8, CV_8UC3, cv::Scalar(0, 255, 0)));
+  DPFramePaths paths;
+  paths.left = dir / "l.jpg";
+  paths.right = dir / "r.png";
+  const DPFrames frames = LoadDPFrames(paths, false);
+  ASSERT_EQ(frames.left.type(), CV_32FC3);
+  EXPECT_NEAR(frames.right.at<cv::Vec3f>(2, 2)[1], 1.0, 1e-6);
+  EXPECT_TRUE(frames.lossy);
+  EXPECT_EQ(frames.encoding, DPEncoding::kSrgb);
+}
+
+// Frames are decoded by OpenImageIO (as COLMAP 4 reads images) and come out
+// as OpenCV's decoder gave them: colour in B, G, R order (written here by
+// OpenCV's encoder, an independent library), each 16-bit value exactly.
+TEST(ReadDPFrameFile, ChannelOrderAndSixteenBitValues) {
+  TempDir dir;
+  cv::Mat colour(4, 6, CV_16UC3);
+  for (int y = 0; y < colour.rows; ++y) {
+    for (int x = 0; x < colour.cols; ++x) {
+      colour.at<cv::Vec3w>(y, x) = cv::Vec3w(1000 + x, 30000 + y, 65535 - x);
+    }
+  }
+  for (const std::string name : {"c.png", "c.tif"}) {
+    ASSERT_TRUE(cv::imwrite(dir / name, colour));
+    const DPFrameFile file = ReadDPFrameFile(dir / name);
+    EXPECT_EQ(file.bits, 16) << name;
+    ASSERT_EQ(file.values.type(), CV_32FC3) << name;
+    for (int y = 0; y < colour.rows; ++y) {
+      for (int x = 0; x < colour.cols; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_FLOAT_EQ(file.values.at<cv::Vec3f>(y, x)[c] * 65535.0f,
+                          colour.at<cv::Vec3w>(y, x)[c])
+              << name << " " << x << "," << y << "," << c;
+        }
+      }
+    }
+  }
+}
+
+// Floating-point frames (what COLMAP 4 reads from EXR or float TIFF) are
+// taken as stored, in linear light.
+TEST(ReadDPFrameFile, FloatFramesAreLinear) {
+  TempDir dir;
+  cv::Mat grey(5, 7, CV_32FC1);
+  for (int i = 0; i < grey.rows * grey.cols; ++i) {
+    grey.at<float>(i) = 0.01f * i;
+  }
+  ASSERT_TRUE(cv::imwrite(dir / "f.tif", grey));
+  const DPFrameFile file = ReadDPFrameFile(dir / "f.tif");
+  EXPECT_EQ(file.bits, 32);
+  ASSERT_EQ(file.values.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(file.values.at<float>(3, 4), 0.01f * (3 * 7 + 4));
+  std::string reason;
+  EXPECT_EQ(DecideEncoding(DPEncoding::kAuto, file, &reason),
+            DPEncoding::kLinear);
+  EXPECT_EQ(reason, "32-bit file");
+}
+
+TEST(ReadDPFrameFile, UnreadableFileIsNamed) {
+  TempDir dir;
+  WriteTextFile(dir / "bad.png", "\x89PNG\r\n\x1a\nnot really");
+  try {
+    ReadDPFrameFile(dir / "bad.png");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("cannot read DP view"),
+              std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("bad.png"), std::string::npos);
+  }
+}
+
+// Sparse mode with DP frames of half the model's size: a triangulated
+// point observed at the centre of DP pixel (i, j), model pixel coordinates
+// (2 i + 1, 2 j + 1) with COLMAP's top-left centre at 0.5, lands at exactly
+// (i, j) in the frame (the inverse of the dense path's (x + 0.5) k; it was
+// (xy - 0.5) / k, a quarter pixel off), at its depth along the optical axis.
+TEST(WorkspaceReader, SparseDepthPointsInHalfSizeFrames) {
+  TempDir dir;
+  const std::string model = dir / "sparse";
+  std::filesystem::create_directories(model);
+  colmap::Reconstruction reconstruction;
+  AddCamera(&reconstruction,
+            colmap::Camera::CreateFromModelName(1, "PINHOLE", 40, 40, 30));
+  const std::vector<std::pair<int, int>> dp_pixels = {{3, 4}, {10, 7}, {0, 0}};
+  std::vector<Eigen::Vector2d> points2D;
+  for (const auto& ij : dp_pixels) {
+    points2D.emplace_back(2 * ij.first + 1, 2 * ij.second + 1);
+  }
+  colmap::Image image;
+  image.SetImageId(1);
+  image.SetName("v.png");
+  image.SetCameraId(1);
+  image.SetPoints2D(points2D);
+  AddRegisteredImage(&reconstruction, image, colmap::Rigid3d());
+  const double z = 2.5;
+  for (size_t i = 0; i < points2D.size(); ++i) {
+    colmap::Track track;
+    track.AddElement(1, static_cast<colmap::point2D_t>(i));
+    const Eigen::Vector3d xyz(
+        (points2D[i].x() - 20) / 40 * z, (points2D[i].y() - 15) / 40 * z, z);
+    reconstruction.AddPoint3D(xyz, track, Eigen::Vector3ub(0, 0, 0));
+  }
+  reconstruction.WriteBinary(model);
+  for (const char* side : {"left", "right"}) {
+    std::filesystem::create_directories(dir / (std::string("dp/") + side));
+    cv::imwrite(dir / (std::string("dp/") + side + "/v.png"),
+                cv::Mat(15, 20, CV_8UC1, cv::Scalar(100)));
+  }
+  ScaleRunOptions options;
+  options.input_path = model;
+  options.dp_image_path = dir / "dp";
+  options.focal_length_mm = 50;
+  options.f_number = 2;
+  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+  const WorkspaceReader reader(options, layout);
+  const DPView view = reader.LoadView(0);
+  ASSERT_EQ(view.left.cols, 20);
+  ASSERT_EQ(view.depth_points.size(), dp_pixels.size());
+  for (size_t i = 0; i < dp_pixels.size(); ++i) {
+    EXPECT_DOUBLE_EQ(view.depth_points[i].x, dp_pixels[i].first) << i;
+    EXPECT_DOUBLE_EQ(view.depth_points[i].y, dp_pixels[i].second) << i;
+    EXPECT_NEAR(view.depth_points[i].depth, z, 1e-12) << i;
+  }
+}
+
+TEST(DPFrameDownsampling, IntegerFractionsOnly) {
+  EXPECT_EQ(DPFrameDownsampling(cv::Size(6720, 4480), 6720, 4480, "a"), 1);
+  EXPECT_EQ(DPFrameDownsampling(cv::Size(2016, 1512), 4032, 3024, "a"), 2);
+  EXPECT_EQ(DPFrameDownsampling(cv::Size(2016, 1512), 4033, 3025, "a"), 2);
+  EXPECT_THROW(DPFrameDownsampling(cv::Size(3000, 2000), 6720, 4480, "a"),
+               InputError);
+  EXPECT_THROW(DPFrameDownsampling(cv::Size(2016, 1000), 4032, 3024, "a"),
+               InputError);
+}
+
+std::string DepthMapBytes(int width, int height, const std::vector<float>& v) {
+  std::string bytes =
+      std::to_string(width) + "&" + std::to_string(height) + "&1&";
+  bytes.append(reinterpret_cast<const char*>(v.data()), v.size() * 4);
+  return bytes;
+}
+
+TEST(ReadColmapDepthMap, ReadsRowMajor) {
+  TempDir dir;
+  WriteTextFile(dir / "d.bin", DepthMapBytes(3, 2, {1, 2, 3, 4, 5, -1}));
+  const cv::Mat depth = ReadColmapDepthMap(dir / "d.bin");
+  ASSERT_EQ(depth.size(), cv::Size(3, 2));
+  EXPECT_EQ(depth.at<float>(0, 2), 3);
+  EXPECT_EQ(depth.at<float>(1, 0), 4);
+  EXPECT_EQ(depth.at<float>(1, 2), -1);
+}
+
+TEST(ReadColmapDepthMap, RejectsBadFilesNamingThem) {
+  TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"truncated.bin", DepthMapBytes(3, 2, {1, 2, 3}).substr(0, 14)},
+      {"long.bin", DepthMapBytes(3, 2, {1, 2, 3, 4, 5, 6, 7})},
+      {"header.bin", "3&x&1&"},
+      {"channels.bin", "1&1&2&12345678"},
+      {"nan.bin", DepthMapBytes(1, 2, {1, std::nanf("")})},
+      {"inf.bin", DepthMapBytes(1, 1, {INFINITY})}};
+  for (const auto& item : cases) {
+    WriteTextFile(dir / item.first, item.second);
+    try {
+      ReadColmapDepthMap(dir / item.first);
+      ADD_FAILURE() << item.first << " was accepted";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(item.first), std::string::npos)
+          << error.what();
+    }
+  }
+  EXPECT_THROW(ReadColmapDepthMap(dir / "missing.bin"), InputError);
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+TEST(ResampleDepthToFrame, FollowsTheDistortion) {
+  // Original camera with strong barrel distortion, undistorted PINHOLE of
+  // another size; the depth map is half the undistorted size and encodes
+  // its own pixel position, so every resampled value says where it came
+  // from.
+  colmap::Camera original =
+      colmap::Camera::CreateFromModelName(1, "SIMPLE_RADIAL", 500, 400, 300);
+  original.params[3] = -0.2;
+  const colmap::Camera undistorted =
+      colmap::Camera::CreateFromModelName(2, "PINHOLE", 480, 440, 330);
+  cv::Mat depth(165, 220, CV_32FC1);
+  for (int r = 0; r < depth.rows; ++r) {
+    for (int c = 0; c < depth.cols; ++c) {
+      depth.at<float>(r, c) = 1 + c + 1000 * r;
+    }
+  }
+  const int k = 2;  // DP frames at half the original size
+  const cv::Mat mapped =
+      ResampleDepthToFrame(depth, undistorted, original, cv::Size(200, 150), k);
+  ASSERT_EQ(mapped.size(), cv::Size(200, 150));
+  int checked = 0;
+  for (int y = 0; y < 150; y += 7) {
+    for (int x = 0; x < 200; x += 7) {
+      const float value = mapped.at<float>(y, x);
+      if (value == 0) continue;  // outside the undistorted view
+      const int col = static_cast<int>(value - 1) % 1000;
+      const int row = static_cast<int>(value - 1) / 1000;
+      // Back to the original image through the undistorted camera: it must
+      // land on this frame pixel (within the depth map's 2 px cells).
+      const Eigen::Vector2d centre((col + 0.5) * 2, (row + 0.5) * 2);
+      const std::optional<Eigen::Vector2d> ray =
+          CamFromImg(undistorted, centre);
+      ASSERT_TRUE(ray.has_value());
+      const std::optional<Eigen::Vector2d> in_original =
+          ImgFromCam(original, ray->homogeneous());
+      ASSERT_TRUE(in_original.has_value());
+      EXPECT_NEAR(in_original->x(), (x + 0.5) * k, 3.0) << x << "," << y;
+      EXPECT_NEAR(in_original->y(), (y + 0.5) * k, 3.0) << x << "," << y;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400);
+  // The principal points correspond: frame centre -> depth map centre.
+  const float centre_value = mapped.at<float>(75, 100);
+  EXPECT_NEAR(static_cast<int>(centre_value - 1) % 1000, 110, 2);
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm
+
+namespace dpsfm {
+namespace test {
+namespace {
+
+TEST(ScaleRunOptions, CheckNamesTheFlag) {
+  ScaleRunOptions options;
+  EXPECT_FALSE(options.Check());
+  EXPECT_NE(OptionCheckFailure().find("give exactly one of --workspace_path"),
+            std::string::npos)
+      << OptionCheckFailure();
+  options.input_path = "sparse";
+  options.dp_image_path = "dp";
+  EXPECT_TRUE(options.Check()) << OptionCheckFailure();
+  options.f_number = -4;
+  EXPECT_FALSE(options.Check());
+  EXPECT_EQ(OptionCheckFailure(),
+            "--DPScaleEstimator.f_number must be a positive number, got -4");
+  options.f_number = 0;
+  options.prefetch_views = 9;
+  EXPECT_FALSE(options.Check());
+  EXPECT_NE(OptionCheckFailure().find("prefetch_views must be in [0, 8]"),
+            std::string::npos);
+  options.prefetch_views = 1;
+  options.view_budget.check_every = 0;
+  EXPECT_FALSE(options.Check());
+  EXPECT_EQ(OptionCheckFailure(),
+            "invalid DPScaleEstimator view budget: check_every >= 1 (got 0)");
+  // The layout acts on it: an InputError with the same line.
+  try {
+    ResolveWorkspaceLayout(options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "invalid DPScaleEstimator view budget: check_every >= 1 (got 0)");
+  }
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace dpsfm

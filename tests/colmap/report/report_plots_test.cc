@@ -1,0 +1,358 @@
+// Report pictures: files are written as PNGs of the expected size with
+// content, patch colours mean what the legend says, and odd results (NaN,
+// empty, failed) still give pictures instead of exceptions.
+#include "dpsfm/colmap/report/report_plots.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "dpsfm/core/optics/lens_model.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A plausible successful result: `num_views` views of one scene, patches
+// whose measured blur follows the thin-lens model plus noise, a loss curve
+// with a minimum near the scale.
+DPScaleResult RealisticResult(int num_views, double resize_factor = 1.0) {
+  DPScaleResult result;
+  result.success = true;
+  result.scale = 0.42;
+  result.scale_initial = 0.41;
+  result.scale_ci_low = 0.40;
+  result.scale_ci_high = 0.44;
+  result.scale_initial_ci_low = 0.39;
+  result.scale_initial_ci_high = 0.43;
+  result.intensity_used = true;
+  result.intensity_status = "adopted (95 % interval 9.5 % of the scale)";
+  result.scale_intensity = 0.42;
+  result.intensity_ci_low = 0.40;
+  result.intensity_ci_high = 0.44;
+  result.intensity_bootstrap_support = 0.87;
+  result.intensity_loss = "noise-corrected L2";
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0, 0.15);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  for (int v = 0; v < num_views; ++v) {
+    DPViewResult view;
+    view.name =
+        "cam" + std::to_string(v % 3) + "/DP_" + std::to_string(v) + ".jpg";
+    view.used = v != 1;
+    view.reason = view.used ? "used" : "predicted blur range too small";
+    view.lens.focal_length_mm = 50;
+    view.lens.f_number = 2.8;
+    view.lens.pixel_pitch_um = 30;
+    view.focus_distance_model = 2.5 + 0.3 * v;
+    view.focus_distance_m = result.scale * view.focus_distance_model;
+    result.views.push_back(view);
+    const double working_pitch_mm = view.lens.PixelPitchMm() / resize_factor;
+    for (int k = 0; k < 60; ++k) {
+      PatchSample s;
+      s.view = v;
+      s.x = 20 + 1160 * uniform(rng);
+      s.y = 20 + 760 * uniform(rng);
+      s.depth = 1.5 + 4 * uniform(rng);
+      s.predicted_radius_px = PredictBlurRadiusPx(view.lens,
+                                                  working_pitch_mm,
+                                                  result.scale,
+                                                  view.focus_distance_model,
+                                                  s.depth);
+      s.radius_px = s.predicted_radius_px + noise(rng) * resize_factor;
+      s.radius_frame_px = s.radius_px / resize_factor;
+      s.confidence = uniform(rng);
+      s.selected = k < 40;
+      s.used = s.selected && view.used;
+      result.patches.push_back(s);
+    }
+  }
+  for (int i = 0; i <= 100; ++i) {
+    const double s = 0.08 + 0.68 * i / 100.0;
+    result.candidate_scales.push_back(s);
+    result.candidate_losses.push_back(10 + 200 * (s - 0.42) * (s - 0.42));
+  }
+  return result;
+}
+
+bool IsPng(const std::string& path) {
+  const std::string bytes = test::ReadTextFile(path);
+  return bytes.size() > 8 && bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0;
+}
+
+double PixelStdDev(const cv::Mat& image) {
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(image, mean, stddev);
+  return (stddev[0] + stddev[1] + stddev[2]) / 3;
+}
+
+// Mean BGR over a small window around `p` (robust to anti-aliased edges).
+cv::Vec3d MeanColourAround(const cv::Mat& image, const cv::Point2d& p) {
+  const cv::Rect window(static_cast<int>(std::lround(p.x)) - 2,
+                        static_cast<int>(std::lround(p.y)) - 2,
+                        5,
+                        5);
+  const cv::Scalar mean =
+      cv::mean(image(window & cv::Rect(0, 0, image.cols, image.rows)));
+  return cv::Vec3d(mean[0], mean[1], mean[2]);
+}
+
+// Example pictures for a person to look at: DPSFM_PLOT_DUMP_DIR=/some/dir.
+void MaybeDump(const cv::Mat& image, const std::string& name) {
+  const char* dir = std::getenv("DPSFM_PLOT_DUMP_DIR");
+  if (dir == nullptr || image.empty()) return;
+  cv::imwrite(std::string(dir) + "/" + name, image);
+}
+
+TEST(ReportPlots, BlurFitAndLossPlotsAreWrittenAsNonBlankPngs) {
+  test::TempDir dir;
+  const DPScaleResult result = RealisticResult(4);
+  ASSERT_TRUE(WriteBlurFitPlot(result, dir / "blur.png"));
+  ASSERT_TRUE(WriteLossCurvePlot(result, dir / "loss.png"));
+  for (const std::string name : {"blur.png", "loss.png"}) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(IsPng(dir / name));
+    const cv::Mat image = cv::imread(dir / name, cv::IMREAD_COLOR);
+    ASSERT_FALSE(image.empty());
+    EXPECT_EQ(image.cols, 1000);
+    EXPECT_EQ(image.rows, 700);
+    EXPECT_GT(PixelStdDev(image), 10);
+    MaybeDump(image, "realistic_" + name);
+  }
+}
+
+TEST(ReportPlots, BlurFitShowsEveryUsedViewInItsColour) {
+  // Used views get the palette's colours, so their points must be on the
+  // picture: tab10 blue (view with the most points) appears in many pixels.
+  const cv::Mat image = RenderBlurFitPlot(RealisticResult(3));
+  const cv::Vec3b tab_blue(180, 119, 31);
+  int count = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      if (image.at<cv::Vec3b>(y, x) == tab_blue) ++count;
+    }
+  }
+  EXPECT_GT(count, 200);
+}
+
+TEST(ReportPlots, ManyViewsAndResizedFramesStillDraw) {
+  const DPScaleResult result = RealisticResult(14, 0.5);
+  const cv::Mat image = RenderBlurFitPlot(result);
+  ASSERT_FALSE(image.empty());
+  EXPECT_GT(PixelStdDev(image), 10);
+  MaybeDump(image, "many_views_blur.png");
+}
+
+DPScaleResult TwoPatchResult() {
+  DPScaleResult result;
+  result.success = true;
+  result.scale = 1;
+  DPViewResult view;
+  view.name = "DP_0001.jpg";
+  view.used = true;
+  result.views.push_back(view);
+  PatchSample far;
+  far.view = 0;
+  far.x = 100;
+  far.y = 80;
+  far.depth = 3;
+  far.radius_px = far.radius_frame_px = 3;
+  far.selected = far.used = true;
+  PatchSample near = far;
+  near.x = 300;
+  near.y = 220;
+  near.radius_px = near.radius_frame_px = -3;
+  // A patch of another view at the same place must not be drawn.
+  PatchSample other = far;
+  other.view = 1;
+  other.x = 200;
+  other.y = 150;
+  result.patches = {far, near, other};
+  return result;
+}
+
+TEST(ReportPlots, OverlayColoursPositiveBlurRedAndNegativeBlue) {
+  const cv::Mat image(300, 400, CV_32FC1, cv::Scalar(0.05));
+  const DPScaleResult result = TwoPatchResult();
+  const cv::Mat overlay =
+      RenderPatchOverlay(image, "DP_0001.jpg", 0, result, 40);
+  ASSERT_FALSE(overlay.empty());
+  MaybeDump(overlay, "two_patches.png");
+
+  const cv::Vec3d far =
+      MeanColourAround(overlay, PatchOverlayPoint(image.size(), 100, 80));
+  const cv::Vec3d near =
+      MeanColourAround(overlay, PatchOverlayPoint(image.size(), 300, 220));
+  const cv::Vec3d background =
+      MeanColourAround(overlay, PatchOverlayPoint(image.size(), 200, 150));
+  EXPECT_GT(far[2], far[0] + 40) << far;     // red over blue
+  EXPECT_GT(near[0], near[2] + 40) << near;  // blue over red
+  // Grey background, untouched by the other view's patch.
+  EXPECT_NEAR(background[0], background[2], 3) << background;
+}
+
+TEST(ReportPlots, OverlayOfLargeColourFrameIsDownscaledTo1600) {
+  test::TempDir dir;
+  cv::Mat image(2000, 3000, CV_32FC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(0.1));  // dark linear
+  DPScaleResult result = TwoPatchResult();
+  result.patches[0].x = 2500;
+  result.patches[0].y = 1500;
+  result.patches[1].x = 500;
+  result.patches[1].y = 400;
+  ASSERT_TRUE(WritePatchOverlay(image, "big", 0, result, 150, dir / "o.png"));
+  const cv::Mat overlay = cv::imread(dir / "o.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(overlay.empty());
+  EXPECT_TRUE(IsPng(dir / "o.png"));
+  const cv::Point2d corner = PatchOverlayPoint(image.size(), 2999.5, 1999.5);
+  EXPECT_NEAR(
+      corner.x - PatchOverlayPoint(image.size(), -0.5, -0.5).x, 1600, 1);
+  EXPECT_LE(overlay.cols, 1600 + 250);
+  EXPECT_GT(overlay.cols, 1600);
+  EXPECT_GT(overlay.rows, 1067);
+  const cv::Vec3d far =
+      MeanColourAround(overlay, PatchOverlayPoint(image.size(), 2500, 1500));
+  const cv::Vec3d near =
+      MeanColourAround(overlay, PatchOverlayPoint(image.size(), 500, 400));
+  EXPECT_GT(far[2], far[0] + 40) << far;
+  EXPECT_GT(near[0], near[2] + 40) << near;
+  // The display gamma makes a dark frame visible: the image area is not
+  // near-black.
+  const cv::Point2d middle = PatchOverlayPoint(image.size(), 1500, 1000);
+  const cv::Scalar mean =
+      cv::mean(overlay(cv::Rect(static_cast<int>(middle.x) - 50,
+                                static_cast<int>(middle.y) - 50,
+                                100,
+                                100)));
+  EXPECT_GT(mean[0], 80);
+}
+
+TEST(ReportPlots, OverlayAcceptsOtherImageTypes) {
+  const DPScaleResult result = TwoPatchResult();
+  for (const int type : {CV_8UC1, CV_8UC3, CV_16UC1, CV_16UC3, CV_64FC1}) {
+    cv::Mat image(300, 400, type, cv::Scalar::all(10));
+    const cv::Mat overlay = RenderPatchOverlay(image, "", 0, result, 0);
+    EXPECT_FALSE(overlay.empty()) << type;
+  }
+  EXPECT_TRUE(RenderPatchOverlay(cv::Mat(), "x", 0, result, 40).empty());
+  test::TempDir dir;
+  EXPECT_FALSE(
+      WritePatchOverlay(cv::Mat(), "x", 0, result, 40, dir / "none.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+}
+
+TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
+  test::TempDir dir;
+  const DPScaleResult empty;
+  EXPECT_NO_THROW(EXPECT_TRUE(WriteBlurFitPlot(empty, dir / "e_blur.png")));
+  EXPECT_NO_THROW(EXPECT_TRUE(WriteLossCurvePlot(empty, dir / "e_loss.png")));
+  const cv::Mat image(50, 60, CV_32FC1, cv::Scalar(kNaN));
+  EXPECT_NO_THROW(EXPECT_TRUE(
+      WritePatchOverlay(image, "v", 0, empty, 10, dir / "e_patches.png")));
+  MaybeDump(cv::imread(dir / "e_loss.png"), "empty_loss.png");
+
+  DPScaleResult odd = RealisticResult(3);
+  odd.success = false;
+  odd.failure_reason =
+      "too few views with usable blur: 1 of 3 views passed (need 2); the "
+      "others had predicted blur ranges below T_p = 2 px, so depth does not "
+      "change blur enough in them to tell the scale";
+  odd.scale = kNaN;
+  odd.scale_ci_low = kNaN;
+  odd.scale_ci_high = kNaN;
+  odd.scale_intensity = kNaN;
+  odd.intensity_ci_low = -kNaN;
+  odd.intensity_bootstrap_support = kNaN;
+  odd.candidate_scales.push_back(kNaN);  // longer than the losses
+  odd.candidate_losses[3] = kNaN;
+  odd.candidate_losses[4] = std::numeric_limits<double>::infinity();
+  for (PatchSample& s : odd.patches) s.used = false;
+  odd.patches[0].x = kNaN;
+  odd.patches[1].depth = 0;
+  odd.patches[2].radius_frame_px = kNaN;
+  odd.patches[3].predicted_radius_px = kNaN;
+  odd.patches[4].view = 99;
+  odd.patches[5].view = -1;
+  odd.patches[6].x = 1e300;
+  odd.patches[7].radius_frame_px = 1e300;
+  odd.views[0].focus_distance_model = kNaN;
+  odd.views[0].focus_distance_m = kNaN;
+  const cv::Mat frame(800, 1200, CV_32FC3, cv::Scalar::all(0.3));
+  std::vector<std::string> written;
+  EXPECT_NO_THROW(
+      written = WriteReportPlots(odd,
+                                 {{0, frame}, {99, frame}, {-1, cv::Mat()}},
+                                 dir / "failed.json",
+                                 33));
+  EXPECT_EQ(written.size(), 4u);
+  for (const std::string& path : written) {
+    EXPECT_TRUE(IsPng(path)) << path;
+    const cv::Mat picture = cv::imread(path);
+    EXPECT_GT(PixelStdDev(picture), 5) << path;
+    MaybeDump(picture,
+              "failed_" + std::filesystem::path(path).filename().string());
+  }
+
+  // No curve at all (intensity stage skipped).
+  DPScaleResult skipped = RealisticResult(2);
+  skipped.candidate_scales.clear();
+  skipped.candidate_losses.clear();
+  skipped.intensity_used = false;
+  skipped.intensity_status = "skipped (--intensity_refinement 0)";
+  cv::Mat loss;
+  EXPECT_NO_THROW(loss = RenderLossCurvePlot(skipped));
+  EXPECT_GT(PixelStdDev(loss), 5);
+  MaybeDump(loss, "skipped_loss.png");
+}
+
+TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
+  test::TempDir dir;
+  const DPScaleResult result = RealisticResult(4);
+  const cv::Mat frame(800, 1200, CV_32FC1, cv::Scalar(0.2));
+  const std::vector<std::string> written = WriteReportPlots(
+      result, {{0, frame}, {2, frame}}, dir / "report.json", 33);
+  const std::vector<std::string> expected = {
+      dir / "report_blur_fit.png",
+      dir / "report_loss.png",
+      dir / "report_patches_cam0_DP_0.png",
+      dir / "report_patches_cam2_DP_2.png"};
+  EXPECT_EQ(written, expected);
+  for (const std::string& path : expected) {
+    EXPECT_TRUE(IsPng(path)) << path;
+  }
+  MaybeDump(cv::imread(dir / "report_patches_cam0_DP_0.png"),
+            "realistic_patches.png");
+
+  // Two views whose names sanitise alike get distinct files.
+  DPScaleResult twins = result;
+  twins.views[1].name = "cam0_DP_0.jpg";
+  const std::vector<std::string> twin_paths =
+      WriteReportPlots(twins, {{0, frame}, {1, frame}}, dir / "twins", 33);
+  ASSERT_EQ(twin_paths.size(), 4u);
+  EXPECT_NE(twin_paths[2], twin_paths[3]);
+
+  // An unwritable location gives no paths and no exception.
+  EXPECT_TRUE(WriteReportPlots(
+                  result, {{0, frame}}, dir / "missing/dir/report.json", 33)
+                  .empty());
+}
+
+TEST(ReportPlots, FileComponentsAreSafe) {
+  EXPECT_EQ(PlotFileComponent("DP_0001.jpg"), "DP_0001");
+  EXPECT_EQ(PlotFileComponent("cam 1/sub\\DP 2.JPG"), "cam_1_sub_DP_2");
+  EXPECT_EQ(PlotFileComponent("a.b/c"), "a.b_c");
+  EXPECT_EQ(PlotFileComponent(""), "view");
+  EXPECT_EQ(PlotFileComponent("../../etc/x.png"), ".._.._etc_x");
+}
+
+}  // namespace
+}  // namespace dpsfm

@@ -1,0 +1,292 @@
+#include "dpsfm/core/scale/linear_estimator.h"
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace dpsfm {
+namespace {
+
+// A view with its own lens (multi-camera), focus g' and depths around it.
+LinearViewData MakeView(int index,
+                        double scale,
+                        int num_samples,
+                        std::mt19937* rng,
+                        double depth_spread = 0.6) {
+  LinearViewData view;
+  view.name = "view" + std::to_string(index);
+  const double focals[] = {35, 50, 85, 4.38};
+  const double fnums[] = {1.8, 2.8, 1.4, 1.73};
+  const double pitches[] = {5.36, 5.36, 5.36, 2.8};
+  const int k = index % 4;
+  view.lens.focal_length_mm = focals[k];
+  view.lens.f_number = fnums[k];
+  view.lens.pixel_pitch_um = pitches[k];
+  view.pixel_pitch_mm = view.lens.PixelPitchMm() * (k == 3 ? 1 : 2);
+  // Focus between 1 and 3 m (0.3-0.6 m for the phone), in model units.
+  std::uniform_real_distribution<double> u(0, 1);
+  const double g_m = k == 3 ? 0.3 + 0.3 * u(*rng) : 1.0 + 2.0 * u(*rng);
+  const double g_model = g_m / scale;
+  for (int j = 0; j < num_samples; ++j) {
+    const double z_model =
+        g_model * (1.0 - depth_spread + 2 * depth_spread * u(*rng)) + 1e-6;
+    LinearSample s;
+    s.depth = z_model;
+    s.radius_px = PredictBlurRadiusPx(
+        view.lens, view.pixel_pitch_mm, scale, g_model, z_model);
+    view.samples.push_back(s);
+  }
+  return view;
+}
+
+TEST(Irls, ExactOnNoiselessSamplesForAnyViewCount) {
+  const double scale = 0.137;
+  for (int n = 1; n <= 9; ++n) {
+    std::mt19937 rng(n);
+    std::vector<LinearViewData> views;
+    for (int i = 0; i < n; ++i) views.push_back(MakeView(i, scale, 12, &rng));
+    DPLinearSystem system;
+    system.num_views = n;
+    for (int i = 0; i < n; ++i) {
+      for (const auto& s : views[i].samples) {
+        system.AddRow(
+            i,
+            MakeLinearRow(
+                views[i].lens, views[i].pixel_pitch_mm, s.radius_px, s.depth));
+      }
+    }
+    const IrlsResult fit = SolveL1Irls(system, IrlsOptions());
+    ASSERT_TRUE(fit.success) << n;
+    EXPECT_NEAR(ScaleFromSbar(fit.x[n]) / scale, 1.0, 1e-7) << n;
+    EXPECT_LT(fit.residuals.cwiseAbs().maxCoeff(), 1e-6);
+  }
+}
+
+TEST(Irls, MinimalTwoPatchSystem) {
+  // Paper: two patches with distinct depths in one view determine s.
+  std::mt19937 rng(3);
+  LinearViewData view = MakeView(1, 2.5, 2, &rng);
+  DPLinearSystem system;
+  system.num_views = 1;
+  for (const auto& s : view.samples) {
+    system.AddRow(
+        0, MakeLinearRow(view.lens, view.pixel_pitch_mm, s.radius_px, s.depth));
+  }
+  const IrlsResult fit = SolveL1Irls(system, IrlsOptions());
+  ASSERT_TRUE(fit.success);
+  EXPECT_NEAR(ScaleFromSbar(fit.x[1]) / 2.5, 1.0, 1e-8);
+}
+
+TEST(Irls, RankDeficientWithoutDepthVariation) {
+  std::mt19937 rng(4);
+  LinearViewData view = MakeView(0, 1.0, 10, &rng);
+  DPLinearSystem system;
+  system.num_views = 1;
+  for (int k = 0; k < 10; ++k) {
+    system.AddRow(0,
+                  MakeLinearRow(view.lens,
+                                view.pixel_pitch_mm,
+                                view.samples[0].radius_px,
+                                view.samples[0].depth));
+  }
+  const IrlsResult fit = SolveL1Irls(system, IrlsOptions());
+  EXPECT_LT(fit.rcond, 1e-10);
+}
+
+TEST(Irls, RecoversScaleWith30PercentGrossOutliers) {
+  const double scale = 0.42;
+  for (int trial = 0; trial < 5; ++trial) {
+    std::mt19937 rng(100 + trial);
+    std::normal_distribution<double> noise(0, 0.05);
+    // Gross errors of 2-8 px of either sign on 30 % of the patches.
+    std::uniform_real_distribution<double> gross(2, 8);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<LinearViewData> views;
+    for (int i = 0; i < 4; ++i) {
+      views.push_back(MakeView(i, scale, 100, &rng));
+      for (auto& s : views.back().samples) {
+        s.radius_px +=
+            u(rng) < 0.3 ? (u(rng) < 0.5 ? -1 : 1) * gross(rng) : noise(rng);
+      }
+    }
+    LinearEstimatorOptions options;
+    options.num_bootstrap = 50;
+    const LinearEstimate est = EstimateScaleLinear(views, options);
+    ASSERT_TRUE(est.success) << est.failure_reason;
+    EXPECT_NEAR(est.scale / scale, 1.0, 0.005) << "trial " << trial;
+    EXPECT_LE(est.scale_ci_low, est.scale);
+    EXPECT_GE(est.scale_ci_high, est.scale);
+  }
+}
+
+TEST(SelectViewsNearMedian, CorrectForOneToTenViews) {
+  for (int n = 1; n <= 10; ++n) {
+    for (int nv : {1, 3, 7}) {
+      // Scales 1.0 * 1.1^(k - offset) in shuffled order: the median and its
+      // neighbours are known.
+      std::vector<double> scales(n);
+      std::vector<int> perm(n);
+      for (int k = 0; k < n; ++k) perm[k] = k;
+      std::mt19937 rng(n * 10 + nv);
+      std::shuffle(perm.begin(), perm.end(), rng);
+      for (int k = 0; k < n; ++k) scales[perm[k]] = std::pow(1.1, k);
+      const std::vector<bool> eligible(n, true);
+      const std::vector<int> sel = SelectViewsNearMedian(scales, eligible, nv);
+      ASSERT_EQ(static_cast<int>(sel.size()), std::min(n, nv))
+          << n << " " << nv;
+      // The kept views are a contiguous run of ranks around the median:
+      // every kept rank is within the kept count of the middle.
+      std::vector<int> rank_of_view(n);
+      for (int k = 0; k < n; ++k) rank_of_view[perm[k]] = k;
+      std::vector<int> ranks;
+      for (int v : sel) ranks.push_back(rank_of_view[v]);
+      std::sort(ranks.begin(), ranks.end());
+      for (size_t k = 1; k < ranks.size(); ++k) {
+        EXPECT_EQ(ranks[k], ranks[k - 1] + 1) << n << " " << nv;
+      }
+      const double mid = 0.5 * (n - 1);
+      const double centre = 0.5 * (ranks.front() + ranks.back());
+      EXPECT_LE(std::abs(centre - mid), 0.5 + 1e-9) << n << " " << nv;
+      // Sorted and unique.
+      EXPECT_TRUE(std::is_sorted(sel.begin(), sel.end()));
+    }
+  }
+}
+
+TEST(SelectViewsNearMedian, SkipsIneligibleAndInvalid) {
+  const std::vector<double> scales = {1.0, 100.0, -1.0, 1.1, NAN, 0.9, 50.0};
+  const std::vector<bool> eligible = {
+      true, true, true, true, true, true, false};
+  const std::vector<int> sel = SelectViewsNearMedian(scales, eligible, 3);
+  EXPECT_EQ(sel, (std::vector<int>{0, 3, 5}));
+}
+
+TEST(SelectTopFraction, KeepsBestTenPercentWithMinimum) {
+  std::vector<double> conf(50);
+  for (int i = 0; i < 50; ++i) conf[i] = (i * 37) % 50;
+  const std::vector<int> top = SelectTopFraction(conf, 0.1, 3);
+  ASSERT_EQ(top.size(), 5u);
+  for (int i : top) EXPECT_GE(conf[i], 45);
+  EXPECT_EQ(SelectTopFraction(conf, 0.01, 4).size(), 4u);
+  conf[7] = NAN;
+  for (int i : SelectTopFraction(conf, 0.98, 0)) EXPECT_NE(i, 7);
+  EXPECT_TRUE(SelectTopFraction({}, 0.1, 3).empty());
+}
+
+TEST(SelectTopFractionStratified, SpreadsOverDepth) {
+  // 90 patches on three planes; the nearest plane is the most textured, so a
+  // plain top 10 % takes only it.
+  std::vector<double> conf, key;
+  for (int i = 0; i < 90; ++i) {
+    const int plane = i % 3;
+    key.push_back(1.0 / (1.0 + plane));
+    conf.push_back((plane == 0 ? 100 : 10) + i * 0.01);
+  }
+  std::vector<int> plain = SelectTopFraction(conf, 0.1, 0);
+  for (int i : plain) EXPECT_EQ(i % 3, 0);
+  const std::vector<int> spread =
+      SelectTopFractionStratified(conf, key, 0.1, 0, 4);
+  ASSERT_EQ(spread.size(), plain.size());
+  int per_plane[3] = {0, 0, 0};
+  for (int i : spread) per_plane[i % 3]++;
+  for (int p = 0; p < 3; ++p) EXPECT_EQ(per_plane[p], 3) << p;
+  // strata = 1 is the plain selection.
+  EXPECT_EQ(SelectTopFractionStratified(conf, key, 0.1, 0, 1), plain);
+}
+
+TEST(EstimateScaleLinear, SelectionRecordsEveryRejection) {
+  const double scale = 0.8;
+  std::mt19937 rng(7);
+  std::vector<LinearViewData> views;
+  for (int i = 0; i < 10; ++i) views.push_back(MakeView(i, scale, 30, &rng));
+  // View 1: too few patches. View 2: no depth variation (blur varies).
+  // View 3: tiny blur.
+  // View 4: blur falling with depth (s <= 0).
+  views[1].samples.resize(2);
+  for (auto& s : views[2].samples) s.depth = views[2].samples[0].depth;
+  for (auto& s : views[3].samples) s.radius_px *= 0.05;
+  for (auto& s : views[4].samples) s.radius_px = -s.radius_px;
+  LinearEstimatorOptions options;
+  options.num_selected_views = 4;
+  options.num_bootstrap = 20;
+  const LinearEstimate est = EstimateScaleLinear(views, options);
+  ASSERT_TRUE(est.success) << est.failure_reason;
+  EXPECT_NEAR(est.scale / scale, 1.0, 1e-6);
+  EXPECT_EQ(est.views[1].rejection, ViewRejection::kTooFewPatches);
+  EXPECT_EQ(est.views[2].rejection, ViewRejection::kDegenerate);
+  EXPECT_EQ(est.views[3].rejection, ViewRejection::kSmallBlurRange);
+  EXPECT_TRUE(est.views[4].rejection == ViewRejection::kNonPositiveScale ||
+              est.views[4].rejection == ViewRejection::kNonPositiveFocus)
+      << est.views[4].reason;
+  int used = 0, far = 0;
+  for (const auto& v : est.views) {
+    EXPECT_FALSE(v.reason.empty());
+    used += v.used;
+    far += v.rejection == ViewRejection::kFarFromMedian;
+  }
+  EXPECT_EQ(used, 4);
+  EXPECT_EQ(far, 2);
+  // Every view with samples gets a focus distance under the joint scale,
+  // also the unused ones (view 3 keeps the truth since only its blur scaled).
+  for (int i : {0, 5, 6}) {
+    EXPECT_TRUE(std::isfinite(est.views[i].focus_model)) << i;
+  }
+}
+
+TEST(EstimateScaleLinear, FailureSaysWhy) {
+  std::mt19937 rng(8);
+  std::vector<LinearViewData> views;
+  for (int i = 0; i < 12; ++i) {
+    views.push_back(MakeView(i, 1.0, 20, &rng));
+    for (auto& s : views.back().samples) {
+      s.radius_px *= i < 9 ? 1e-4 : -1.0;
+    }
+  }
+  const LinearEstimate est =
+      EstimateScaleLinear(views, LinearEstimatorOptions());
+  EXPECT_FALSE(est.success);
+  EXPECT_NE(est.failure_reason.find("no view passed selection: 9 views with "
+                                    "blur range <= 2 px"),
+            std::string::npos)
+      << est.failure_reason;
+  EXPECT_TRUE(
+      EstimateScaleLinear({}, LinearEstimatorOptions()).failure_reason ==
+      "no views");
+}
+
+TEST(EstimateScaleLinear, RejectsViewsWhoseBlurIgnoresDepth) {
+  // Blur estimates of pure noise: random radii unrelated to depth.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-9, 9);
+  std::vector<LinearViewData> views;
+  for (int i = 0; i < 5; ++i) {
+    views.push_back(MakeView(i, 1.0, 30, &rng));
+    for (auto& s : views.back().samples) s.radius_px = u(rng);
+  }
+  const LinearEstimate est =
+      EstimateScaleLinear(views, LinearEstimatorOptions());
+  EXPECT_FALSE(est.success);
+  for (const auto& v : est.views) EXPECT_FALSE(v.used) << v.reason;
+  std::printf("%s\n", est.failure_reason.c_str());
+}
+
+TEST(EstimateScaleLinear, SingleViewWorks) {
+  std::mt19937 rng(9);
+  const LinearEstimate est = EstimateScaleLinear({MakeView(0, 3.0, 20, &rng)},
+                                                 LinearEstimatorOptions());
+  ASSERT_TRUE(est.success) << est.failure_reason;
+  EXPECT_NEAR(est.scale / 3.0, 1.0, 1e-7);
+}
+
+TEST(LinearEstimatorOptions, CheckIsActedOn) {
+  LinearEstimatorOptions options;
+  EXPECT_TRUE(options.Check());
+  options.min_samples_per_view = 1;
+  EXPECT_FALSE(options.Check());
+  EXPECT_THROW(EstimateScaleLinear({}, options), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dpsfm

@@ -1,0 +1,69 @@
+// Each statistic against values worked out by hand.
+#include "dpsfm/core/util/statistics.h"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace dpsfm {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+TEST(Median, OddEvenAndEmpty) {
+  EXPECT_EQ(Median({5, 1, 3}), 3);
+  // Even count: the mean of the two middle values, 2 and 7.
+  EXPECT_EQ(Median({10, 2, 7, 1}), 4.5);
+  EXPECT_TRUE(std::isnan(Median({})));
+}
+
+TEST(FiniteMedian, DropsNonFiniteValues) {
+  // Finite values 1, 4, 6: median 4 (with the infinities counted it would
+  // be (4 + 6) / 2 = 5).
+  EXPECT_EQ(FiniteMedian({6, kNaN, 1, kInf, 4}), 4);
+  EXPECT_TRUE(std::isnan(FiniteMedian({kNaN, kInf})));
+}
+
+TEST(Percentile, InterpolatesBetweenSortedValues) {
+  // Sorted 10, 20, 30, 40: q = 0.5 sits at position 1.5 -> 25;
+  // q = 0.9 at 2.7 -> 30 + 0.7 * 10 = 37.
+  const std::vector<double> v = {40, 10, 30, 20};
+  EXPECT_DOUBLE_EQ(Percentile(v, 0.5), 25);
+  EXPECT_DOUBLE_EQ(Percentile(v, 0.9), 37);
+  EXPECT_DOUBLE_EQ(Percentile(v, 0), 10);
+  EXPECT_DOUBLE_EQ(Percentile(v, 1), 40);
+  EXPECT_TRUE(std::isnan(Percentile({}, 0.5)));
+}
+
+TEST(NearestRankQuantile, PicksASample) {
+  // Sorted 10, 20, 30, 40: q = 0.5 -> rank round(1.5) = 2 -> 30 (a sample,
+  // unlike Percentile's 25); q = 0.2 -> rank round(0.6) = 1 -> 20.
+  const std::vector<double> v = {40, 10, kNaN, 30, 20};
+  EXPECT_EQ(NearestRankQuantile(v, 0.5), 30);
+  EXPECT_EQ(NearestRankQuantile(v, 0.2), 20);
+  EXPECT_EQ(NearestRankQuantile(v, 1), 40);
+  EXPECT_TRUE(std::isnan(NearestRankQuantile({kNaN}, 0.5)));
+}
+
+TEST(RankInPlace, UpperMedianAndRanks) {
+  std::vector<float> v = {4, 8, 1, 6};
+  // Ranks 0..3 of {1, 4, 6, 8}; the upper median of an even count is 6.
+  EXPECT_EQ(UpperMedianInPlace(&v), 6);
+  EXPECT_EQ(RankInPlace(&v, 0), 1);
+  EXPECT_EQ(RankInPlace(&v, 3), 8);
+  std::vector<int> odd = {9, 3, 5};
+  EXPECT_EQ(UpperMedianInPlace(&odd), 5);
+}
+
+TEST(SigmaFromMedianAbsolute, HalfNormalMedian) {
+  // Phi^-1(0.75) = 0.6744897...: a median |x| of 0.67449 is one sigma, and
+  // through a filter of gain 6, six times that is one sigma.
+  EXPECT_NEAR(SigmaFromMedianAbsolute(0.6744897), 1.0, 1e-5);
+  EXPECT_NEAR(SigmaFromMedianAbsolute(6 * 0.6744897, 6.0), 1.0, 1e-5);
+}
+
+}  // namespace
+}  // namespace dpsfm
