@@ -1,26 +1,20 @@
 #include "dpsfm/exe/dp_scale_estimator.h"
 
 #include <cstdlib>
-#include <exception>
 #include <iostream>
 
 #include "dpsfm/colmap/controllers/scale_controller.h"
 #include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/core/scale/scale_estimator.h"
+#include "dpsfm/exe/command_boundary.h"
 #include "dpsfm/exe/command_options.h"
 
 namespace dpsfm {
 namespace {
 
-// The one line a failed run leaves on stderr (besides earlier progress).
-int Fail(const std::string& message) {
-  std::cerr << "ERROR: dp_scale_estimator: " << message << std::endl;
-  return EXIT_FAILURE;
-}
-
-void AddCommandOptions(CommandOptions* manager,
-                       ScaleRunOptions* options,
-                       DPScaleOptions* core) {
+void AddRequiredOptions(CommandOptions* manager,
+                        ScaleRunOptions* options,
+                        DPScaleOptions* core) {
   manager->Group(
       "Required (and exactly one of --workspace_path, --input_path)");
   manager->AddRequired(
@@ -37,7 +31,11 @@ void AddCommandOptions(CommandOptions* manager,
                       &options->input_path,
                       "sparse model to rescale instead (e.g. sparse/0; "
                       "depths from its triangulated points, no CUDA needed)");
+}
 
+void AddLensOptions(CommandOptions* manager,
+                    ScaleRunOptions* options,
+                    DPScaleOptions* core) {
   manager->Group("Lens data (per image: lens.csv, else the flags, else EXIF)");
   manager->AddDefault(
       "lens_path",
@@ -67,7 +65,11 @@ void AddCommandOptions(CommandOptions* manager,
       "how far each image's focal length / pixel pitch may differ from its "
       "camera's focal length in pixels, as a fraction beyond focus "
       "breathing, before the run stops");
+}
 
+void AddOutputOptions(CommandOptions* manager,
+                      ScaleRunOptions* options,
+                      DPScaleOptions* core) {
   manager->Group("Output");
   manager->AddDefault("report_path",
                       &options->report_path,
@@ -86,7 +88,11 @@ void AddCommandOptions(CommandOptions* manager,
                       &options->force,
                       "rescale a workspace that was already rescaled (the "
                       "scales compose)");
+}
 
+void AddOtherInputOptions(CommandOptions* manager,
+                          ScaleRunOptions* options,
+                          DPScaleOptions* core) {
   manager->Group("Other inputs");
   manager->AddDefault("database_path",
                       &options->database_path,
@@ -102,7 +108,11 @@ void AddCommandOptions(CommandOptions* manager,
                       &options->input_type,
                       "depth maps to read: geometric (falls back to "
                       "photometric) or photometric");
+}
 
+void AddDPProfileOptions(CommandOptions* manager,
+                         ScaleRunOptions* options,
+                         DPScaleOptions* core) {
   manager->Group("DP frames and the DP profile");
   manager->AddDefault(
       "DPScaleEstimator.swap_dp_views",
@@ -131,7 +141,11 @@ void AddCommandOptions(CommandOptions* manager,
       "folder of calibrated profiles (*.dpsf) picked by camera and lens "
       "with psf_model auto (empty: $DPSFM_PROFILE_LIBRARY or "
       "~/.local/share/dp-sfm/profiles)");
+}
 
+void AddRefusalOptions(CommandOptions* manager,
+                       ScaleRunOptions* options,
+                       DPScaleOptions* core) {
   manager->Group("When a run refuses (the refusal names the one to change)");
   manager->AddDefault("DPScaleEstimator.max_radius_px",
                       &core->max_radius_px,
@@ -151,7 +165,11 @@ void AddCommandOptions(CommandOptions* manager,
       "DPScaleEstimator.recorded_focus_tolerance",
       &core->recorded_focus_tolerance,
       "relative accuracy of the recorded focus distances (0.1: within 10 %)");
+}
 
+void AddLargeProjectOptions(CommandOptions* manager,
+                            ScaleRunOptions* options,
+                            DPScaleOptions* core) {
   manager->Group("Large projects");
   manager->AddDefault(
       "DPScaleEstimator.max_views",
@@ -173,7 +191,11 @@ void AddCommandOptions(CommandOptions* manager,
   manager->AddDefault("DPScaleEstimator.num_threads",
                       &core->num_threads,
                       "threads (-1: all cores)");
+}
 
+void AddMethodOptions(CommandOptions* manager,
+                      ScaleRunOptions* options,
+                      DPScaleOptions* core) {
   manager->Group("Method parameters (rarely changed; docs/user-guide.md)");
   manager->AddDefault(
       "DPScaleEstimator.resize_factor",
@@ -216,6 +238,20 @@ void AddCommandOptions(CommandOptions* manager,
                       "intensities");
 }
 
+// The command's options, in the groups --help shows.
+void AddCommandOptions(CommandOptions* manager,
+                       ScaleRunOptions* options,
+                       DPScaleOptions* core) {
+  AddRequiredOptions(manager, options, core);
+  AddLensOptions(manager, options, core);
+  AddOutputOptions(manager, options, core);
+  AddOtherInputOptions(manager, options, core);
+  AddDPProfileOptions(manager, options, core);
+  AddRefusalOptions(manager, options, core);
+  AddLargeProjectOptions(manager, options, core);
+  AddMethodOptions(manager, options, core);
+}
+
 }  // namespace
 
 int RunDPScaleEstimator(int argc, char** argv) {
@@ -239,16 +275,9 @@ int RunDPScaleEstimator(int argc, char** argv) {
   if (!command.Parse(argc, argv, std::cout, &exit_code)) return exit_code;
   options.num_threads = core_options.num_threads;
 
-  try {
-    const ScaleEstimationOutcome outcome =
-        RunScaleEstimation(options, core_options);
-    if (!outcome.success) return Fail(outcome.failure);
-    return EXIT_SUCCESS;
-  } catch (const InputError& error) {
-    return Fail(error.what());
-  } catch (const std::exception& error) {
-    return Fail(std::string("internal error: ") + error.what());
-  }
+  return RunAtCommandBoundary("dp_scale_estimator", [&] {
+    return RunScaleEstimation(options, core_options);
+  });
 }
 
 }  // namespace dpsfm

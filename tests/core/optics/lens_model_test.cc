@@ -32,17 +32,17 @@ TEST(LensModel, BlurSignAndClosedForm) {
   EXPECT_DOUBLE_EQ(SignedBlurDiameterMm(lens, g, g), 0.0);
   EXPECT_GT(SignedBlurDiameterMm(lens, g, 3000), 0);  // farther: b > 0
   EXPECT_LT(SignedBlurDiameterMm(lens, g, 1000), 0);  // nearer: b < 0
-  // Closed form: L f / (g - f) * (1 - g/z) * ... written out by hand.
-  const double l = 50 / 1.8;
-  const double expected = l * 50 / (1 - 50.0 / g) * (1 / g - 1 / 3000.0);
-  EXPECT_NEAR(SignedBlurDiameterMm(lens, g, 3000), expected, 1e-15);
-  // Far limit: b -> L f / (g - f).
-  EXPECT_NEAR(SignedBlurDiameterMm(lens, g, 1e15), l * 50 / (g - 50), 1e-11);
-  // Focus at infinity: b = -L f / z.
+  // By hand: aperture L = f / N = 50 / 1.8 = 27.778 mm; the blur circle on
+  // the sensor is b = L f (z - g) / (z (g - f)) = 27.778 * 50 * 1500 /
+  // (3000 * 1450) = 0.478927 mm for g = 1.5 m, z = 3 m.
+  EXPECT_NEAR(SignedBlurDiameterMm(lens, g, 3000), 0.4789272030651341, 1e-12);
+  // Far limit: b -> L f / (g - f) = 1388.89 / 1450 = 0.957854 mm.
+  EXPECT_NEAR(SignedBlurDiameterMm(lens, g, 1e15), 0.9578544061302682, 1e-11);
+  // Focus at infinity: b = -L f / z = -1388.89 / 2000 = -0.694444 mm.
   EXPECT_NEAR(
       SignedBlurDiameterMm(lens, std::numeric_limits<double>::infinity(), 2000),
-      -l * 50 / 2000,
-      1e-15);
+      -0.6944444444444444,
+      1e-12);
 }
 
 TEST(LensModel, RadiusInPixels) {
@@ -82,15 +82,16 @@ TEST(LensModel, ForwardAndBack) {
 
 TEST(LensModel, PhoneNumbers) {
   // Pixel 4 DP: f = 4.38 mm, N = 1.73, pitch 2.8 um, focus 0.5 m, object at
-  // 0.25 m gives a few pixels of (negative) blur radius.
+  // 0.25 m. By hand: L = 2.5318 mm, b = L f (z - g) / (z (g - f)) =
+  // 11.089 * (-250) / (250 * 495.62) = -0.022374 mm, radius b / 2 over the
+  // pitch = -0.011187 / 0.0028 = -3.995 px.
   DPLensData lens;
   lens.focal_length_mm = 4.38;
   lens.f_number = 1.73;
   lens.pixel_pitch_um = 2.8;
   const double r =
       PredictBlurRadiusPx(lens, lens.PixelPitchMm(), 1.0, 0.5, 0.25);
-  EXPECT_LT(r, -1.0);
-  EXPECT_GT(r, -10.0);
+  EXPECT_NEAR(r, -3.9954460196007364, 1e-9);
 }
 
 TEST(LensModel, RowRejectsNonPositiveDepth) {

@@ -552,16 +552,17 @@ TEST(DPScaleEstimator, RefusesVeryNoisyCaptureAndSaysWhy) {
   }
   const RunOutput out = RunPipeline(specs, scale, SmallFrameOptions());
   const DPScaleResult& r = out.result;
-  if (r.success) {
-    // Only acceptable if it is actually right and says how unsure it is.
-    Print("very noisy capture", r, scale);
-    EXPECT_NEAR(r.scale / scale, 1.0, 0.1);
-    EXPECT_LE(r.scale_ci_low, scale);
-    EXPECT_GE(r.scale_ci_high, scale);
-  } else {
-    EXPECT_FALSE(r.failure_reason.empty());
-    std::printf("very noisy refusal: %s\n", r.failure_reason.c_str());
-  }
+  // Pinned for these seeds: noise 0.04 leaves too few patches whose
+  // texture rises above it, so no view passes selection, and the reason
+  // says so in the user's terms.
+  EXPECT_FALSE(r.success) << "answered " << r.scale << " (truth " << scale
+                          << ")";
+  EXPECT_NE(r.failure_reason.find("no view passed selection"),
+            std::string::npos)
+      << r.failure_reason;
+  EXPECT_NE(r.failure_reason.find("texture too weak for the noise"),
+            std::string::npos)
+      << r.failure_reason;
 }
 
 // Whatever is reported comes with an interval that covers the truth on a

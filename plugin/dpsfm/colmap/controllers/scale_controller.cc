@@ -438,8 +438,8 @@ RescaleWorkspaceResult Rescale(const ScaleRunOptions& options,
 
 }  // namespace
 
-ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
-                                          DPScaleOptions core_options) {
+RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
+                              DPScaleOptions core_options) {
   colmap::Timer total_timer;
   total_timer.Start();
   LOG_HEADING1("DP scale estimation");
@@ -456,7 +456,7 @@ ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
       layout.dense ? options.workspace_path : options.input_path;
   const bool in_place = !options.dry_run && options.output_path.empty();
   if (in_place && FinishInterruptedCommit(root)) {
-    return ScaleEstimationOutcome::Success();
+    return RunOutcome::Success();
   }
   CheckAlreadyRescaled(root, in_place, options.force);
   if (!options.dry_run) {
@@ -511,8 +511,8 @@ ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
     LOG(INFO) << "Report: " << options.report_path;
   }
   if (!result.success) {
-    return ScaleEstimationOutcome::Failure(
-        "no scale: " + result.failure_reason + "; nothing was changed");
+    return RunOutcome::Failure("no scale: " + result.failure_reason +
+                               "; nothing was changed");
   }
   LOG(INFO) << "Linear estimate s* = " << result.scale_initial
             << ", final s = " << result.scale << " (95% interval "
@@ -524,7 +524,7 @@ ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
             << ", intensity " << Seconds(timings.intensity);
   if (options.dry_run) {
     LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed";
-    return ScaleEstimationOutcome::Success();
+    return RunOutcome::Success();
   }
 
   colmap::Timer rescale_timer;
@@ -547,7 +547,7 @@ ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
             << " (" << Seconds(timings.rescale)
             << "); the model is now in metres. Record: "
             << rescaled.record_path;
-  return ScaleEstimationOutcome::Success();
+  return RunOutcome::Success();
 }
 
 }  // namespace dpsfm

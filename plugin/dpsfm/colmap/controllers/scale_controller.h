@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "dpsfm/colmap/controllers/run_outcome.h"
 #include "dpsfm/colmap/io/workspace_reader.h"
 #include "dpsfm/colmap/report/report.h"
 #include "dpsfm/core/scale/scale_estimator.h"
@@ -55,24 +56,13 @@ class DPScaleController {
   int prefetch_views_;
 };
 
-// What a run of `colmap dp_scale_estimator` ended in: success (the scale
-// written, or the dry run's report), or the one line that says why not.
-struct ScaleEstimationOutcome {
-  bool success = false;
-  std::string failure;
-  static ScaleEstimationOutcome Success() { return {true, ""}; }
-  static ScaleEstimationOutcome Failure(const std::string& why) {
-    return {false, why};
-  }
-};
-
 // The whole run after option parsing: finishing an interrupted commit, the
 // already-rescaled policy, reading the workspace, choosing the DP profile
 // (given, library or auto), the view loop (DPScaleController), the report
 // and plots, and the rescale. Throws InputError for what the user must
 // fix; the command prints it as its one error line.
-ScaleEstimationOutcome RunScaleEstimation(const ScaleRunOptions& options,
-                                          DPScaleOptions core_options);
+RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
+                              DPScaleOptions core_options);
 
 // The report's "view_budget" section: visited, planned and skipped views,
 // why the run stopped, and the checkpoints' scales.

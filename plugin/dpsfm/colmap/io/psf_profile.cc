@@ -84,33 +84,64 @@ std::vector<double> ParseNumbers(const std::string& text,
   return numbers;
 }
 
-}  // namespace
-
-PsfProfileFile ReadPsfProfile(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw InputError("cannot read DP PSF profile " + path);
-  PsfProfileFile profile;
+// A profile file's key/value lines (fit_* lines aside), with where each
+// was given for messages.
+struct ProfileEntries {
+  std::string path;
   std::map<std::string, std::string> values;
   std::map<std::string, int> lines;
+
+  bool Has(const std::string& key) const { return values.count(key) > 0; }
+  std::string Value(const std::string& key) const {
+    const auto it = values.find(key);
+    return it == values.end() ? std::string() : it->second;
+  }
+  std::string Where(const std::string& key) const {
+    const auto it = lines.find(key);
+    return path + ":" + std::to_string(it == lines.end() ? 0 : it->second);
+  }
+  double Number(const std::string& key) const {
+    return ParseNumber(Value(key), Where(key));
+  }
+  // Keys that do not belong to `model` are refused.
+  void Refuse(const std::vector<std::string>& keys,
+              const std::string& model) const {
+    for (const std::string& key : keys) {
+      if (Has(key)) {
+        throw InputError(Where(key) + ": '" + key +
+                         "' does not belong to model " + model);
+      }
+    }
+  }
+};
+
+// Reads the lines: "key value", '#' comments, known keys once each; fit_*
+// lines go to profile->fit_info as they are.
+ProfileEntries ReadProfileEntries(const std::string& path,
+                                  PsfProfileFile* profile) {
+  std::ifstream file(path);
+  if (!file) throw InputError("cannot read DP PSF profile " + path);
+  static const std::set<std::string> kKnown = {"format",
+                                               "model",
+                                               "split_exponent",
+                                               "crosstalk",
+                                               "rim_softness",
+                                               "rim_brightness",
+                                               "band_split_exponents",
+                                               "reference_radius_px",
+                                               "side",
+                                               "grid",
+                                               "region",
+                                               "left",
+                                               "right",
+                                               "camera",
+                                               "lens",
+                                               "uncertainty",
+                                               "light"};
+  ProfileEntries entries;
+  entries.path = path;
   std::string line;
   int number = 0;
-  const std::set<std::string> known = {"format",
-                                       "model",
-                                       "split_exponent",
-                                       "crosstalk",
-                                       "rim_softness",
-                                       "rim_brightness",
-                                       "band_split_exponents",
-                                       "reference_radius_px",
-                                       "side",
-                                       "grid",
-                                       "region",
-                                       "left",
-                                       "right",
-                                       "camera",
-                                       "lens",
-                                       "uncertainty",
-                                       "light"};
   while (std::getline(file, line)) {
     ++number;
     const std::string where = path + ":" + std::to_string(number);
@@ -123,115 +154,175 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     const std::string key = text.substr(0, space);
     const std::string value = Trim(text.substr(space));
     if (key.compare(0, 4, "fit_") == 0) {
-      profile.fit_info.emplace_back(key, value);
+      profile->fit_info.emplace_back(key, value);
       continue;
     }
-    if (known.count(key) == 0) {
+    if (kKnown.count(key) == 0) {
       throw InputError(where + ": unknown key '" + key + "'");
     }
-    if (!values.emplace(key, value).second) {
+    if (!entries.values.emplace(key, value).second) {
       throw InputError(where + ": '" + key + "' is given twice");
     }
-    lines[key] = number;
+    entries.lines[key] = number;
   }
-  auto where = [&](const std::string& key) {
-    return path + ":" + std::to_string(lines[key]);
-  };
-  if (values.count("format") == 0 || values["format"] != "1") {
-    throw InputError(path +
+  return entries;
+}
+
+// format, camera, lens, light and uncertainty: every model has them.
+void ReadCommonKeys(const ProfileEntries& entries, PsfProfileFile* profile) {
+  if (entries.Value("format") != "1") {
+    throw InputError(entries.path +
                      " is not a dp-sfm DP PSF profile (needs 'format 1'; "
                      "write one with colmap dp_psf_calibrator)");
   }
-  profile.camera = values["camera"];
-  if (values.count("light")) {
-    profile.light = values["light"];
-    if (profile.light != "linear" && profile.light != "srgb") {
-      throw InputError(where("light") +
+  profile->camera = entries.Value("camera");
+  if (entries.Has("light")) {
+    profile->light = entries.Value("light");
+    if (profile->light != "linear" && profile->light != "srgb") {
+      throw InputError(entries.Where("light") +
                        ": 'light' must be linear or srgb, got '" +
-                       profile.light + "'");
+                       profile->light + "'");
     }
   }
-  profile.lens = values["lens"];
-  if (values.count("uncertainty")) {
-    profile.uncertainty =
-        ParseNumber(values["uncertainty"], where("uncertainty"));
-    if (!(profile.uncertainty >= 0 && profile.uncertainty < 1)) {
-      throw InputError(where("uncertainty") +
+  profile->lens = entries.Value("lens");
+  if (entries.Has("uncertainty")) {
+    profile->uncertainty = entries.Number("uncertainty");
+    if (!(profile->uncertainty >= 0 && profile->uncertainty < 1)) {
+      throw InputError(entries.Where("uncertainty") +
                        ": the relative uncertainty must lie in [0, 1)");
     }
   }
-  const std::string model = values["model"];
-  auto refuse_keys = [&](const std::vector<std::string>& keys) {
-    for (const std::string& key : keys) {
-      if (values.count(key)) {
-        throw InputError(where(key) + ": '" + key +
-                         "' does not belong to "
-                         "model " +
-                         model);
+}
+
+// grid ROWS COLS and region x0 y0 x1 y1 of a measured profile.
+void ReadLayout(const ProfileEntries& entries, DPPsfLayout* layout) {
+  if (entries.Has("grid")) {
+    const std::vector<double> g =
+        ParseNumbers(entries.Value("grid"), entries.Where("grid"));
+    if (g.size() != 2 || g[0] < 1 || g[1] < 1 || g[0] != std::floor(g[0]) ||
+        g[1] != std::floor(g[1]) || g[0] * g[1] > 10000) {
+      throw InputError(entries.Where("grid") + ": expected 'grid ROWS COLS'");
+    }
+    layout->rows = static_cast<int>(g[0]);
+    layout->cols = static_cast<int>(g[1]);
+  }
+  if (entries.Has("region")) {
+    const std::vector<double> r =
+        ParseNumbers(entries.Value("region"), entries.Where("region"));
+    if (r.size() != 4) {
+      throw InputError(entries.Where("region") +
+                       ": expected 'region x0 y0 x1 y1'");
+    }
+    layout->x0 = r[0];
+    layout->y0 = r[1];
+    layout->x1 = r[2];
+    layout->y1 = r[3];
+  }
+  if (!layout->Check()) {
+    throw InputError(entries.Where("region") +
+                     ": the region must satisfy 0 <= x0 < x1 <= 1 and 0 <= "
+                     "y0 < y1 <= 1");
+  }
+}
+
+// model measured_kernels: the reference radius, side, layout and the .npy
+// kernel stacks (paths relative to the profile file).
+void ReadMeasuredKernels(const ProfileEntries& entries,
+                         PsfProfileFile* profile) {
+  const std::string& path = entries.path;
+  entries.Refuse({"split_exponent",
+                  "crosstalk",
+                  "rim_softness",
+                  "rim_brightness",
+                  "band_split_exponents"},
+                 profile->model);
+  for (const char* key : {"reference_radius_px", "side", "left", "right"}) {
+    if (!entries.Has(key)) {
+      throw InputError(path + ": model measured_kernels needs '" + key + "'");
+    }
+  }
+  profile->reference_radius_px = entries.Number("reference_radius_px");
+  if (!(profile->reference_radius_px > 0.5)) {
+    throw InputError(entries.Where("reference_radius_px") +
+                     ": the reference radius must exceed 0.5 px");
+  }
+  const std::string side = entries.Value("side");
+  if (side != "far" && side != "near") {
+    throw InputError(entries.Where("side") +
+                     ": side must be far or near, got '" + side + "'");
+  }
+  profile->far_side = side == "far";
+  ReadLayout(entries, &profile->layout);
+  const fs::path dir = fs::path(path).parent_path();
+  auto resolve = [&](const std::string& name) {
+    const fs::path p(name);
+    return (p.is_absolute() ? p : dir / p).string();
+  };
+  profile->left_kernels = ReadKernelStack(
+      resolve(entries.Value("left")), profile->layout, entries.Where("left"));
+  profile->right_kernels = ReadKernelStack(
+      resolve(entries.Value("right")), profile->layout, entries.Where("right"));
+  if (profile->left_kernels[0].size() != profile->right_kernels[0].size()) {
+    throw InputError(path + ": the left and right kernels differ in size");
+  }
+  profile->MakeField(path);  // the conventions, checked once here
+}
+
+// model split_profile: the family's parameters, optionally one split
+// exponent per column band.
+void ReadSplitProfile(const ProfileEntries& entries, PsfProfileFile* profile) {
+  const std::string& path = entries.path;
+  entries.Refuse(
+      {"reference_radius_px", "side", "grid", "region", "left", "right"},
+      "split_profile");
+  if (!entries.Has("split_exponent")) {
+    throw InputError(path + ": needs 'split_exponent'");
+  }
+  profile->params.split_exponent = entries.Number("split_exponent");
+  if (entries.Has("crosstalk")) {
+    profile->params.crosstalk = entries.Number("crosstalk");
+  }
+  if (entries.Has("rim_softness")) {
+    profile->params.rim_softness = entries.Number("rim_softness");
+  }
+  if (entries.Has("rim_brightness")) {
+    profile->params.rim_brightness = entries.Number("rim_brightness");
+  }
+  if (entries.Has("band_split_exponents")) {
+    for (const double p : ParseNumbers(entries.Value("band_split_exponents"),
+                                       entries.Where("band_split_exponents"))) {
+      profile->band_split_exponents.push_back(p);
+      SplitProfileParams band = profile->params;
+      band.split_exponent = p;
+      if (!band.Check()) {
+        throw InputError(entries.Where("band_split_exponents") +
+                         ": split exponents must lie in [0.05, 8]");
       }
     }
-  };
+    if (profile->band_split_exponents.size() < 2) {
+      throw InputError(entries.Where("band_split_exponents") +
+                       ": needs two or more bands");
+    }
+  }
+  if (!profile->params.Check()) {
+    throw InputError(path + ": profile out of range (" +
+                     profile->params.ToString() +
+                     "; split_exponent in [0.05, 8], crosstalk in [0, "
+                     "0.45], rim_softness in [0, 0.5], rim_brightness in "
+                     "[0, 4])");
+  }
+}
+
+}  // namespace
+
+PsfProfileFile ReadPsfProfile(const std::string& path) {
+  PsfProfileFile profile;
+  const ProfileEntries entries = ReadProfileEntries(path, &profile);
+  ReadCommonKeys(entries, &profile);
+  const std::string model = entries.Value("model");
   if (model == "measured_kernels") {
     profile.model = model;
-    refuse_keys({"split_exponent",
-                 "crosstalk",
-                 "rim_softness",
-                 "rim_brightness",
-                 "band_split_exponents"});
-    for (const char* key : {"reference_radius_px", "side", "left", "right"}) {
-      if (values.count(key) == 0) {
-        throw InputError(path + ": model measured_kernels needs '" + key + "'");
-      }
-    }
-    profile.reference_radius_px = ParseNumber(values["reference_radius_px"],
-                                              where("reference_radius_px"));
-    if (!(profile.reference_radius_px > 0.5)) {
-      throw InputError(where("reference_radius_px") +
-                       ": the reference radius must exceed 0.5 px");
-    }
-    if (values["side"] != "far" && values["side"] != "near") {
-      throw InputError(where("side") + ": side must be far or near, got '" +
-                       values["side"] + "'");
-    }
-    profile.far_side = values["side"] == "far";
-    if (values.count("grid")) {
-      const std::vector<double> g = ParseNumbers(values["grid"], where("grid"));
-      if (g.size() != 2 || g[0] < 1 || g[1] < 1 || g[0] != std::floor(g[0]) ||
-          g[1] != std::floor(g[1]) || g[0] * g[1] > 10000) {
-        throw InputError(where("grid") + ": expected 'grid ROWS COLS'");
-      }
-      profile.layout.rows = static_cast<int>(g[0]);
-      profile.layout.cols = static_cast<int>(g[1]);
-    }
-    if (values.count("region")) {
-      const std::vector<double> r =
-          ParseNumbers(values["region"], where("region"));
-      if (r.size() != 4) {
-        throw InputError(where("region") + ": expected 'region x0 y0 x1 y1'");
-      }
-      profile.layout.x0 = r[0];
-      profile.layout.y0 = r[1];
-      profile.layout.x1 = r[2];
-      profile.layout.y1 = r[3];
-    }
-    if (!profile.layout.Check()) {
-      throw InputError(where("region") +
-                       ": the region must satisfy 0 <= x0 < x1 <= 1 and 0 <= "
-                       "y0 < y1 <= 1");
-    }
-    const fs::path dir = fs::path(path).parent_path();
-    auto resolve = [&](const std::string& name) {
-      const fs::path p(name);
-      return (p.is_absolute() ? p : dir / p).string();
-    };
-    profile.left_kernels =
-        ReadKernelStack(resolve(values["left"]), profile.layout, where("left"));
-    profile.right_kernels = ReadKernelStack(
-        resolve(values["right"]), profile.layout, where("right"));
-    if (profile.left_kernels[0].size() != profile.right_kernels[0].size()) {
-      throw InputError(path + ": the left and right kernels differ in size");
-    }
-    profile.MakeField(path);  // the conventions, checked once here
+    ReadMeasuredKernels(entries, &profile);
     return profile;
   }
   if (model != "split_profile") {
@@ -239,48 +330,7 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
                      ": needs 'model split_profile' or 'model "
                      "measured_kernels'");
   }
-  refuse_keys(
-      {"reference_radius_px", "side", "grid", "region", "left", "right"});
-  if (values.count("split_exponent") == 0) {
-    throw InputError(path + ": needs 'split_exponent'");
-  }
-  profile.params.split_exponent =
-      ParseNumber(values["split_exponent"], where("split_exponent"));
-  if (values.count("crosstalk")) {
-    profile.params.crosstalk =
-        ParseNumber(values["crosstalk"], where("crosstalk"));
-  }
-  if (values.count("rim_softness")) {
-    profile.params.rim_softness =
-        ParseNumber(values["rim_softness"], where("rim_softness"));
-  }
-  if (values.count("rim_brightness")) {
-    profile.params.rim_brightness =
-        ParseNumber(values["rim_brightness"], where("rim_brightness"));
-  }
-  if (values.count("band_split_exponents")) {
-    for (const double p : ParseNumbers(values["band_split_exponents"],
-                                       where("band_split_exponents"))) {
-      profile.band_split_exponents.push_back(p);
-      SplitProfileParams band = profile.params;
-      band.split_exponent = p;
-      if (!band.Check()) {
-        throw InputError(where("band_split_exponents") +
-                         ": split exponents must lie in [0.05, 8]");
-      }
-    }
-    if (profile.band_split_exponents.size() < 2) {
-      throw InputError(where("band_split_exponents") +
-                       ": needs two or more bands");
-    }
-  }
-  if (!profile.params.Check()) {
-    throw InputError(path + ": profile out of range (" +
-                     profile.params.ToString() +
-                     "; split_exponent in [0.05, 8], crosstalk in [0, "
-                     "0.45], rim_softness in [0, 0.5], rim_brightness in "
-                     "[0, 4])");
-  }
+  ReadSplitProfile(entries, &profile);
   return profile;
 }
 

@@ -11,8 +11,9 @@
 
 namespace dpsfm {
 
-// Paths and settings of one run, as given on the command line (see
-// shared cli-contract). Empty strings and zero values mean "not given".
+// Paths and settings of one run, as given on the command line
+// (docs/user-guide.md, "Options"). Empty strings and zero values mean "not
+// given".
 struct ScaleRunOptions {
   // COLMAP dense workspace (sparse/, stereo/depth_maps/, fused.ply, ...).
   std::string workspace_path;

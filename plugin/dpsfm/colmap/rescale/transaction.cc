@@ -19,8 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/colmap/util/durable_file.h"
+#include "dpsfm/colmap/util/input_error.h"
 
 namespace dpsfm {
 

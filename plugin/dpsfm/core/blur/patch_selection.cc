@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numeric>
 
-#include "dpsfm/core/scale/linear_estimator.h"
+#include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -16,6 +18,99 @@ const char* const kLeftUnsearched =
 const char* const kNotFittedByOneBlur =
     "not fitted by one blur (blur beyond the search bound or depth varying "
     "inside)";
+
+double PatchConfidence(double texture,
+                       double fit_quality,
+                       double relative_depth_variance) {
+  return std::max(texture, 0.0) * std::max(fit_quality, 0.0) /
+         (relative_depth_variance + 1e-4);
+}
+
+std::vector<int> SelectTopFraction(const std::vector<double>& confidence,
+                                   double fraction,
+                                   int min_count) {
+  DPSFM_CHECK(fraction > 0 && fraction <= 1) << "fraction " << fraction;
+  const int n = static_cast<int>(confidence.size());
+  int count = static_cast<int>(std::ceil(fraction * n - 1e-9));
+  count = std::min(n, std::max(count, min_count));
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  auto key = [&](int i) {
+    return std::isfinite(confidence[i])
+               ? confidence[i]
+               : -std::numeric_limits<double>::infinity();
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return key(a) > key(b);
+  });
+  order.resize(count);
+  std::sort(order.begin(), order.end());
+  return order;
+}
+
+std::vector<int> SelectTopFractionStratified(
+    const std::vector<double>& confidence,
+    const std::vector<double>& key,
+    double fraction,
+    int min_count,
+    int strata) {
+  DPSFM_CHECK_EQ(confidence.size(), key.size());
+  if (strata <= 1) return SelectTopFraction(confidence, fraction, min_count);
+  const int n = static_cast<int>(confidence.size());
+  const int count = static_cast<int>(
+      SelectTopFraction(confidence, fraction, min_count).size());
+  if (count == 0) return {};
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (double k : key) {
+    if (std::isfinite(k)) {
+      lo = std::min(lo, k);
+      hi = std::max(hi, k);
+    }
+  }
+  auto conf = [&](int i) {
+    return std::isfinite(confidence[i])
+               ? confidence[i]
+               : -std::numeric_limits<double>::infinity();
+  };
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return conf(a) > conf(b);
+  });
+  std::vector<std::vector<int>> bins(strata);
+  for (int i : order) {
+    if (!std::isfinite(key[i])) continue;
+    const int b =
+        hi > lo ? std::min(strata - 1,
+                           static_cast<int>((key[i] - lo) / (hi - lo) * strata))
+                : 0;
+    bins[b].push_back(i);
+  }
+  int nonempty = 0;
+  for (const auto& b : bins) nonempty += !b.empty();
+  std::vector<bool> taken(n, false);
+  int num_taken = 0;
+  // Round-robin over the bins, best first inside each, up to an even share.
+  const int share = nonempty > 0 ? count / nonempty : 0;
+  for (const auto& b : bins) {
+    for (int q = 0; q < std::min<int>(share, b.size()); ++q) {
+      taken[b[q]] = true;
+      ++num_taken;
+    }
+  }
+  for (int i : order) {
+    if (num_taken >= count) break;
+    if (!taken[i]) {
+      taken[i] = true;
+      ++num_taken;
+    }
+  }
+  std::vector<int> selected;
+  for (int i = 0; i < n; ++i) {
+    if (taken[i]) selected.push_back(i);
+  }
+  return selected;
+}
 
 ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
                               const cv::Mat& gray_right,
@@ -48,8 +143,8 @@ ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
   for (int k = 0; k < num; ++k) {
     if (!pass[k]) continue;
     out.index.push_back(k);
-    out.confidence.push_back((*estimates)[k].texture /
-                             (candidates[k].depth.relative_variance + 1e-4));
+    out.confidence.push_back(PatchConfidence(
+        (*estimates)[k].texture, 1.0, candidates[k].depth.relative_variance));
     out.inverse_depth.push_back(1.0 / candidates[k].depth.median);
   }
   return out;

@@ -19,11 +19,43 @@ extern const char* const kTextureTooWeak;
 extern const char* const kLeftUnsearched;
 extern const char* const kNotFittedByOneBlur;
 
+// A patch's confidence: texture x fit quality / (relative depth variance +
+// 1e-4). The reference code's sobel * exp(-1e6 loss) / (var(depth) + 1e-10),
+// with the blur estimator's fit quality in place of exp(-1e6 loss) (which
+// underflows at real noise levels) and the RELATIVE depth variance (scale
+// free) floored at 1 % std, so that depth noise below that level does not
+// decide the ranking. Negative texture or fit quality count as 0.
+double PatchConfidence(double texture,
+                       double fit_quality,
+                       double relative_depth_variance);
+
+// Top-T_c selection by confidence, per view.
+// Indices of the `fraction` highest `confidence` values (ties by index), at
+// least min(min_count, n) of them. Non-finite confidences rank last.
+std::vector<int> SelectTopFraction(const std::vector<double>& confidence,
+                                   double fraction,
+                                   int min_count);
+
+// The same count as SelectTopFraction, spread over depth: `key` (e.g. inverse
+// depth, which blur is affine in) is cut into `strata` equal-width bins and
+// the count is shared evenly among the non-empty bins (best confidence first
+// inside each; what a bin cannot fill goes to the best remaining patches).
+// Pure top-T_c picks the most textured plane of a view again and again,
+// which leaves the view's own solve without depth variation; the linear
+// system needs blur range, the paper's T_p test says as much.
+// strata <= 1 is SelectTopFraction.
+std::vector<int> SelectTopFractionStratified(
+    const std::vector<double>& confidence,
+    const std::vector<double>& key,
+    double fraction,
+    int min_count,
+    int strata);
+
 struct ScreenedPatches {
   std::vector<int> index;  // candidates that pass, in grid order
-  // Per passing candidate: texture / (relative depth variance + 1e-4), the
-  // final confidence without its fit quality (<= 1), so an upper bound of
-  // it; and the inverse median depth (for the depth strata).
+  // Per passing candidate: PatchConfidence with a fit quality of 1 (its
+  // largest), so an upper bound of the final confidence; and the inverse
+  // median depth (for the depth strata).
   std::vector<double> confidence;
   std::vector<double> inverse_depth;
 };

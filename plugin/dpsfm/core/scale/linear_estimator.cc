@@ -201,92 +201,6 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
   return result;
 }
 
-std::vector<int> SelectTopFraction(const std::vector<double>& confidence,
-                                   double fraction,
-                                   int min_count) {
-  DPSFM_CHECK(fraction > 0 && fraction <= 1) << "fraction " << fraction;
-  const int n = static_cast<int>(confidence.size());
-  int count = static_cast<int>(std::ceil(fraction * n - 1e-9));
-  count = std::min(n, std::max(count, min_count));
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  auto key = [&](int i) {
-    return std::isfinite(confidence[i])
-               ? confidence[i]
-               : -std::numeric_limits<double>::infinity();
-  };
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return key(a) > key(b);
-  });
-  order.resize(count);
-  std::sort(order.begin(), order.end());
-  return order;
-}
-
-std::vector<int> SelectTopFractionStratified(
-    const std::vector<double>& confidence,
-    const std::vector<double>& key,
-    double fraction,
-    int min_count,
-    int strata) {
-  DPSFM_CHECK_EQ(confidence.size(), key.size());
-  if (strata <= 1) return SelectTopFraction(confidence, fraction, min_count);
-  const int n = static_cast<int>(confidence.size());
-  const int count = static_cast<int>(
-      SelectTopFraction(confidence, fraction, min_count).size());
-  if (count == 0) return {};
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (double k : key) {
-    if (std::isfinite(k)) {
-      lo = std::min(lo, k);
-      hi = std::max(hi, k);
-    }
-  }
-  auto conf = [&](int i) {
-    return std::isfinite(confidence[i])
-               ? confidence[i]
-               : -std::numeric_limits<double>::infinity();
-  };
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return conf(a) > conf(b);
-  });
-  std::vector<std::vector<int>> bins(strata);
-  for (int i : order) {
-    if (!std::isfinite(key[i])) continue;
-    const int b =
-        hi > lo ? std::min(strata - 1,
-                           static_cast<int>((key[i] - lo) / (hi - lo) * strata))
-                : 0;
-    bins[b].push_back(i);
-  }
-  int nonempty = 0;
-  for (const auto& b : bins) nonempty += !b.empty();
-  std::vector<bool> taken(n, false);
-  int num_taken = 0;
-  // Round-robin over the bins, best first inside each, up to an even share.
-  const int share = nonempty > 0 ? count / nonempty : 0;
-  for (const auto& b : bins) {
-    for (int q = 0; q < std::min<int>(share, b.size()); ++q) {
-      taken[b[q]] = true;
-      ++num_taken;
-    }
-  }
-  for (int i : order) {
-    if (num_taken >= count) break;
-    if (!taken[i]) {
-      taken[i] = true;
-      ++num_taken;
-    }
-  }
-  std::vector<int> selected;
-  for (int i = 0; i < n; ++i) {
-    if (taken[i]) selected.push_back(i);
-  }
-  return selected;
-}
-
 std::vector<int> SelectViewsNearMedian(const std::vector<double>& scales,
                                        const std::vector<bool>& eligible,
                                        int count) {
@@ -367,6 +281,270 @@ std::string FailureFromCounts(const std::vector<LinearViewResult>& results,
   return s.str();
 }
 
+// The per-view checks before a fit: enough samples, depth variation (with
+// one depth, eq. (one_pixel) is still solvable when the blur varies (b sits
+// in gamma) but only by g = f, a meaningless fit), and T_p on the measured
+// blur (the paper's test: a view whose patches all show about the same blur
+// cannot separate s from g_i, and its fit would only report noise, e.g. a
+// random sign of s). False with out's rejection set when one fails.
+bool CheckViewSamples(const LinearViewData& view,
+                      const LinearEstimatorOptions& options,
+                      LinearViewResult* out) {
+  if (out->num_samples < options.min_samples_per_view) {
+    out->rejection = ViewRejection::kTooFewPatches;
+    out->reason = std::to_string(out->num_samples) +
+                  " selected patches, need at least " +
+                  std::to_string(options.min_samples_per_view);
+    return false;
+  }
+  double imin = std::numeric_limits<double>::infinity(), imax = 0;
+  for (const LinearSample& sample : view.samples) {
+    imin = std::min(imin, 1.0 / sample.depth);
+    imax = std::max(imax, 1.0 / sample.depth);
+  }
+  if (!(imax - imin > options.min_relative_depth_range * imax)) {
+    out->rejection = ViewRejection::kDegenerate;
+    out->reason =
+        "no depth variation among its selected patches "
+        "(inverse-depth range " +
+        FormatDouble(100 * (imax - imin) / imax) + " %)";
+    return false;
+  }
+  double rmin = std::numeric_limits<double>::infinity(), rmax = -rmin;
+  for (const LinearSample& sample : view.samples) {
+    rmin = std::min(rmin, sample.radius_px);
+    rmax = std::max(rmax, sample.radius_px);
+  }
+  if (!(rmax - rmin > options.min_blur_range_px)) {
+    out->rejection = ViewRejection::kSmallBlurRange;
+    out->predicted_blur_range_px = rmax - rmin;
+    out->reason = "measured blur range " + FormatDouble(rmax - rmin) +
+                  " px <= T_p = " + FormatDouble(options.min_blur_range_px) +
+                  " px (too little blur or depth variation)";
+    return false;
+  }
+  return true;
+}
+
+// Range of the blur radii the single-view fit predicts for the samples.
+double PredictedBlurRange(const LinearViewData& view,
+                          const LinearViewResult& out) {
+  double rmin = std::numeric_limits<double>::infinity();
+  double rmax = -rmin;
+  for (const LinearSample& sample : view.samples) {
+    const double r = PredictBlurRadiusPx(view.lens,
+                                         view.pixel_pitch_mm,
+                                         out.single_scale,
+                                         out.single_focus_model,
+                                         sample.depth);
+    rmin = std::min(rmin, r);
+    rmax = std::max(rmax, r);
+  }
+  return rmax - rmin;
+}
+
+// View i's own solve and the checks on its result (a positive scale, a
+// physical focus, enough predicted blur range, residuals small against
+// it). True when the view is eligible for the joint solve.
+bool FitSingleView(const std::vector<LinearViewData>& views,
+                   int i,
+                   const LinearEstimatorOptions& options,
+                   LinearViewResult* out) {
+  const LinearViewData& view = views[i];
+  const IrlsResult fit = SolveL1Irls(BuildSystem(views, {i}), options.irls);
+  if (!fit.success || fit.rcond < options.min_rcond) {
+    out->rejection = ViewRejection::kDegenerate;
+    out->reason =
+        "single-view system is rank deficient (no depth variation among "
+        "its patches; rcond " +
+        FormatDouble(fit.rcond) + ")";
+    return false;
+  }
+  const double gbar = fit.x[0];
+  const double sbar = fit.x[1];
+  if (!(sbar > 0)) {
+    out->rejection = ViewRejection::kNonPositiveScale;
+    out->reason =
+        "single-view fit gives s <= 0 (blur does not grow with "
+        "depth as the lens model predicts)";
+    return false;
+  }
+  out->single_solved = true;
+  out->single_scale = ScaleFromSbar(sbar);
+  if (!(gbar > 0)) {
+    out->rejection = ViewRejection::kNonPositiveFocus;
+    out->reason = "single-view fit gives focus distance <= 0 or at infinity";
+    return false;
+  }
+  out->single_focus_model = FocusModelFromUnknowns(gbar, sbar);
+  if (gbar >= 1.0 / view.lens.focal_length_mm) {
+    out->rejection = ViewRejection::kFocusBelowFocalLength;
+    out->reason =
+        "single-view fit puts the focus closer than the focal "
+        "length";
+    return false;
+  }
+  out->predicted_blur_range_px = PredictedBlurRange(view, *out);
+  if (!(out->predicted_blur_range_px > options.min_blur_range_px)) {
+    out->rejection = ViewRejection::kSmallBlurRange;
+    out->reason =
+        "predicted blur range " + FormatDouble(out->predicted_blur_range_px) +
+        " px <= T_p = " + FormatDouble(options.min_blur_range_px) + " px";
+    return false;
+  }
+  std::vector<double> abs_res(fit.residuals.size());
+  for (int k = 0; k < fit.residuals.size(); ++k) {
+    abs_res[k] = std::abs(fit.residuals[k]);
+  }
+  const double median_res = Median(abs_res);
+  if (!(median_res <=
+        options.max_residual_to_range * out->predicted_blur_range_px)) {
+    out->rejection = ViewRejection::kPoorFit;
+    out->reason = "blur does not follow depth: median residual " +
+                  FormatDouble(median_res) + " px against a blur range of " +
+                  FormatDouble(out->predicted_blur_range_px) + " px";
+    return false;
+  }
+  return true;
+}
+
+// Eligible views left out of the N_v nearest the median say so.
+void MarkFarFromMedian(const std::vector<double>& single_scales,
+                       const std::vector<bool>& eligible,
+                       const std::vector<int>& selected,
+                       const LinearEstimatorOptions& options,
+                       LinearEstimate* estimate) {
+  const int num_views = static_cast<int>(eligible.size());
+  std::vector<double> eligible_scales;
+  for (int i = 0; i < num_views; ++i) {
+    if (eligible[i]) eligible_scales.push_back(single_scales[i]);
+  }
+  const double median = Median(eligible_scales);
+  for (int i = 0; i < num_views; ++i) {
+    if (eligible[i] &&
+        !std::binary_search(selected.begin(), selected.end(), i)) {
+      estimate->views[i].rejection = ViewRejection::kFarFromMedian;
+      estimate->views[i].reason =
+          "single-view scale " + FormatDouble(single_scales[i]) +
+          " is not among the " + std::to_string(options.num_selected_views) +
+          " nearest the median " + FormatDouble(median);
+    }
+  }
+}
+
+// The joint solve of the selected views. A kept view whose joint focus
+// comes out non-physical is dropped (its rejection set) and the solve
+// repeated, at most once per view.
+IrlsResult SolveJoint(const std::vector<LinearViewData>& views,
+                      const LinearEstimatorOptions& options,
+                      std::vector<int>* selected,
+                      LinearEstimate* estimate) {
+  IrlsResult joint;
+  while (!selected->empty()) {
+    joint = SolveL1Irls(BuildSystem(views, *selected), options.irls);
+    if (!joint.success) break;
+    const int n = static_cast<int>(selected->size());
+    int worst = -1;
+    for (int c = 0; c < n; ++c) {
+      const double gbar = joint.x[c];
+      if (!(gbar > 0) ||
+          gbar >= 1.0 / views[(*selected)[c]].lens.focal_length_mm) {
+        worst = c;
+        break;
+      }
+    }
+    if (worst < 0 || !(joint.x[n] > 0)) break;
+    const int view = (*selected)[worst];
+    estimate->views[view].rejection = ViewRejection::kNonPositiveFocus;
+    estimate->views[view].reason =
+        "joint fit gives a non-physical focus distance for this view";
+    selected->erase(selected->begin() + worst);
+  }
+  return joint;
+}
+
+// Focus distances and residuals of every view under the joint scale (a view
+// outside the joint solve gets its own focus by a 1-D L1 fit).
+void FitViewsUnderJointScale(const std::vector<LinearViewData>& views,
+                             const std::vector<int>& selected,
+                             const IrlsResult& joint,
+                             double sbar,
+                             LinearEstimate* estimate) {
+  for (int i = 0; i < static_cast<int>(views.size()); ++i) {
+    LinearViewResult& out = estimate->views[i];
+    const auto it = std::lower_bound(selected.begin(), selected.end(), i);
+    const bool used = it != selected.end() && *it == i;
+    out.used = used;
+    if (used) {
+      out.rejection = ViewRejection::kNone;
+      out.reason = "used";
+    }
+    if (views[i].samples.empty()) continue;
+    const DPLinearSystem system = BuildSystem(views, {i});
+    std::vector<double> gamma, c;
+    for (const LinearRow& row : system.rows) {
+      gamma.push_back(row.gamma);
+      c.push_back(row.rhs - row.minus_l * sbar);
+    }
+    const double gbar =
+        used ? joint.x[it - selected.begin()] : WeightedL1Fit1D(gamma, c);
+    out.focus_model = gbar > 0 ? FocusModelFromUnknowns(gbar, sbar) : kNaN;
+    std::vector<double> abs_res;
+    for (size_t k = 0; k < gamma.size(); ++k) {
+      abs_res.push_back(std::abs(gamma[k] * gbar - c[k]));
+    }
+    out.median_abs_residual_px = Median(abs_res);
+  }
+}
+
+// Bootstrap: resample rows within each kept view (stratified, so every
+// column keeps its rows) and re-solve; the scale's interval, or why there
+// is none, and each kept view's focus samples.
+void BootstrapScaleInterval(const std::vector<LinearViewData>& views,
+                            const std::vector<int>& selected,
+                            const LinearEstimatorOptions& options,
+                            LinearEstimate* estimate) {
+  const int n = static_cast<int>(selected.size());
+  const DPLinearSystem system = BuildSystem(views, selected);
+  std::vector<std::vector<int>> rows_of_view(n);
+  for (int k = 0; k < system.NumRows(); ++k) {
+    rows_of_view[system.row_view[k]].push_back(k);
+  }
+  std::mt19937_64 rng(options.seed);
+  IrlsOptions irls = options.irls;
+  irls.max_iterations = std::min(irls.max_iterations, 200);
+  irls.tolerance = std::max(irls.tolerance, 1e-7);
+  std::vector<double> samples;
+  std::vector<double> weights(system.NumRows());
+  for (int b = 0; b < options.num_bootstrap; ++b) {
+    std::fill(weights.begin(), weights.end(), 0.0);
+    for (const auto& rows : rows_of_view) {
+      std::uniform_int_distribution<size_t> pick(0, rows.size() - 1);
+      for (size_t k = 0; k < rows.size(); ++k) weights[rows[pick(rng)]] += 1;
+    }
+    const IrlsResult fit = SolveL1Irls(system, irls, &weights);
+    const bool solved = fit.success && fit.x[n] > 0;
+    if (solved) samples.push_back(ScaleFromSbar(fit.x[n]));
+    for (int j = 0; j < n; ++j) {
+      estimate->views[selected[j]].focus_model_samples.push_back(
+          solved && fit.x[j] > 0 ? FocusModelFromUnknowns(fit.x[j], fit.x[n])
+                                 : kNaN);
+    }
+  }
+  if (samples.size() >= 10) {
+    const double alpha = 0.5 * (1.0 - options.confidence_level);
+    estimate->scale_ci_low =
+        std::min(estimate->scale, Percentile(samples, alpha));
+    estimate->scale_ci_high =
+        std::max(estimate->scale, Percentile(samples, 1.0 - alpha));
+    estimate->interval_status.clear();
+  } else {
+    estimate->interval_status = "only " + std::to_string(samples.size()) +
+                                " of " + std::to_string(options.num_bootstrap) +
+                                " bootstrap resamples solved, need 10";
+  }
+}
+
 }  // namespace
 
 LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
@@ -392,167 +570,20 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
     DPSFM_CHECK_GT(view.pixel_pitch_mm, 0);
     out.num_samples = static_cast<int>(view.samples.size());
     out.focus_model = kNaN;
-    if (out.num_samples < options.min_samples_per_view) {
-      out.rejection = ViewRejection::kTooFewPatches;
-      out.reason = std::to_string(out.num_samples) +
-                   " selected patches, need at least " +
-                   std::to_string(options.min_samples_per_view);
-      continue;
-    }
-    // Depth variation: with one depth, eq. (one_pixel) is still solvable when
-    // the blur varies (b sits in gamma) but only by g = f, a meaningless fit.
-    {
-      double imin = std::numeric_limits<double>::infinity(), imax = 0;
-      for (const LinearSample& sample : view.samples) {
-        imin = std::min(imin, 1.0 / sample.depth);
-        imax = std::max(imax, 1.0 / sample.depth);
-      }
-      if (!(imax - imin > options.min_relative_depth_range * imax)) {
-        out.rejection = ViewRejection::kDegenerate;
-        out.reason =
-            "no depth variation among its selected patches "
-            "(inverse-depth range " +
-            FormatDouble(100 * (imax - imin) / imax) + " %)";
-        continue;
-      }
-    }
-    // T_p on the measured blur first (the paper's test): a view whose
-    // patches all show about the same blur cannot separate s from g_i, and
-    // its fit would only report noise (e.g. a random sign of s).
-    {
-      double rmin = std::numeric_limits<double>::infinity(), rmax = -rmin;
-      for (const LinearSample& sample : view.samples) {
-        rmin = std::min(rmin, sample.radius_px);
-        rmax = std::max(rmax, sample.radius_px);
-      }
-      if (!(rmax - rmin > options.min_blur_range_px)) {
-        out.rejection = ViewRejection::kSmallBlurRange;
-        out.predicted_blur_range_px = rmax - rmin;
-        out.reason = "measured blur range " + FormatDouble(rmax - rmin) +
-                     " px <= T_p = " + FormatDouble(options.min_blur_range_px) +
-                     " px (too little blur or depth variation)";
-        continue;
-      }
-    }
-    const IrlsResult fit = SolveL1Irls(BuildSystem(views, {i}), options.irls);
-    if (!fit.success || fit.rcond < options.min_rcond) {
-      out.rejection = ViewRejection::kDegenerate;
-      out.reason =
-          "single-view system is rank deficient (no depth variation among "
-          "its patches; rcond " +
-          FormatDouble(fit.rcond) + ")";
-      continue;
-    }
-    const double gbar = fit.x[0];
-    const double sbar = fit.x[1];
-    if (!(sbar > 0)) {
-      out.rejection = ViewRejection::kNonPositiveScale;
-      out.reason =
-          "single-view fit gives s <= 0 (blur does not grow with "
-          "depth as the lens model predicts)";
-      continue;
-    }
-    out.single_solved = true;
-    out.single_scale = ScaleFromSbar(sbar);
-    single_scales[i] = out.single_scale;
-    if (!(gbar > 0)) {
-      out.rejection = ViewRejection::kNonPositiveFocus;
-      out.reason = "single-view fit gives focus distance <= 0 or at infinity";
-      continue;
-    }
-    out.single_focus_model = FocusModelFromUnknowns(gbar, sbar);
-    if (gbar >= 1.0 / view.lens.focal_length_mm) {
-      out.rejection = ViewRejection::kFocusBelowFocalLength;
-      out.reason =
-          "single-view fit puts the focus closer than the focal "
-          "length";
-      continue;
-    }
-    double rmin = std::numeric_limits<double>::infinity();
-    double rmax = -rmin;
-    for (const LinearSample& sample : view.samples) {
-      const double r = PredictBlurRadiusPx(view.lens,
-                                           view.pixel_pitch_mm,
-                                           out.single_scale,
-                                           out.single_focus_model,
-                                           sample.depth);
-      rmin = std::min(rmin, r);
-      rmax = std::max(rmax, r);
-    }
-    out.predicted_blur_range_px = rmax - rmin;
-    if (!(out.predicted_blur_range_px > options.min_blur_range_px)) {
-      out.rejection = ViewRejection::kSmallBlurRange;
-      out.reason =
-          "predicted blur range " + FormatDouble(out.predicted_blur_range_px) +
-          " px <= T_p = " + FormatDouble(options.min_blur_range_px) + " px";
-      continue;
-    }
-    {
-      std::vector<double> abs_res(fit.residuals.size());
-      for (int k = 0; k < fit.residuals.size(); ++k) {
-        abs_res[k] = std::abs(fit.residuals[k]);
-      }
-      const double median_res = Median(abs_res);
-      if (!(median_res <=
-            options.max_residual_to_range * out.predicted_blur_range_px)) {
-        out.rejection = ViewRejection::kPoorFit;
-        out.reason = "blur does not follow depth: median residual " +
-                     FormatDouble(median_res) + " px against a blur range of " +
-                     FormatDouble(out.predicted_blur_range_px) + " px";
-        continue;
-      }
-    }
-    eligible[i] = true;
+    if (!CheckViewSamples(view, options, &out)) continue;
+    eligible[i] = FitSingleView(views, i, options, &out);
+    if (out.single_solved) single_scales[i] = out.single_scale;
   }
 
   // --- N_v views nearest the median; the joint solve. ---
   std::vector<int> selected = SelectViewsNearMedian(
       single_scales, eligible, options.num_selected_views);
-  {
-    std::vector<double> eligible_scales;
-    for (int i = 0; i < num_views; ++i) {
-      if (eligible[i]) eligible_scales.push_back(single_scales[i]);
-    }
-    const double median = Median(eligible_scales);
-    for (int i = 0; i < num_views; ++i) {
-      if (eligible[i] &&
-          !std::binary_search(selected.begin(), selected.end(), i)) {
-        estimate.views[i].rejection = ViewRejection::kFarFromMedian;
-        estimate.views[i].reason =
-            "single-view scale " + FormatDouble(single_scales[i]) +
-            " is not among the " + std::to_string(options.num_selected_views) +
-            " nearest the median " + FormatDouble(median);
-      }
-    }
-  }
+  MarkFarFromMedian(single_scales, eligible, selected, options, &estimate);
   if (selected.empty()) {
     estimate.failure_reason = FailureFromCounts(estimate.views, options);
     return estimate;
   }
-
-  IrlsResult joint;
-  // A kept view whose joint focus comes out non-physical is dropped and the
-  // solve repeated (at most once per view).
-  while (!selected.empty()) {
-    joint = SolveL1Irls(BuildSystem(views, selected), options.irls);
-    if (!joint.success) break;
-    const int n = static_cast<int>(selected.size());
-    int worst = -1;
-    for (int c = 0; c < n; ++c) {
-      const double gbar = joint.x[c];
-      if (!(gbar > 0) ||
-          gbar >= 1.0 / views[selected[c]].lens.focal_length_mm) {
-        worst = c;
-        break;
-      }
-    }
-    if (worst < 0 || !(joint.x[n] > 0)) break;
-    const int view = selected[worst];
-    estimate.views[view].rejection = ViewRejection::kNonPositiveFocus;
-    estimate.views[view].reason =
-        "joint fit gives a non-physical focus distance for this view";
-    selected.erase(selected.begin() + worst);
-  }
+  const IrlsResult joint = SolveJoint(views, options, &selected, &estimate);
   if (selected.empty()) {
     estimate.failure_reason = FailureFromCounts(estimate.views, options);
     return estimate;
@@ -570,86 +601,15 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
   estimate.scale = ScaleFromSbar(joint.x[n]);
   estimate.num_rows = static_cast<int>(joint.residuals.size());
   estimate.irls_iterations = joint.iterations;
-  {
-    const Eigen::VectorXd abs_res = joint.residuals.cwiseAbs();
-    estimate.median_abs_residual_px = Median(
-        std::vector<double>(abs_res.data(), abs_res.data() + abs_res.size()));
-  }
-  const double sbar = joint.x[n];
+  const Eigen::VectorXd abs_res = joint.residuals.cwiseAbs();
+  estimate.median_abs_residual_px = Median(
+      std::vector<double>(abs_res.data(), abs_res.data() + abs_res.size()));
+  FitViewsUnderJointScale(views, selected, joint, joint.x[n], &estimate);
 
-  // Focus distances and residuals of every view under the joint scale.
-  for (int i = 0; i < num_views; ++i) {
-    LinearViewResult& out = estimate.views[i];
-    const auto it = std::lower_bound(selected.begin(), selected.end(), i);
-    const bool used = it != selected.end() && *it == i;
-    out.used = used;
-    if (used) {
-      out.rejection = ViewRejection::kNone;
-      out.reason = "used";
-    }
-    if (views[i].samples.empty()) continue;
-    const DPLinearSystem system = BuildSystem(views, {i});
-    std::vector<double> gamma, c;
-    for (const LinearRow& row : system.rows) {
-      gamma.push_back(row.gamma);
-      c.push_back(row.rhs - row.minus_l * sbar);
-    }
-    const double gbar =
-        used ? joint.x[it - selected.begin()] : WeightedL1Fit1D(gamma, c);
-    out.focus_model = gbar > 0 ? FocusModelFromUnknowns(gbar, sbar) : kNaN;
-    std::vector<double> abs_res;
-    for (size_t k = 0; k < gamma.size(); ++k) {
-      abs_res.push_back(std::abs(gamma[k] * gbar - c[k]));
-    }
-    out.median_abs_residual_px = Median(abs_res);
-  }
-
-  // Bootstrap: resample rows within each kept view (stratified, so every
-  // column keeps its rows) and re-solve.
   estimate.scale_ci_low = estimate.scale_ci_high = kNaN;
   estimate.interval_status = "num_bootstrap is 0";
   if (options.num_bootstrap > 0) {
-    const DPLinearSystem system = BuildSystem(views, selected);
-    std::vector<std::vector<int>> rows_of_view(n);
-    for (int k = 0; k < system.NumRows(); ++k) {
-      rows_of_view[system.row_view[k]].push_back(k);
-    }
-    std::mt19937_64 rng(options.seed);
-    IrlsOptions irls = options.irls;
-    irls.max_iterations = std::min(irls.max_iterations, 200);
-    irls.tolerance = std::max(irls.tolerance, 1e-7);
-    std::vector<double> samples;
-    std::vector<double> weights(system.NumRows());
-    for (int b = 0; b < options.num_bootstrap; ++b) {
-      std::fill(weights.begin(), weights.end(), 0.0);
-      for (const auto& rows : rows_of_view) {
-        std::uniform_int_distribution<size_t> pick(0, rows.size() - 1);
-        for (size_t k = 0; k < rows.size(); ++k) weights[rows[pick(rng)]] += 1;
-      }
-      const IrlsResult fit = SolveL1Irls(system, irls, &weights);
-      const bool solved = fit.success && fit.x[n] > 0;
-      if (solved) {
-        samples.push_back(ScaleFromSbar(fit.x[n]));
-      }
-      for (int j = 0; j < n; ++j) {
-        estimate.views[selected[j]].focus_model_samples.push_back(
-            solved && fit.x[j] > 0 ? FocusModelFromUnknowns(fit.x[j], fit.x[n])
-                                   : kNaN);
-      }
-    }
-    if (samples.size() >= 10) {
-      const double alpha = 0.5 * (1.0 - options.confidence_level);
-      estimate.scale_ci_low =
-          std::min(estimate.scale, Percentile(samples, alpha));
-      estimate.scale_ci_high =
-          std::max(estimate.scale, Percentile(samples, 1.0 - alpha));
-      estimate.interval_status.clear();
-    } else {
-      estimate.interval_status = "only " + std::to_string(samples.size()) +
-                                 " of " +
-                                 std::to_string(options.num_bootstrap) +
-                                 " bootstrap resamples solved, need 10";
-    }
+    BootstrapScaleInterval(views, selected, options, &estimate);
   }
   return estimate;
 }

@@ -64,30 +64,6 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
                        const std::vector<double>* row_weights = nullptr);
 
 // ---------------------------------------------------------------------------
-// Patch selection (top T_c by confidence, per view).
-
-// Indices of the `fraction` highest `confidence` values (ties by index), at
-// least min(min_count, n) of them. Non-finite confidences rank last.
-std::vector<int> SelectTopFraction(const std::vector<double>& confidence,
-                                   double fraction,
-                                   int min_count);
-
-// The same count as SelectTopFraction, spread over depth: `key` (e.g. inverse
-// depth, which blur is affine in) is cut into `strata` equal-width bins and
-// the count is shared evenly among the non-empty bins (best confidence first
-// inside each; what a bin cannot fill goes to the best remaining patches).
-// Pure top-T_c picks the most textured plane of a view again and again,
-// which leaves the view's own solve without depth variation; the linear
-// system needs blur range, the paper's T_p test says as much.
-// strata <= 1 is SelectTopFraction.
-std::vector<int> SelectTopFractionStratified(
-    const std::vector<double>& confidence,
-    const std::vector<double>& key,
-    double fraction,
-    int min_count,
-    int strata);
-
-// ---------------------------------------------------------------------------
 // View selection and the joint solve.
 
 struct LinearSample {

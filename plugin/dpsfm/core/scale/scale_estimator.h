@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -23,6 +24,7 @@
 #include "dpsfm/core/optics/lens_model.h"
 #include "dpsfm/core/scale/intensity_search.h"
 #include "dpsfm/core/scale/linear_estimator.h"
+#include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/scale_cues.h"
 
 namespace dpsfm {
@@ -386,7 +388,45 @@ class DPScaleEstimator {
  private:
   struct ViewData;
   struct IntervalTerms;
-  // The intensity stage: refines the linear scale on the
+  // The steps of Estimate, in order (scale_estimator.cc).
+  // The linear stage on the selected samples; false (failure_reason set)
+  // if it threw.
+  bool LinearStage(const std::vector<std::vector<PatchSample>>& samples,
+                   LinearEstimate* linear,
+                   DPScaleResult* result) const;
+  // Each view's result and every patch, as the linear stage left them.
+  void AddViewResults(const LinearEstimate& linear,
+                      const std::vector<std::vector<PatchSample>>& samples,
+                      DPScaleResult* result) const;
+  // Where the patches went, summed over views (refusal.h).
+  PatchAccount AccountForPatches() const;
+  // The lens geometry's relative systematic term (see
+  // DPScaleOptions::lens_geometry_uncertainty): f / z at the selected
+  // patches' median distance, times the option.
+  double LensGeometryTerm(
+      const LinearEstimate& linear,
+      const std::vector<std::vector<PatchSample>>& samples) const;
+  // result->profile_scale_factor_low/high: what the profile leaves open.
+  void SetProfileScaleFactors(const DPPsfField& field,
+                              DPScaleResult* result) const;
+  // Why the DP data alone give no scale ("" when they give one): too few
+  // patches, no interval, or an interval too wide (and whether the profile
+  // or the data leave it open).
+  std::string LinearRefusal(const LinearEstimate& linear,
+                            const PatchAccount& account,
+                            double statistical_width,
+                            double statistical_ci_low,
+                            double statistical_ci_high,
+                            const DPScaleResult& result) const;
+  // After the DP data answered on their own: their cue, and the recorded
+  // focus's joining it when use_focus; false (failure_reason set) when the
+  // two disagree beyond what may be printed.
+  bool JoinRecordedFocus(const LinearEstimate& linear,
+                         bool use_focus,
+                         DPScaleResult* result) const;
+  // Focus distances and predicted blur radii under the final scale.
+  void PredictUnderFinalScale(DPScaleResult* result) const;
+  // The intensity stage (intensity_stage.cc): refines the linear scale on the
   // selected views' stored crops; fills the result's intensity fields and,
   // when its estimate is used, the scale and its interval (widened by
   // `terms`).
@@ -395,12 +435,33 @@ class DPScaleEstimator {
                       const DPPsfField& field,
                       const IntervalTerms& terms,
                       DPScaleResult* result) const;
-  // Self-calibration: fits the split profile to the stored patches and, if
-  // it replaces the given PSF, re-estimates them (samples[i] of view i; only
-  // the stored ones stay selected) and sets *psf.
+  // Self-calibration (profile_self_calibration.cc): fits the split profile
+  // to the stored patches and, if it replaces the given PSF, re-estimates
+  // them (samples[i] of view i; only the stored ones stay selected) and
+  // sets *field.
   void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
                         DPPsfField* field,
                         DPScaleResult* result) const;
+  // A stored crop: its view and its index among the view's stored crops.
+  struct StoredRef {
+    int view, stored;
+  };
+  // Stored crops by geometry (crop size, radius bound).
+  using StoredGroups = std::map<std::pair<int, double>, std::vector<StoredRef>>;
+  StoredGroups GroupStoredCrops() const;
+  // The group's flat crops (max_psf_fit_depth_spread; the flattest
+  // 2 min_patches when too few are flat), evenly over the views, at most
+  // max_psf_fit_patches.
+  std::vector<ProfilePatch> ProfileFitPatches(
+      const std::vector<StoredRef>& group, int min_patches) const;
+  // Searches every stored crop again with its cell's fitted profile; the
+  // count re-estimated (those that fit become selected), and in *failures
+  // those whose search threw.
+  int ReestimateStoredPatches(
+      const StoredGroups& groups,
+      const std::vector<std::shared_ptr<const DPPsfModel>>& fitted,
+      std::vector<std::vector<PatchSample>>* samples,
+      int* failures) const;
   // Fills the focus_* fields of the result (recorded focus as evidence).
   void CheckAgainstRecordedFocus(DPScaleResult* result) const;
   // The DP data's cue from the linear stage (invalid with too few patches

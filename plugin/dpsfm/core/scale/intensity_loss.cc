@@ -1,0 +1,433 @@
+#include "dpsfm/core/scale/intensity_loss.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/statistics.h"
+
+namespace dpsfm {
+namespace intensity {
+namespace {
+
+cv::Mat ToFloat(const cv::Mat& image) {
+  if (image.depth() == CV_32F) return image;
+  cv::Mat out;
+  const double scale = image.depth() == CV_16U  ? 1.0 / 65535.0
+                       : image.depth() == CV_8U ? 1.0 / 255.0
+                                                : 1.0;
+  image.convertTo(out, CV_MAKETYPE(CV_32F, image.channels()), scale);
+  return out;
+}
+
+double SumSquares(const cv::Mat& kernel) { return kernel.dot(kernel); }
+
+// What the L2-family losses need of one channel at one radius: the mean
+// squared difference of the cross-blurred patches normalised to mean 1,
+// their summed variance, and the normalisers al = n / sum(A), ar = n /
+// sum(B). ok = false: a dark channel (no alignment information).
+struct ChannelMoments {
+  bool ok = false;
+  double acc = 0, own_power = 0, al = 0, ar = 0;
+};
+
+// The L2-family losses from per-channel moments; hr2 = |H_r|^2, hl2 =
+// |H_l|^2 of the kernels used.
+double CombineChannels(const Prepared& p,
+                       IntensityLoss loss,
+                       const std::vector<ChannelMoments>& moments,
+                       double hr2,
+                       double hl2,
+                       std::vector<ChannelTerms>* terms) {
+  const int channels = static_cast<int>(moments.size());
+  double total = 0;
+  int relative_channels = 0;
+  for (int c = 0; c < channels; ++c) {
+    const ChannelMoments& m = moments[c];
+    if (!m.ok) continue;
+    // E ||n_l * H_r||^2 per pixel = sigma_l^2 ||H_r||^2 (white noise), in
+    // the same normalisation: the floor both noise-aware losses remove.
+    const double ql =
+        c < static_cast<int>(p.sigma_left.size()) ? p.sigma_left[c] * m.al : 0;
+    const double qr = c < static_cast<int>(p.sigma_right.size())
+                          ? p.sigma_right[c] * m.ar
+                          : 0;
+    const double noise = ql * ql * hr2 + qr * qr * hl2;
+    if (loss == IntensityLoss::kRelativeL2) {
+      // The denominator keeps its noise: subtracting it too would divide
+      // by ~0 on heavily blurred patches.
+      if (terms != nullptr) {
+        terms->resize(channels);
+        ChannelTerms& t = (*terms)[c];
+        t.acc = m.acc;
+        t.gain = m.al * m.al * hr2 + m.ar * m.ar * hl2;
+        t.power = m.own_power;
+        t.noise = noise;
+      }
+      if (c < static_cast<int>(p.channel_used.size()) && !p.channel_used[c]) {
+        continue;
+      }
+      const double power = c < static_cast<int>(p.reference_power.size())
+                               ? p.reference_power[c]
+                               : m.own_power;
+      if (power > 1e-12) {
+        total += (m.acc - noise) / power;
+        ++relative_channels;
+      }
+    } else if (loss == IntensityLoss::kNoiseCorrectedL2) {
+      total += m.acc - noise;
+    } else {
+      total += m.acc;
+    }
+  }
+  // kRelativeL2: the mean over the informative channels, so that every
+  // patch weighs alike whatever its colour.
+  if (loss == IntensityLoss::kRelativeL2 && relative_channels > 0) {
+    total /= relative_channels;
+  }
+  return total;
+}
+
+// Exact path: the model's kernels at r itself, convolved in the image domain.
+double ExactLoss(const Prepared& p,
+                 double radius_px,
+                 const DPPsfModel& psf,
+                 IntensityLoss loss,
+                 std::vector<ChannelTerms>* terms) {
+  const double r =
+      std::max(-p.max_abs_radius, std::min(p.max_abs_radius, radius_px));
+  const DPKernels kernels = psf.Kernels(r);
+  const int k = std::max(kernels.left.cols, kernels.left.rows) / 2;
+  const int w = p.left.cols - 2 * p.border;
+  const int h = p.left.rows - 2 * p.border;
+  // Convolve only the interior plus the kernel's reach (cheaper for small
+  // kernels; the reflected border of ConvolvePsf never reaches the interior).
+  const cv::Rect reach(p.border - k, p.border - k, w + 2 * k, h + 2 * k);
+  const cv::Rect interior(k, k, w, h);
+  // Eq. (loss_refine): G_l * H_r against G_r * H_l (H_l = flip(H_r)).
+  const cv::Mat xl = ConvolvePsf(p.left(reach), kernels.right)(interior);
+  const cv::Mat xr = ConvolvePsf(p.right(reach), kernels.left)(interior);
+  const int channels = xl.channels();
+  const double n = static_cast<double>(w) * h;
+  const cv::Scalar sum_l = cv::sum(xl);
+  const cv::Scalar sum_r = cv::sum(xr);
+  std::vector<ChannelMoments> moments(channels);
+  double total_l1 = 0;
+  for (int c = 0; c < channels; ++c) {
+    // eta(X) = X / ||X||_1; intensities are >= 0 so ||X||_1 = sum X. A dark
+    // channel carries no alignment information.
+    const double sl = sum_l[c], sr = sum_r[c];
+    if (!(sl > 1e-9 * n) || !(sr > 1e-9 * n)) continue;
+    if (loss == IntensityLoss::kPaperL1) {
+      double acc = 0;
+      for (int y = 0; y < h; ++y) {
+        const float* a = xl.ptr<float>(y);
+        const float* b = xr.ptr<float>(y);
+        for (int x = 0; x < w; ++x) {
+          acc += std::abs(a[x * channels + c] / sl - b[x * channels + c] / sr);
+        }
+      }
+      total_l1 += acc;
+      continue;
+    }
+    // Normalised to mean 1 so the loss reads as a relative contrast.
+    ChannelMoments& m = moments[c];
+    m.ok = true;
+    m.al = n / sl;
+    m.ar = n / sr;
+    double acc = 0, power_l = 0, power_r = 0;
+    for (int y = 0; y < h; ++y) {
+      const float* a = xl.ptr<float>(y);
+      const float* b = xr.ptr<float>(y);
+      for (int x = 0; x < w; ++x) {
+        const double va = a[x * channels + c] * m.al;
+        const double vb = b[x * channels + c] * m.ar;
+        const double d = va - vb;
+        acc += d * d;
+        // Both normalised patches have mean 1.
+        power_l += (va - 1) * (va - 1);
+        power_r += (vb - 1) * (vb - 1);
+      }
+    }
+    m.acc = acc / n;
+    m.own_power = (power_l + power_r) / n;
+  }
+  if (loss == IntensityLoss::kPaperL1) return total_l1;
+  return CombineChannels(p,
+                         loss,
+                         moments,
+                         SumSquares(kernels.right),
+                         SumSquares(kernels.left),
+                         terms);
+}
+
+// Grid path: the same L2-family losses with kernels interpolated between
+// grid nodes, from the node statistics (no convolution per radius).
+double GridLoss(const Prepared& p,
+                double radius_px,
+                IntensityLoss loss,
+                std::vector<ChannelTerms>* terms) {
+  const DPKernelGrid& grid = *p.grid;
+  int node = 0;
+  double t = 0;
+  grid.Locate(radius_px, &node, &t);
+  const auto e0 = p.stats.find(node);
+  const auto e1 = p.stats.find(node + 1);
+  DPSFM_CHECK(e0 != p.stats.end() && e0->second.has_next && e1 != p.stats.end())
+      << "kernel-grid interval " << node << " was not prepared";
+  const std::vector<NodeChannelStats>& s0 = e0->second.channel;
+  const std::vector<NodeChannelStats>& s1 = e1->second.channel;
+  const double n = p.num_interior;
+  const double u = 1 - t;
+  std::vector<ChannelMoments> moments(p.channels);
+  for (int c = 0; c < p.channels; ++c) {
+    const NodeChannelStats& a = s0[c];
+    const NodeChannelStats& b = s1[c];
+    const double sl = u * a.sum_a + t * b.sum_a;
+    const double sr = u * a.sum_b + t * b.sum_b;
+    if (!(sl > 1e-9 * n) || !(sr > 1e-9 * n)) continue;
+    const double aa = InterpolatedEnergy(a.aa, a.aa_next, b.aa, t);
+    const double bb = InterpolatedEnergy(a.bb, a.bb_next, b.bb, t);
+    const double ab =
+        u * u * a.ab + t * u * (a.ab_next + a.ba_next) + t * t * b.ab;
+    ChannelMoments& m = moments[c];
+    m.ok = true;
+    m.al = n / sl;
+    m.ar = n / sr;
+    const double la = m.al * m.al * aa, lb = m.ar * m.ar * bb;
+    m.acc = std::max(0.0, (la - 2 * m.al * m.ar * ab + lb) / n);
+    // sum (va - 1)^2 = al^2 |A|^2 - n, as va has mean 1.
+    m.own_power = std::max(0.0, (la + lb) / n - 2);
+  }
+  const double hr2 = InterpolatedEnergy(grid.RightEnergy(node),
+                                        grid.RightCross(node),
+                                        grid.RightEnergy(node + 1),
+                                        t);
+  const double hl2 = InterpolatedEnergy(grid.LeftEnergy(node),
+                                        grid.LeftCross(node),
+                                        grid.LeftEnergy(node + 1),
+                                        t);
+  return CombineChannels(p, loss, moments, hr2, hl2, terms);
+}
+
+}  // namespace
+
+// Largest |r| whose kernels fit inside `border` (and <= max_radius_px).
+double MaxSupportedRadius(const DPPsfModel& psf,
+                          int border,
+                          double max_radius_px) {
+  double r = std::min(max_radius_px, border + 0.5);
+  while (r > 0 && psf.KernelRadius(r) > border) r -= 0.05;
+  return std::max(r, 0.0);
+}
+
+double LossOfPrepared(const Prepared& p,
+                      double radius_px,
+                      const DPPsfModel& psf,
+                      IntensityLoss loss,
+                      std::vector<ChannelTerms>* terms) {
+  return p.grid != nullptr ? GridLoss(p, radius_px, loss, terms)
+                           : ExactLoss(p, radius_px, psf, loss, terms);
+}
+
+// Grid intervals (node n <-> [r_n, r_n+1]) that the radii fall in.
+std::vector<int> IntervalsOf(const DPKernelGrid& grid,
+                             const std::vector<double>& radii) {
+  std::vector<int> intervals;
+  for (const double r : radii) {
+    int node = 0;
+    double t = 0;
+    grid.Locate(r, &node, &t);
+    intervals.push_back(node);
+  }
+  std::sort(intervals.begin(), intervals.end());
+  intervals.erase(std::unique(intervals.begin(), intervals.end()),
+                  intervals.end());
+  return intervals;
+}
+
+// Adds to p->stats the nodes of the given intervals that are not ready yet,
+// from the patch's crops: per channel one forward DFT of each view, then per
+// node one product and inverse DFT per view (only the interior is kept; the
+// grid's kernels fit the crop's border, so circular wrap-around never
+// reaches it).
+void AddIntervals(const IntensityPatch& patch,
+                  const std::vector<int>& intervals,
+                  Prepared* p) {
+  std::vector<int> nodes;
+  for (const int n : intervals) {
+    const auto it = p->stats.find(n);
+    if (it == p->stats.end() || !it->second.has_next) {
+      nodes.push_back(n);
+      nodes.push_back(n + 1);
+    }
+  }
+  if (nodes.empty()) return;
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+
+  const DPKernelGrid& grid = *p->grid;
+  const cv::Size dft = grid.DftSize();
+  const cv::Mat left = ToFloat(patch.left), right = ToFloat(patch.right);
+  const int channels = left.channels();
+  const cv::Rect interior(p->border,
+                          p->border,
+                          left.cols - 2 * p->border,
+                          left.rows - 2 * p->border);
+  std::vector<cv::Mat> left_channels, right_channels;
+  cv::split(left, left_channels);
+  cv::split(right, right_channels);
+  std::vector<cv::Mat> spec_left(channels), spec_right(channels);
+  cv::Mat padded = cv::Mat::zeros(dft, CV_32FC1);
+  const cv::Rect area(0, 0, left.cols, left.rows);
+  for (int c = 0; c < channels; ++c) {
+    left_channels[c].copyTo(padded(area));
+    cv::dft(padded, spec_left[c], 0, left.rows);
+    right_channels[c].copyTo(padded(area));
+    cv::dft(padded, spec_right[c], 0, left.rows);
+  }
+  // Rows of the inverse transforms that are needed (up to the interior's
+  // last one).
+  const int output_rows = interior.y + interior.height;
+  std::vector<cv::Mat> previous_a(channels), previous_b(channels);
+  int previous_node = -2;
+  cv::Mat product, image;
+  // The interior of a view's spectrum times a kernel's, back in space.
+  auto blurred = [&](const cv::Mat& view_spectrum,
+                     const cv::Mat& kernel_spectrum) {
+    cv::mulSpectrums(view_spectrum, kernel_spectrum, product, 0);
+    cv::dft(product,
+            image,
+            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
+            output_rows);
+    return cv::Mat(image(interior).clone());
+  };
+  for (const int n : nodes) {
+    Prepared::NodeEntry& entry = p->stats[n];
+    entry.channel.assign(channels, NodeChannelStats());
+    Prepared::NodeEntry* before =
+        previous_node == n - 1 ? &p->stats[n - 1] : nullptr;
+    for (int c = 0; c < channels; ++c) {
+      const cv::Mat a = blurred(spec_left[c], grid.RightSpectrum(n));
+      const cv::Mat b = blurred(spec_right[c], grid.LeftSpectrum(n));
+      NodeChannelStats& s = entry.channel[c];
+      s.sum_a = cv::sum(a)[0];
+      s.sum_b = cv::sum(b)[0];
+      s.aa = a.dot(a);
+      s.bb = b.dot(b);
+      s.ab = a.dot(b);
+      if (before != nullptr) {
+        NodeChannelStats& prev = before->channel[c];
+        prev.aa_next = previous_a[c].dot(a);
+        prev.bb_next = previous_b[c].dot(b);
+        prev.ab_next = previous_a[c].dot(b);
+        prev.ba_next = previous_b[c].dot(a);
+      }
+      previous_a[c] = a;
+      previous_b[c] = b;
+    }
+    if (before != nullptr) before->has_next = true;
+    previous_node = n;
+  }
+}
+
+// Radii of a patch under the given scales (eq. (solution01) with s g_i' and
+// s z'_ij); non-finite ones (a depth at the focal plane's pole) at the bound.
+std::vector<double> PatchRadii(const IntensityView& view,
+                               double depth,
+                               const std::vector<double>& scales,
+                               double bound) {
+  std::vector<double> radii;
+  for (const double s : scales) {
+    double r = PredictBlurRadiusPx(
+        view.lens, view.pixel_pitch_mm, s, view.focus_distance_model, depth);
+    if (!std::isfinite(r)) r = r > 0 ? bound : -bound;
+    radii.push_back(r);
+  }
+  return radii;
+}
+
+Prepared Prepare(const IntensityPatch& patch,
+                 const DPPsfModel& psf,
+                 double max_radius_px) {
+  DPSFM_CHECK(!patch.left.empty() && patch.left.size() == patch.right.size() &&
+              patch.left.type() == patch.right.type())
+      << "patch crops must be non-empty and of equal size and type";
+  DPSFM_CHECK(patch.border >= 0 && patch.left.cols > 2 * patch.border &&
+              patch.left.rows > 2 * patch.border)
+      << "patch border " << patch.border << " leaves no interior";
+  Prepared p;
+  p.left = ToFloat(patch.left);
+  p.right = ToFloat(patch.right);
+  p.border = patch.border;
+  p.max_abs_radius = MaxSupportedRadius(psf, patch.border, max_radius_px);
+  p.channels = p.left.channels();
+  p.num_interior = static_cast<double>(p.left.cols - 2 * p.border) *
+                   (p.left.rows - 2 * p.border);
+  return p;
+}
+
+}  // namespace intensity
+
+std::vector<double> EstimateChannelNoiseSigma(const cv::Mat& image) {
+  const cv::Mat f = intensity::ToFloat(image);
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  std::vector<cv::Mat> channels;
+  cv::split(f, channels);
+  std::vector<double> sigmas;
+  for (const cv::Mat& ch : channels) {
+    if (ch.rows < 3 || ch.cols < 3) {
+      sigmas.push_back(0);
+      continue;
+    }
+    cv::Mat response;
+    cv::filter2D(ch, response, CV_32F, mask);
+    // Drop the filter's own border.
+    const cv::Mat inner = response(cv::Rect(1, 1, ch.cols - 2, ch.rows - 2));
+    std::vector<float> values;
+    values.reserve(inner.total());
+    for (int y = 0; y < inner.rows; ++y) {
+      const float* row = inner.ptr<float>(y);
+      for (int x = 0; x < inner.cols; ++x) values.push_back(std::abs(row[x]));
+    }
+    sigmas.push_back(SigmaFromMedianAbsolute(UpperMedianInPlace(&values), 6.0));
+  }
+  return sigmas;
+}
+
+std::vector<double> EstimatePairNoiseSigma(const cv::Mat& left,
+                                           const cv::Mat& right) {
+  const cv::Mat l = intensity::ToFloat(left), r = intensity::ToFloat(right);
+  const cv::Scalar ml = cv::mean(l), mr = cv::mean(r);
+  std::vector<cv::Mat> lc, rc;
+  cv::split(l, lc);
+  cv::split(r, rc);
+  std::vector<cv::Mat> diff(lc.size());
+  for (size_t c = 0; c < lc.size(); ++c) {
+    const double m = 0.5 * (ml[c] + mr[c]);
+    const double gl = ml[c] > 0 ? m / ml[c] : 1.0;
+    const double gr = mr[c] > 0 ? m / mr[c] : 1.0;
+    diff[c] = (lc[c] * gl - rc[c] * gr) * (1.0 / std::sqrt(2.0));
+  }
+  cv::Mat merged;
+  cv::merge(diff, merged);
+  return EstimateChannelNoiseSigma(merged);
+}
+
+double PatchAlignmentLoss(const IntensityPatch& patch,
+                          double radius_px,
+                          const DPPsfModel& psf,
+                          IntensityLoss loss,
+                          double max_radius_px,
+                          const std::vector<double>& noise_sigma_left,
+                          const std::vector<double>& noise_sigma_right) {
+  intensity::Prepared p = intensity::Prepare(patch, psf, max_radius_px);
+  p.sigma_left = noise_sigma_left;
+  p.sigma_right = noise_sigma_right;
+  return intensity::LossOfPrepared(p, radius_px, psf, loss);
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,281 @@
+#include "dpsfm/core/scale/view_patches.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/optics/kernel_grid.h"
+#include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/threads.h"
+
+namespace dpsfm {
+
+void CheckViewInput(const DPView& view) {
+  const std::string& name = view.name;
+  DPSFM_CHECK(!view.left.empty() && !view.right.empty())
+      << "view '" << name << "': empty DP image";
+  DPSFM_CHECK(view.left.size() == view.right.size() &&
+              view.left.type() == view.right.type())
+      << "view '" << name << "': left and right differ in size or type";
+  DPSFM_CHECK(view.left.type() == CV_32FC1 || view.left.type() == CV_32FC3)
+      << "view '" << name << "': DP images must be CV_32FC1 or CV_32FC3";
+  DPSFM_CHECK(view.lens.Check())
+      << "view '" << name << "': invalid lens data (" << view.lens.ToString()
+      << "): " << OptionCheckFailure();
+  DPSFM_CHECK(!view.depth.empty() || !view.depth_points.empty())
+      << "view '" << name << "': neither a depth map nor depth points";
+  DPSFM_CHECK(view.depth.empty() || view.depth.type() == CV_32FC1)
+      << "view '" << name << "': depth map must be CV_32FC1";
+}
+
+PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
+                                const DPScaleOptions& options) {
+  PatchGeometry geometry =
+      options.resize_factor > 0
+          ? DefaultPatchGeometry(frame_size, options.resize_factor)
+          : DefaultPatchGeometry(frame_size);
+  if (options.max_radius_px <= 0 &&
+      geometry.max_radius_px < options.min_auto_radius_px) {
+    geometry = PatchGeometryForRadius(options.min_auto_radius_px,
+                                      geometry.resize_factor);
+  }
+  if (options.patch_size > 0) geometry.patch_size = options.patch_size;
+  if (options.stride > 0) geometry.stride = options.stride;
+  if (options.max_radius_px > 0) geometry.max_radius_px = options.max_radius_px;
+  return geometry;
+}
+
+WorkingView MakeWorkingView(const DPView& view, double resize_factor) {
+  WorkingView working;
+  working.left = view.left;
+  working.right = view.right;
+  if (resize_factor < 1) {
+    // Area averaging is the anti-aliased resize the reference code uses.
+    const cv::Size size(
+        std::max(1,
+                 static_cast<int>(std::round(view.left.cols * resize_factor))),
+        std::max(1,
+                 static_cast<int>(std::round(view.left.rows * resize_factor))));
+    cv::resize(view.left, working.left, size, 0, 0, cv::INTER_AREA);
+    cv::resize(view.right, working.right, size, 0, 0, cv::INTER_AREA);
+  }
+  working.sx = static_cast<double>(working.left.cols) / view.left.cols;
+  working.sy = static_cast<double>(working.left.rows) / view.left.rows;
+  working.gray_left = ToLuma(working.left);
+  working.gray_right = ToLuma(working.right);
+  return working;
+}
+
+int BlurSearchBorder(const DPPsfField& field,
+                     const BlurEstimationOptions& blur,
+                     double max_radius_px) {
+  const double grid_bound =
+      DPKernelGrid::BoundFor(blur.grid_step_px, max_radius_px);
+  int border = 0;
+  for (const auto& psf : field.cells) {
+    border = std::max(border, psf->KernelRadius(grid_bound));
+  }
+  return border;
+}
+
+int PatchCell(const DPPsfField& field,
+              const cv::Rect& interior,
+              const cv::Size& working_size) {
+  return field.layout.CellAt(
+      (interior.x + 0.5 * interior.width) / working_size.width,
+      (interior.y + 0.5 * interior.height) / working_size.height);
+}
+
+std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
+                                             const WorkingView& working,
+                                             const PatchGeometry& geometry,
+                                             int border,
+                                             const DPScaleOptions& options) {
+  std::vector<PatchCandidate> candidates = MakePatchGrid(
+      working.left.size(), geometry.patch_size, geometry.stride, border);
+  PatchDepthOptions depth_options;
+  depth_options.min_coverage = options.min_depth_coverage;
+  depth_options.min_points = options.min_depth_points_per_patch;
+  depth_options.max_relative_spread = options.max_relative_depth_spread;
+  MeasurePatchDepths(view.depth,
+                     view.depth_points,
+                     view.left.size(),
+                     working.sx,
+                     working.sy,
+                     depth_options,
+                     &candidates);
+  return candidates;
+}
+
+ViewBlurSearch SearchViewBlur(const WorkingView& working,
+                              const std::vector<PatchCandidate>& candidates,
+                              const DPPsfField& field,
+                              const BlurEstimationOptions& blur,
+                              int border,
+                              int patch_size,
+                              bool any_depth,
+                              const DPScaleOptions& options) {
+  const int num = static_cast<int>(candidates.size());
+  ViewBlurSearch out;
+  out.estimates.resize(num);
+  if (any_depth) {
+    out.screened = ScreenPatches(working.gray_left,
+                                 working.gray_right,
+                                 candidates,
+                                 border,
+                                 options.min_texture_snr,
+                                 options.num_threads,
+                                 &out.estimates);
+  }
+  SearchShareOptions share;
+  share.blur_search_factor = options.blur_search_factor;
+  share.top_patch_fraction = options.top_patch_fraction;
+  share.min_patches_per_view = options.min_patches_per_view;
+  share.depth_strata = options.depth_strata;
+  const std::vector<char> search =
+      ChooseSearchedPatches(out.screened, num, share, &out.estimates);
+  out.num_searched =
+      static_cast<int>(std::count(search.begin(), search.end(), 1));
+  if (out.num_searched == 0) return out;
+
+  const int crop = patch_size + 2 * border;
+  std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
+  for (const auto& psf : field.cells) {
+    estimators.emplace_back(
+        new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
+    DPSFM_CHECK_LE(estimators.back()->Border(), border);
+  }
+#ifdef _OPENMP
+  const int threads = EffectiveNumThreads(options.num_threads);
+#pragma omp parallel for num_threads(threads) schedule(dynamic)
+#endif
+  for (int k = 0; k < num; ++k) {
+    if (!search[k]) continue;
+    const cv::Rect& interior = candidates[k].interior;
+    const cv::Rect r = PatchCrop(interior, border);
+    try {
+      out.estimates[k] =
+          estimators[PatchCell(field, interior, working.left.size())]->Estimate(
+              working.gray_left(r).clone(), working.gray_right(r).clone());
+    } catch (const std::exception& e) {
+      out.estimates[k].valid = false;
+      out.estimates[k].reject_reason = e.what();
+    }
+  }
+  return out;
+}
+
+std::vector<PatchSample> ViewSamples(
+    const std::vector<PatchCandidate>& candidates,
+    const ViewBlurSearch& search,
+    const WorkingView& working,
+    const DPPsfField& field,
+    const PatchGeometry& geometry,
+    int view_index,
+    const DPScaleOptions& options,
+    std::map<std::string, int>* rejections,
+    std::vector<int>* sample_candidate) {
+  const double residual_threshold =
+      ViewResidualThreshold(candidates,
+                            search.estimates,
+                            options.max_relative_residual,
+                            options.relative_residual_factor);
+  const int p = geometry.patch_size;
+  std::vector<PatchSample> samples;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const PatchCandidate& c = candidates[k];
+    const PatchBlurEstimate& e = search.estimates[k];
+    const std::string reject =
+        PatchRejection(c, e, options.min_texture_snr, residual_threshold);
+    if (!reject.empty()) {
+      (*rejections)[reject]++;
+      continue;
+    }
+    sample_candidate->push_back(static_cast<int>(k));
+    PatchSample s;
+    s.view = view_index;
+    s.psf_band = PatchCell(field, c.interior, working.left.size());
+    const double cx = c.interior.x + 0.5 * (p - 1);
+    const double cy = c.interior.y + 0.5 * (p - 1);
+    s.x = (cx + 0.5) / working.sx - 0.5;
+    s.y = (cy + 0.5) / working.sy - 0.5;
+    s.depth = c.depth.median;
+    s.depth_spread = c.depth.relative_spread;
+    s.radius_px = e.radius_px;
+    s.radius_frame_px = e.radius_px / geometry.resize_factor;
+    s.fit_quality = e.fit_quality;
+    s.texture = e.texture;
+    s.texture_snr = TextureSnr(e.texture, e.noise_sigma);
+    s.confidence =
+        PatchConfidence(e.texture, e.fit_quality, c.depth.relative_variance);
+    s.predicted_radius_px = std::numeric_limits<double>::quiet_NaN();
+    samples.push_back(s);
+  }
+  return samples;
+}
+
+std::vector<int> SelectTopSamples(const std::vector<PatchSample>& samples,
+                                  const ViewBlurSearch& search,
+                                  const DPScaleOptions& options) {
+  std::vector<double> confidence, inverse_depth;
+  for (const PatchSample& s : samples) {
+    confidence.push_back(s.confidence);
+    inverse_depth.push_back(1.0 / s.depth);
+  }
+  const double keep_fraction =
+      search.num_searched > 0
+          ? std::min(1.0,
+                     options.top_patch_fraction * search.screened.index.size() /
+                         search.num_searched)
+          : options.top_patch_fraction;
+  return SelectTopFractionStratified(confidence,
+                                     inverse_depth,
+                                     keep_fraction,
+                                     options.min_patches_per_view,
+                                     options.depth_strata);
+}
+
+std::vector<StoredCrop> StoreBestCrops(
+    const WorkingView& working,
+    const std::vector<PatchCandidate>& candidates,
+    const std::vector<PatchSample>& samples,
+    const std::vector<int>& top,
+    const std::vector<int>& sample_candidate,
+    const DPPsfField& field,
+    const PatchGeometry& geometry,
+    int border,
+    const DPScaleOptions& options) {
+  std::vector<int> by_confidence = top;
+  std::stable_sort(
+      by_confidence.begin(), by_confidence.end(), [&](int a, int b) {
+        return samples[a].confidence > samples[b].confidence;
+      });
+  int store_border = border;
+  if (options.psf_self_calibration) {
+    for (const auto& psf : field.cells) {
+      store_border = std::max(
+          store_border,
+          psf->KernelRadius(options.psf_fit_radius_factor *
+                            DPKernelGridBound(geometry.max_radius_px,
+                                              options.blur.grid_step_px)));
+    }
+  }
+  const int crop = geometry.patch_size + 2 * border;
+  const int cap = MaxStoredCrops(crop,
+                                 working.left.channels(),
+                                 options.max_stored_patches_per_view,
+                                 options.max_stored_megabytes_per_view);
+  if (static_cast<int>(by_confidence.size()) > cap) by_confidence.resize(cap);
+  std::vector<std::pair<int, cv::Rect>> to_store;
+  for (int i : by_confidence) {
+    to_store.emplace_back(i, candidates[sample_candidate[i]].interior);
+  }
+  return StoreCrops(
+      working.left, working.right, to_store, border, store_border);
+}
+
+}  // namespace dpsfm

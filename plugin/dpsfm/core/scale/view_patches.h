@@ -1,0 +1,117 @@
+// One view's patches, from the grid to the stored crops: the steps
+// DPScaleEstimator::AddView runs on each view, in order. The view is
+// resampled to the working frame, the patch grid gets its depths
+// (patch_grid.h), the patches are screened and the blur search runs on the
+// chosen share (patch_selection.h, blur_estimation.h), the usable patches
+// become samples, the top T_c of them are selected, and the best selected
+// ones are kept as crops (crop_store.h) for the later stages.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/blur/crop_store.h"
+#include "dpsfm/core/blur/patch_grid.h"
+#include "dpsfm/core/blur/patch_selection.h"
+#include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/scale/scale_estimator.h"
+
+namespace dpsfm {
+
+// Throws std::invalid_argument naming the view for malformed input (empty or
+// mismatched images, bad lens data, neither depth map nor points).
+void CheckViewInput(const DPView& view);
+
+// The patch geometry of a frame: the reference defaults for its size, then
+// the explicit options.
+PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
+                                const DPScaleOptions& options);
+
+// The view on the working frame (area-averaged when downsampled) and its
+// grey versions; sx, sy: working / frame pixels per axis (exact for the
+// rounded size).
+struct WorkingView {
+  cv::Mat left, right;
+  cv::Mat gray_left, gray_right;
+  double sx = 1, sy = 1;
+};
+WorkingView MakeWorkingView(const DPView& view, double resize_factor);
+
+// The border the blur search's kernel grid needs around a patch: the widest
+// kernel of the field's profiles at the grid's bound (the search bound
+// rounded up to a grid step).
+int BlurSearchBorder(const DPPsfField& field,
+                     const BlurEstimationOptions& blur,
+                     double max_radius_px);
+
+// Which cell of the field's layout serves a patch with this interior (on a
+// working frame of `working_size`).
+int PatchCell(const DPPsfField& field,
+              const cv::Rect& interior,
+              const cv::Size& working_size);
+
+// Step 1: the patch grid and each patch's depth.
+std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
+                                             const WorkingView& working,
+                                             const PatchGeometry& geometry,
+                                             int border,
+                                             const DPScaleOptions& options);
+
+// Steps 2 and 3: screening, the blur-search share, and the blur search on
+// the chosen patches (the expensive part, in parallel). A patch whose
+// search throws is recorded as invalid with the exception's message.
+struct ViewBlurSearch {
+  std::vector<PatchBlurEstimate> estimates;  // per candidate
+  ScreenedPatches screened;
+  int num_searched = 0;
+};
+ViewBlurSearch SearchViewBlur(const WorkingView& working,
+                              const std::vector<PatchCandidate>& candidates,
+                              const DPPsfField& field,
+                              const BlurEstimationOptions& blur,
+                              int border,
+                              int patch_size,
+                              bool any_depth,
+                              const DPScaleOptions& options);
+
+// Step 4: usable patches become samples (of view `view_index`); the others
+// are counted by reason in *rejections. *sample_candidate receives each
+// sample's grid index.
+std::vector<PatchSample> ViewSamples(
+    const std::vector<PatchCandidate>& candidates,
+    const ViewBlurSearch& search,
+    const WorkingView& working,
+    const DPPsfField& field,
+    const PatchGeometry& geometry,
+    int view_index,
+    const DPScaleOptions& options,
+    std::map<std::string, int>* rejections,
+    std::vector<int>* sample_candidate);
+
+// Step 5: the top T_c of the samples by confidence, stratified by depth (of
+// all screened patches, taken from the searched ones; all of them when
+// blur_search_factor is 0).
+std::vector<int> SelectTopSamples(const std::vector<PatchSample>& samples,
+                                  const ViewBlurSearch& search,
+                                  const DPScaleOptions& options);
+
+// Step 6: crops of the best selected patches (best first, within the
+// memory budget) for the intensity stage and self-calibration. With
+// self-calibration their border supports blur up to psf_fit_radius_factor x
+// the search bound; the budget is for crops with the blur stage's border.
+std::vector<StoredCrop> StoreBestCrops(
+    const WorkingView& working,
+    const std::vector<PatchCandidate>& candidates,
+    const std::vector<PatchSample>& samples,
+    const std::vector<int>& top,
+    const std::vector<int>& sample_candidate,
+    const DPPsfField& field,
+    const PatchGeometry& geometry,
+    int border,
+    const DPScaleOptions& options);
+
+}  // namespace dpsfm
