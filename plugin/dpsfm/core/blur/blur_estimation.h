@@ -140,6 +140,10 @@ struct PatchBlurEstimate {
   std::string reject_reason;
 };
 
+namespace internal {
+struct BlurTables;
+}  // namespace internal
+
 // Estimates patches of one size with one PSF model. Precomputes the kernel
 // spectra once (tens of ms, tens of MB for 111 px patches at |r| <= 20);
 // Estimate is const and thread-safe, so one instance serves all threads.
@@ -160,14 +164,8 @@ class PatchBlurEstimator {
   const BlurEstimationOptions& Options() const;
 
  private:
-  struct Tables;
-  struct CoarseCurve;
-  class Refinement;
-  // The coarse global search on the gain-equalised views.
-  CoarseCurve CoarseSearch(const cv::Mat& gl,
-                           const cv::Mat& gr,
-                           double sigma2_hp) const;
-  std::unique_ptr<const Tables> tables_;
+  // Defined in blur_search_internal.h.
+  std::unique_ptr<const internal::BlurTables> tables_;
 };
 
 // left/right: grayscale CV_32FC1 patches of equal size, intensities roughly
@@ -182,6 +180,8 @@ PatchBlurEstimate EstimatePatchBlur(const cv::Mat& left,
 // The grey view the blur search works on: CV_32FC1 as is, CV_32FC3 by Rec.
 // 601 weights in the channel order given (the loss is symmetric in it).
 cv::Mat ToLuma(const cv::Mat& image);
+
+// Screening patches before the blur search (patch_screening.cc).
 
 // Mean |horizontal Sobel| (3x3, unnormalised, BORDER_REFLECT_101) of a
 // CV_32FC1 patch: DP disparity is horizontal, so only vertical edges carry it.
@@ -219,6 +219,8 @@ class PatchScreening {
   cv::Mat texture_integral_;                       // CV_64FC1
   cv::Mat noise_left_, noise_right_, noise_diff_;  // |responses|, CV_32FC1
 };
+
+// Patch geometry (patch_geometry.cc).
 
 // Patch geometry on the working frame (the DP frame after resizing by
 // resize_factor).

@@ -119,6 +119,245 @@ cv::Mat RegisterSharp(const ShapeCapture& c, cv::Point2d* shift) {
   return moved;
 }
 
+// Appends a note to a capture's notes ("; " between notes).
+void AddNote(std::string* notes, const std::string& note) {
+  *notes += (notes->empty() ? "" : "; ") + note;
+}
+
+// Which captures show a shape (|r| >= min_radius_px; a note says why not),
+// with the per-capture results set up empty. Returns the largest |r| of
+// the captures used (0 when none is).
+double ListCaptures(const std::vector<ShapeCapture>& captures,
+                    const ShapeCalibrationOptions& options,
+                    ShapeCalibration* out) {
+  const int num_cells = options.layout.NumCells();
+  double largest = 0;
+  for (const ShapeCapture& c : captures) {
+    DPSFM_CHECK(!c.left.empty() && c.left.size() == c.right.size() &&
+                c.left.size() == c.sharp.size())
+        << "capture " << c.name
+        << ": the DP views and the sharp reference differ in size";
+    DPSFM_CHECK(std::isfinite(c.signed_radius_px))
+        << "capture " << c.name << ": no blur radius";
+    out->capture_names.push_back(c.name);
+    const bool used = std::abs(c.signed_radius_px) >= options.min_radius_px;
+    out->capture_used.push_back(used);
+    std::ostringstream note;
+    if (!used) {
+      note << std::setprecision(3) << "blur radius "
+           << std::abs(c.signed_radius_px) << " px < " << options.min_radius_px
+           << " px shows no shape";
+    }
+    out->capture_notes.push_back(note.str());
+    if (used) largest = std::max(largest, std::abs(c.signed_radius_px));
+    out->capture_cell_offsets.emplace_back(num_cells, kNaN);
+    out->capture_shifts.emplace_back(0, 0);
+    out->capture_cell_residuals.emplace_back(num_cells, kNaN);
+    out->capture_cell_light.emplace_back(num_cells, kNaN);
+  }
+  return largest;
+}
+
+// The sharp reference of each used capture, registered onto its views
+// (empty for the others).
+std::vector<cv::Mat> RegisterUsedCaptures(
+    const std::vector<ShapeCapture>& captures, ShapeCalibration* out) {
+  std::vector<cv::Mat> registered(captures.size());
+  for (size_t i = 0; i < captures.size(); ++i) {
+    if (out->capture_used[i]) {
+      registered[i] = RegisterSharp(captures[i], &out->capture_shifts[i]);
+    }
+  }
+  return registered;
+}
+
+// Per cell: every usable capture's pair, magnified to the reference radius
+// (far side), weighted by |r|^2 (the number of kernel pixels it resolves).
+class CellMeasurement {
+ public:
+  CellMeasurement(const std::vector<ShapeCapture>& captures,
+                  const std::vector<cv::Mat>& registered,
+                  const ShapeCalibrationOptions& options,
+                  ShapeCalibration* out)
+      : captures_(captures),
+        registered_(registered),
+        options_(options),
+        ref_(out->reference_radius_px),
+        out_(out) {}
+
+  // The cell's averaged kernels and centroid offset; false (with the
+  // reason) when it has no usable measurement or breaks the DP convention.
+  bool MeasureCell(int cell) {
+    Samples samples;
+    for (size_t i = 0; i < captures_.size(); ++i) {
+      if (!out_->capture_used[i]) continue;
+      SampleCapture(static_cast<int>(i), cell, &samples);
+    }
+    if (samples.kernels.empty()) {
+      out_->reason = "cell " + std::to_string(cell) +
+                     " of the frame has no usable kernel measurement";
+      return false;
+    }
+    const DPKernels mean = WeightedMean(samples);
+    out_->cell_centroid_offsets[cell] = CentroidOffsetPerRadius(mean, ref_);
+    if (!(out_->cell_centroid_offsets[cell] > 0)) {
+      out_->reason = "cell " + std::to_string(cell) +
+                     "'s measured kernels break the DP convention (the left "
+                     "view does not lean away from the right one): are the "
+                     "views swapped?";
+      return false;
+    }
+    out_->cell_kernels[cell] = TrimToSupport(mean);
+    return true;
+  }
+
+  // The |r|^2-weighted mean centroid offsets of the measurements nearer
+  // and farther than the focus.
+  void SetNearAndFar() const {
+    if (near_sum_[1] > 0) {
+      out_->near_centroid_offset = near_sum_[0] / near_sum_[1];
+    }
+    if (far_sum_[1] > 0) out_->far_centroid_offset = far_sum_[0] / far_sum_[1];
+  }
+
+ private:
+  struct Samples {
+    std::vector<DPKernels> kernels;  // far side, at the reference radius
+    std::vector<double> weights;
+    int max_half = 0;
+  };
+
+  // Capture i's pair in the cell, added to the samples; or a note on the
+  // capture why the cell gives none.
+  void SampleCapture(int i, int cell, Samples* samples) {
+    const ShapeCapture& c = captures_[i];
+    const double r = std::abs(c.signed_radius_px);
+    const cv::Rect rect = CellRect(options_.layout, cell, c.left.size());
+    KernelEstimationOptions ko;
+    ko.half_size =
+        std::min(24,
+                 static_cast<int>(std::ceil(options_.support_factor * r)) +
+                     options_.support_margin_px);
+    ko.smoothness = options_.smoothness;
+    std::string& notes = out_->capture_notes[i];
+    if (rect.width <= 4 * ko.half_size + 8 ||
+        rect.height <= 4 * ko.half_size + 8) {
+      AddNote(&notes,
+              "cell " + std::to_string(cell) + " too small for its kernel");
+      return;
+    }
+    EstimatedDPKernels m;
+    try {
+      m = EstimateDPKernels(
+          registered_[i](rect), c.left(rect), c.right(rect), ko);
+    } catch (const std::invalid_argument& e) {
+      AddNote(&notes, "cell " + std::to_string(cell) + ": " + e.what());
+      return;
+    }
+    out_->capture_cell_residuals[i][cell] = m.relative_residual;
+    out_->capture_cell_light[i][cell] = m.light_ratio;
+    if (!(m.light_ratio >= options_.min_light_ratio &&
+          m.light_ratio <= options_.max_light_ratio)) {
+      std::ostringstream n;
+      n << "cell " << cell << ": the kernels carry " << std::setprecision(2)
+        << m.light_ratio
+        << " of the light (is the sharp capture of the same view?)";
+      AddNote(&notes, n.str());
+      return;
+    }
+    DPKernels k = m.kernels;
+    if (c.signed_radius_px < 0) {  // near side: rotate to the far side
+      cv::flip(k.left, k.left, -1);
+      cv::flip(k.right, k.right, -1);
+    }
+    const double offset = CentroidOffsetPerRadius(k, r);
+    out_->capture_cell_offsets[i][cell] = offset;
+    std::vector<double>& side = c.signed_radius_px < 0 ? near_sum_ : far_sum_;
+    side[0] += r * r * offset;
+    side[1] += r * r;
+    k.left = MagnifyKernel(k.left, ref_ / r);
+    k.right = MagnifyKernel(k.right, ref_ / r);
+    samples->max_half = std::max(samples->max_half, k.left.rows / 2);
+    samples->kernels.push_back(k);
+    samples->weights.push_back(r * r);
+  }
+
+  static DPKernels WeightedMean(const Samples& samples) {
+    const int max_half = samples.max_half;
+    DPKernels mean;
+    mean.left = cv::Mat::zeros(2 * max_half + 1, 2 * max_half + 1, CV_32FC1);
+    mean.right = mean.left.clone();
+    double total = 0;
+    for (size_t s = 0; s < samples.kernels.size(); ++s) {
+      mean.left +=
+          samples.weights[s] * PadTo(samples.kernels[s].left, max_half);
+      mean.right +=
+          samples.weights[s] * PadTo(samples.kernels[s].right, max_half);
+      total += samples.weights[s];
+    }
+    mean.left /= total;
+    mean.right /= total;
+    return mean;
+  }
+
+  const std::vector<ShapeCapture>& captures_;
+  const std::vector<cv::Mat>& registered_;
+  const ShapeCalibrationOptions& options_;
+  const double ref_;
+  ShapeCalibration* out_;
+  // Over all measurements nearer and farther than the focus: the sums of
+  // |r|^2 offset ([0]) and of |r|^2 ([1]).
+  std::vector<double> near_sum_ = std::vector<double>(2, 0);
+  std::vector<double> far_sum_ = std::vector<double>(2, 0);
+};
+
+// One kernel size for every cell (profile files hold one stack).
+void PadToCommonSize(std::vector<DPKernels>* cell_kernels) {
+  int common_half = 0;
+  for (const DPKernels& k : *cell_kernels) {
+    common_half = std::max(common_half, k.left.rows / 2);
+  }
+  for (DPKernels& k : *cell_kernels) {
+    k.left = PadTo(k.left, common_half);
+    k.right = PadTo(k.right, common_half);
+  }
+}
+
+// The largest relative deviation of a capture's cell offset from the
+// cell's.
+double Spread(const ShapeCalibration& out) {
+  double spread = 0;
+  for (size_t i = 0; i < out.capture_cell_offsets.size(); ++i) {
+    for (size_t cell = 0; cell < out.cell_centroid_offsets.size(); ++cell) {
+      const double o = out.capture_cell_offsets[i][cell];
+      if (std::isfinite(o)) {
+        spread =
+            std::max(spread, std::abs(o / out.cell_centroid_offsets[cell] - 1));
+      }
+    }
+  }
+  return spread;
+}
+
+std::string Summary(const ShapeCalibration& out) {
+  const int num_cells = static_cast<int>(out.cell_centroid_offsets.size());
+  std::ostringstream summary;
+  summary << std::setprecision(3) << "kernel shapes measured in " << num_cells
+          << " cell(s) at " << out.reference_radius_px
+          << " px; centroid offset per radius";
+  for (int cell = 0; cell < num_cells; ++cell) {
+    summary << (cell ? ", " : " ") << out.cell_centroid_offsets[cell];
+  }
+  summary << " (captures within " << 100 * out.spread << " % of it";
+  if (std::isfinite(out.near_centroid_offset) &&
+      std::isfinite(out.far_centroid_offset)) {
+    summary << "; nearer than the focus " << out.near_centroid_offset
+            << ", farther " << out.far_centroid_offset;
+  }
+  summary << ")";
+  return summary.str();
+}
+
 }  // namespace
 
 bool ShapeCalibrationOptions::Check() const {
@@ -141,33 +380,9 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
   ShapeCalibration out;
   out.layout = options.layout;
   const int num_cells = options.layout.NumCells();
-  const int num_captures = static_cast<int>(captures.size());
 
   // Which captures show a shape, and the reference radius.
-  double largest = 0;
-  for (const ShapeCapture& c : captures) {
-    DPSFM_CHECK(!c.left.empty() && c.left.size() == c.right.size() &&
-                c.left.size() == c.sharp.size())
-        << "capture " << c.name
-        << ": the DP views and the sharp reference differ in size";
-    DPSFM_CHECK(std::isfinite(c.signed_radius_px))
-        << "capture " << c.name << ": no blur radius";
-    out.capture_names.push_back(c.name);
-    const bool used = std::abs(c.signed_radius_px) >= options.min_radius_px;
-    out.capture_used.push_back(used);
-    std::ostringstream note;
-    if (!used) {
-      note << std::setprecision(3) << "blur radius "
-           << std::abs(c.signed_radius_px) << " px < " << options.min_radius_px
-           << " px shows no shape";
-    }
-    out.capture_notes.push_back(note.str());
-    if (used) largest = std::max(largest, std::abs(c.signed_radius_px));
-    out.capture_cell_offsets.emplace_back(num_cells, kNaN);
-    out.capture_shifts.emplace_back(0, 0);
-    out.capture_cell_residuals.emplace_back(num_cells, kNaN);
-    out.capture_cell_light.emplace_back(num_cells, kNaN);
-  }
+  const double largest = ListCaptures(captures, options, &out);
   if (largest == 0) {
     out.reason = "no capture has a blur of " +
                  std::to_string(options.min_radius_px) +
@@ -176,140 +391,18 @@ ShapeCalibration CalibrateShapes(const std::vector<ShapeCapture>& captures,
   }
   out.reference_radius_px =
       options.reference_radius_px > 0 ? options.reference_radius_px : largest;
-  const double ref = out.reference_radius_px;
+  const std::vector<cv::Mat> registered = RegisterUsedCaptures(captures, &out);
 
-  std::vector<cv::Mat> registered(num_captures);
-  for (int i = 0; i < num_captures; ++i) {
-    if (out.capture_used[i]) {
-      registered[i] = RegisterSharp(captures[i], &out.capture_shifts[i]);
-    }
-  }
-
-  // Per cell: every usable capture's pair, magnified to the reference radius
-  // (far side), weighted by |r|^2 (the number of kernel pixels it resolves).
   out.cell_kernels.resize(num_cells);
   out.cell_centroid_offsets.assign(num_cells, kNaN);
-  std::vector<double> near_sum(2, 0), far_sum(2, 0);
+  CellMeasurement measurement(captures, registered, options, &out);
   for (int cell = 0; cell < num_cells; ++cell) {
-    std::vector<DPKernels> samples;
-    std::vector<double> weights;
-    int max_half = 0;
-    for (int i = 0; i < num_captures; ++i) {
-      if (!out.capture_used[i]) continue;
-      const ShapeCapture& c = captures[i];
-      const double r = std::abs(c.signed_radius_px);
-      const cv::Rect rect = CellRect(options.layout, cell, c.left.size());
-      KernelEstimationOptions ko;
-      ko.half_size =
-          std::min(24,
-                   static_cast<int>(std::ceil(options.support_factor * r)) +
-                       options.support_margin_px);
-      ko.smoothness = options.smoothness;
-      if (rect.width <= 4 * ko.half_size + 8 ||
-          rect.height <= 4 * ko.half_size + 8) {
-        out.capture_notes[i] += (out.capture_notes[i].empty() ? "" : "; ") +
-                                std::string("cell ") + std::to_string(cell) +
-                                " too small for its kernel";
-        continue;
-      }
-      EstimatedDPKernels m;
-      try {
-        m = EstimateDPKernels(
-            registered[i](rect), c.left(rect), c.right(rect), ko);
-      } catch (const std::invalid_argument& e) {
-        out.capture_notes[i] += (out.capture_notes[i].empty() ? "" : "; ") +
-                                std::string("cell ") + std::to_string(cell) +
-                                ": " + e.what();
-        continue;
-      }
-      out.capture_cell_residuals[i][cell] = m.relative_residual;
-      out.capture_cell_light[i][cell] = m.light_ratio;
-      if (!(m.light_ratio >= options.min_light_ratio &&
-            m.light_ratio <= options.max_light_ratio)) {
-        std::ostringstream n;
-        n << "cell " << cell << ": the kernels carry " << std::setprecision(2)
-          << m.light_ratio
-          << " of the light (is the sharp capture of the same view?)";
-        out.capture_notes[i] +=
-            (out.capture_notes[i].empty() ? "" : "; ") + n.str();
-        continue;
-      }
-      DPKernels k = m.kernels;
-      if (c.signed_radius_px < 0) {  // near side: rotate to the far side
-        cv::flip(k.left, k.left, -1);
-        cv::flip(k.right, k.right, -1);
-      }
-      const double offset = CentroidOffsetPerRadius(k, r);
-      out.capture_cell_offsets[i][cell] = offset;
-      std::vector<double>& side = c.signed_radius_px < 0 ? near_sum : far_sum;
-      side[0] += r * r * offset;
-      side[1] += r * r;
-      k.left = MagnifyKernel(k.left, ref / r);
-      k.right = MagnifyKernel(k.right, ref / r);
-      max_half = std::max(max_half, k.left.rows / 2);
-      samples.push_back(k);
-      weights.push_back(r * r);
-    }
-    if (samples.empty()) {
-      out.reason = "cell " + std::to_string(cell) +
-                   " of the frame has no usable kernel measurement";
-      return out;
-    }
-    DPKernels mean;
-    mean.left = cv::Mat::zeros(2 * max_half + 1, 2 * max_half + 1, CV_32FC1);
-    mean.right = mean.left.clone();
-    double total = 0;
-    for (size_t s = 0; s < samples.size(); ++s) {
-      mean.left += weights[s] * PadTo(samples[s].left, max_half);
-      mean.right += weights[s] * PadTo(samples[s].right, max_half);
-      total += weights[s];
-    }
-    mean.left /= total;
-    mean.right /= total;
-    out.cell_centroid_offsets[cell] = CentroidOffsetPerRadius(mean, ref);
-    if (!(out.cell_centroid_offsets[cell] > 0)) {
-      out.reason = "cell " + std::to_string(cell) +
-                   "'s measured kernels break the DP convention (the left "
-                   "view does not lean away from the right one): are the "
-                   "views swapped?";
-      return out;
-    }
-    out.cell_kernels[cell] = TrimToSupport(mean);
+    if (!measurement.MeasureCell(cell)) return out;
   }
-  // One kernel size for every cell (profile files hold one stack).
-  int common_half = 0;
-  for (const DPKernels& k : out.cell_kernels) {
-    common_half = std::max(common_half, k.left.rows / 2);
-  }
-  for (DPKernels& k : out.cell_kernels) {
-    k.left = PadTo(k.left, common_half);
-    k.right = PadTo(k.right, common_half);
-  }
-  if (near_sum[1] > 0) out.near_centroid_offset = near_sum[0] / near_sum[1];
-  if (far_sum[1] > 0) out.far_centroid_offset = far_sum[0] / far_sum[1];
-  for (int i = 0; i < num_captures; ++i) {
-    for (int cell = 0; cell < num_cells; ++cell) {
-      const double o = out.capture_cell_offsets[i][cell];
-      if (std::isfinite(o)) {
-        out.spread = std::max(
-            out.spread, std::abs(o / out.cell_centroid_offsets[cell] - 1));
-      }
-    }
-  }
-  std::ostringstream summary;
-  summary << std::setprecision(3) << "kernel shapes measured in " << num_cells
-          << " cell(s) at " << ref << " px; centroid offset per radius";
-  for (int cell = 0; cell < num_cells; ++cell) {
-    summary << (cell ? ", " : " ") << out.cell_centroid_offsets[cell];
-  }
-  summary << " (captures within " << 100 * out.spread << " % of it";
-  if (std::isfinite(out.near_centroid_offset) &&
-      std::isfinite(out.far_centroid_offset)) {
-    summary << "; nearer than the focus " << out.near_centroid_offset
-            << ", farther " << out.far_centroid_offset;
-  }
-  summary << ")";
-  out.reason = summary.str();
+  PadToCommonSize(&out.cell_kernels);
+  measurement.SetNearAndFar();
+  out.spread = Spread(out);
+  out.reason = Summary(out);
   out.determined = true;
   return out;
 }

@@ -1,0 +1,155 @@
+// The blur search's internals (PatchBlurEstimator, blur_estimation.h),
+// shared by its source files: the tables that depend only on (psf,
+// options, patch size) (blur_tables.cc), the coarse global search in the
+// frequency domain (blur_coarse_search.cc) and the exact refinement
+// (blur_refinement.cc), which PatchBlurEstimator::Estimate
+// (blur_estimation.cc) runs in turn. Not part of the API.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/optics/kernel_grid.h"
+
+namespace dpsfm {
+namespace internal {
+
+// Everything that depends only on (psf, options, patch size).
+struct BlurTables {
+  BlurEstimationOptions options;
+  cv::Size patch_size;
+  cv::Size dft_size;
+  int border = 0;
+  cv::Rect interior;
+  int num_interior = 0;
+
+  // Kernels and spectra on the radius grid (node n <-> r = Radius(n)).
+  std::unique_ptr<DPKernelGrid> grid;
+  double step = 0;
+  int half_nodes = 0;
+  int num_nodes = 0;
+  double bound = 0;  // half_nodes * step
+  // Noise gain |h_l|^2 + |h_r|^2 per node, and <h_l(n), h_l(n+1)> +
+  // <h_r(n), h_r(n+1)> per interval, for the noise floor of interpolated
+  // kernels.
+  std::vector<double> noise_gain;
+  std::vector<double> noise_cross;
+
+  // Coarse search.
+  std::vector<int> coarse_nodes;
+  std::vector<int> band_rows;  // row index in the full complex spectrum
+  std::vector<int> band_cols;  // column index, 0..dft_size.width / 2
+  // Row per coarse node, 4 entries per band frequency:
+  // (w |H_r|^2, w |H_l|^2, w Re K, w Im K), K = H_r conj(H_l), w = Hermitian
+  // multiplicity of the frequency.
+  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>
+      coarse_table;
+  // Noise gain of the coarse loss per coarse node: the band's share of
+  // |H_l|^2 + |H_r|^2 (the coarse loss sees only the band's noise).
+  std::vector<double> coarse_noise_gain;
+  std::vector<float> window_x;
+  std::vector<float> window_y;
+  double coarse_normaliser = 1;  // 1 / (N_total * sum w^2)
+
+  double Radius(int node) const { return (node - half_nodes) * step; }
+};
+
+// The coarse global search's curve (windowed, frequency domain): the
+// corrected loss per coarse node, and its local minima, best first (ties
+// prefer small |r|: blurs inside the in-focus threshold are
+// indistinguishable).
+struct CoarseCurve {
+  std::vector<double> loss;
+  std::vector<int> minima;  // indices into loss
+  double min = 0, max = 0;
+};
+
+// The coarse global search on the gain-equalised views.
+CoarseCurve CoarseSearch(const BlurTables& t,
+                         const cv::Mat& gl,
+                         const cv::Mat& gr,
+                         double sigma2_hp);
+
+// The exact refinement (spatial valid-region loss via inverse FFT) of one
+// patch: the views' spectra, the loss at the grid nodes evaluated so far,
+// the noise floor, the closed-form minimum inside grid intervals, the walk
+// downhill from a coarse node, and the second-stage gain equalisation.
+class BlurRefinement {
+ public:
+  struct Minimum {
+    double radius = 0;
+    double corrected = std::numeric_limits<double>::infinity();
+    double raw = std::numeric_limits<double>::infinity();
+    int lo = 0, hi = 0;  // evaluated node range
+  };
+
+  // gl, gr: the gain-equalised views minus `offset`.
+  BlurRefinement(const BlurTables& t,
+                 const cv::Mat& gl,
+                 const cv::Mat& gr,
+                 double offset,
+                 double sigma2_hp);
+
+  const cv::Mat& Left() const { return gl_; }
+  const cv::Mat& Right() const { return gr_; }
+
+  // Residual G_l * H_r - G_r * H_l at node n (once per node).
+  void Evaluate(int n);
+
+  double RawLoss(int n) const { return evals_[n].energy * inv_m_; }
+
+  // Noise variance: the patch estimate, tightened by the fit: E[L(r)] =
+  // S(r) + sigma^2 a(r) with S >= 0, so every L(r) / a(r) bounds sigma^2
+  // from above (up to noise).
+  double CurrentSigma2() const;
+
+  // Minimum of the corrected loss over the evaluated nodes [lo, hi] with
+  // linearly interpolated kernels inside each interval.
+  Minimum Minimise(int lo, int hi, double sigma2) const;
+
+  // Walks downhill from a coarse node until the minimum is enclosed.
+  Minimum Refine(int start);
+
+  int NearestNode(double radius) const;
+
+  // Gain, second stage. The whole-patch means of the two views differ not
+  // only by gain but also because the views are shifted against each other
+  // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
+  // alone moves the estimate by ~0.2 px. The right comparison is the
+  // interior means of the two blurred cross views at the blur, which agree
+  // exactly for equal gains. Re-transforms the views; evaluations made
+  // before stay (the caller resets them when the gain moved the estimate).
+  void EqualiseGain(double radius);
+
+  void ResetEvaluations() { evals_.assign(t_.num_nodes, NodeEval()); }
+
+ private:
+  struct NodeEval {
+    bool done = false;
+    std::vector<float> residual;
+    double energy = 0;  // |e|^2
+    // <e(n), e(n+1)>, once both are known.
+    double next_dot = std::numeric_limits<double>::infinity();
+  };
+
+  void TransformViews();
+
+  const BlurTables& t_;
+  const BlurEstimationOptions& options_;
+  cv::Mat gl_, gr_;
+  cv::Mat left_positive_, right_positive_;
+  const double offset_;
+  const double sigma2_hp_;
+  const double inv_m_;
+  cv::Mat spec_left_, spec_right_;
+  std::vector<NodeEval> evals_;
+  cv::Mat product_left_, product_right_, residual_image_;
+};
+
+}  // namespace internal
+}  // namespace dpsfm

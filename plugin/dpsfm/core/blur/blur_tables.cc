@@ -1,0 +1,190 @@
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/util/check.h"
+
+namespace dpsfm {
+namespace {
+
+// 1-D Tukey window: 1 inside, a raised-cosine taper over `taper` samples at
+// both ends. Tapering the border band (where the exact loss is not evaluated
+// anyway) suppresses the patch-edge discontinuity of the circular model.
+std::vector<float> TukeyWindow(int length, int taper) {
+  std::vector<float> window(length, 1.0f);
+  taper = std::min(taper, length / 2);
+  for (int i = 0; i < taper; ++i) {
+    const float w =
+        static_cast<float>(0.5 * (1.0 - std::cos(M_PI * (i + 0.5) / taper)));
+    window[i] = w;
+    window[length - 1 - i] = w;
+  }
+  return window;
+}
+
+using internal::BlurTables;
+
+// The kernel grid and the patch's interior. The grid's bound is
+// max_radius_px rounded up to a multiple of the step. Spectra need a DFT
+// size >= the patch only: every interior output reads inputs within
+// `border` of itself, inside the patch, so circular wrap-around never
+// reaches it.
+void SetGrid(const DPPsfModel& psf,
+             const BlurEstimationOptions& options,
+             const cv::Size& patch_size,
+             BlurTables* t) {
+  t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
+                         cv::getOptimalDFTSize(patch_size.height));
+  t->grid.reset(new DPKernelGrid(
+      psf, options.grid_step_px, options.max_radius_px, t->dft_size));
+  const DPKernelGrid& grid = *t->grid;
+  t->step = grid.Step();
+  t->half_nodes = grid.HalfNodes();
+  t->num_nodes = grid.NumNodes();
+  t->bound = grid.Bound();
+  t->border = grid.Border();
+  DPSFM_CHECK(patch_size.width >= 2 * t->border + 8 &&
+              patch_size.height >= 2 * t->border + 8)
+      << "patch " << patch_size.width << "x" << patch_size.height
+      << " too small for |r| <= " << t->bound << " (border " << t->border
+      << " px each side, interior >= 8 px needed)";
+  t->interior = cv::Rect(t->border,
+                         t->border,
+                         patch_size.width - 2 * t->border,
+                         patch_size.height - 2 * t->border);
+  t->num_interior = t->interior.area();
+}
+
+// Frequencies of the coarse band, on the half spectrum u = 0..nc/2.
+// Returns each one's Hermitian multiplicity.
+std::vector<float> SelectBand(BlurTables* t) {
+  const int nr = t->dft_size.height;
+  const int nc = t->dft_size.width;
+  const double band = t->options.coarse_band;
+  std::vector<float> multiplicity;
+  for (int v = 0; v < nr; ++v) {
+    const int fv = v <= nr / 2 ? v : v - nr;
+    if (std::abs(fv) > band * nr / 2.0 + 1e-9) continue;
+    for (int u = 0; u <= nc / 2; ++u) {
+      if (u > band * nc / 2.0 + 1e-9) continue;
+      t->band_rows.push_back(v);
+      t->band_cols.push_back(u);
+      multiplicity.push_back(u == 0 || (nc % 2 == 0 && u == nc / 2) ? 1.f
+                                                                    : 2.f);
+    }
+  }
+  return multiplicity;
+}
+
+// The coarse search's nodes (every coarse_step_px through r = 0, and both
+// ends). Returns each grid node's row in the coarse table (-1: none).
+std::vector<int> SelectCoarseNodes(BlurTables* t) {
+  const BlurEstimationOptions& options = t->options;
+  const int coarse_stride = static_cast<int>(
+      std::round(options.coarse_step_px / options.grid_step_px));
+  for (int n = t->half_nodes % coarse_stride; n < t->num_nodes;
+       n += coarse_stride) {
+    t->coarse_nodes.push_back(n);
+  }
+  if (t->coarse_nodes.front() != 0) {
+    t->coarse_nodes.insert(t->coarse_nodes.begin(), 0);
+  }
+  if (t->coarse_nodes.back() != t->num_nodes - 1) {
+    t->coarse_nodes.push_back(t->num_nodes - 1);
+  }
+  std::vector<int> coarse_row(t->num_nodes, -1);
+  for (size_t i = 0; i < t->coarse_nodes.size(); ++i) {
+    coarse_row[t->coarse_nodes[i]] = static_cast<int>(i);
+  }
+  return coarse_row;
+}
+
+// Per node the noise gains; per coarse node its row of the coarse table.
+void TabulateKernels(const std::vector<float>& multiplicity,
+                     const std::vector<int>& coarse_row,
+                     BlurTables* t) {
+  const DPKernelGrid& grid = *t->grid;
+  const int num_band = static_cast<int>(t->band_rows.size());
+  t->coarse_table.resize(t->coarse_nodes.size(), 4 * num_band);
+
+  t->noise_gain.resize(t->num_nodes);
+  t->noise_cross.resize(t->num_nodes - 1);
+  for (int n = 0; n < t->num_nodes; ++n) {
+    t->noise_gain[n] = grid.LeftEnergy(n) + grid.RightEnergy(n);
+    if (n + 1 < t->num_nodes) {
+      t->noise_cross[n] = grid.LeftCross(n) + grid.RightCross(n);
+    }
+    if (coarse_row[n] >= 0) {
+      const cv::Mat wrapped_left = WrapKernel(grid.LeftKernel(n), t->dft_size);
+      const cv::Mat wrapped_right =
+          WrapKernel(grid.RightKernel(n), t->dft_size);
+      cv::Mat hl, hr;
+      cv::dft(wrapped_left, hl, cv::DFT_COMPLEX_OUTPUT);
+      cv::dft(wrapped_right, hr, cv::DFT_COMPLEX_OUTPUT);
+      float* row = t->coarse_table.row(coarse_row[n]).data();
+      for (int k = 0; k < num_band; ++k) {
+        const cv::Vec2f l = hl.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+        const cv::Vec2f r = hr.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+        const float w = multiplicity[k];
+        row[4 * k + 0] = w * (r[0] * r[0] + r[1] * r[1]);
+        row[4 * k + 1] = w * (l[0] * l[0] + l[1] * l[1]);
+        // K = H_r conj(H_l).
+        row[4 * k + 2] = w * (r[0] * l[0] + r[1] * l[1]);
+        row[4 * k + 3] = w * (r[1] * l[0] - r[0] * l[1]);
+      }
+    }
+  }
+}
+
+// The coarse loss's noise gains, window and normaliser.
+void SetCoarseNormalisation(BlurTables* t) {
+  const int nr = t->dft_size.height;
+  const int nc = t->dft_size.width;
+  const int num_band = static_cast<int>(t->band_rows.size());
+  t->coarse_noise_gain.resize(t->coarse_nodes.size());
+  for (size_t i = 0; i < t->coarse_nodes.size(); ++i) {
+    double gain = 0;
+    for (int k = 0; k < num_band; ++k) {
+      gain += t->coarse_table(i, 4 * k) + t->coarse_table(i, 4 * k + 1);
+    }
+    t->coarse_noise_gain[i] = gain / (static_cast<double>(nr) * nc);
+  }
+  t->window_x = TukeyWindow(t->patch_size.width, t->border);
+  t->window_y = TukeyWindow(t->patch_size.height, t->border);
+  double sum_x = 0, sum_y = 0;
+  for (const float w : t->window_x) sum_x += w * w;
+  for (const float w : t->window_y) sum_y += w * w;
+  t->coarse_normaliser = 1.0 / (static_cast<double>(nr) * nc * sum_x * sum_y);
+}
+
+}  // namespace
+
+PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
+                                       const BlurEstimationOptions& options,
+                                       const cv::Size& patch_size) {
+  DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
+  std::unique_ptr<BlurTables> t(new BlurTables);
+  t->options = options;
+  t->patch_size = patch_size;
+  SetGrid(psf, options, patch_size, t.get());
+  const std::vector<float> multiplicity = SelectBand(t.get());
+  const std::vector<int> coarse_row = SelectCoarseNodes(t.get());
+  TabulateKernels(multiplicity, coarse_row, t.get());
+  SetCoarseNormalisation(t.get());
+  tables_ = std::move(t);
+}
+
+PatchBlurEstimator::~PatchBlurEstimator() = default;
+
+int PatchBlurEstimator::Border() const { return tables_->border; }
+const cv::Size& PatchBlurEstimator::PatchSize() const {
+  return tables_->patch_size;
+}
+const BlurEstimationOptions& PatchBlurEstimator::Options() const {
+  return tables_->options;
+}
+
+}  // namespace dpsfm
