@@ -1,10 +1,11 @@
 #include "dpsfm/colmap/report/report.h"
 
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <map>
+#include <stdexcept>
+
+#include "dpsfm/colmap/util/durable_file.h"
+#include "dpsfm/colmap/util/input_error.h"
 
 namespace dpsfm {
 namespace {
@@ -28,6 +29,237 @@ std::string DPSFMVersion() {
   return "unknown";
 #endif
 }
+
+namespace {
+
+// "intensity": the intensity stage's status, answer and loss curve.
+nlohmann::json IntensitySection(const DPScaleResult& result) {
+  nlohmann::json intensity;
+  intensity["used"] = result.intensity_used;
+  intensity["status"] = result.intensity_status;
+  intensity["scale"] = Number(result.scale_intensity);
+  intensity["ci"] = Interval(result.intensity_ci_low, result.intensity_ci_high);
+  intensity["loss"] = result.intensity_loss;
+  intensity["failed_evaluations"] = result.intensity_failed_evaluations;
+  nlohmann::json curve = nlohmann::json::array();
+  for (size_t i = 0;
+       i < result.candidate_scales.size() && i < result.candidate_losses.size();
+       ++i) {
+    curve.push_back({Number(result.candidate_scales[i]),
+                     Number(result.candidate_losses[i])});
+  }
+  intensity["loss_curve"] = curve;
+  return intensity;
+}
+
+// One self-calibration fit (the whole frame's).
+nlohmann::json ProfileFit(const SplitProfileFit& fit) {
+  nlohmann::json j = {
+      {"determined", fit.determined},
+      {"at_edge_of_family", fit.at_edge},
+      {"translating_disk_kept", fit.translating_disk},
+      {"split_exponent", Number(fit.params.split_exponent)},
+      {"crosstalk", Number(fit.params.crosstalk)},
+      {"centroid_offset_per_radius", Number(fit.centroid_offset)},
+      {"centroid_offset_ci",
+       Interval(fit.centroid_offset_ci_low, fit.centroid_offset_ci_high)},
+      {"consistent_centroid_offsets",
+       Interval(fit.consistent_low, fit.consistent_high)},
+      {"translating_disk_centroid_offset",
+       Number(fit.translating_disk_centroid_offset)},
+      {"patches", fit.num_patches},
+      {"mean_relative_residual", Number(fit.mean_relative_residual)},
+      {"translating_disk_criterion", Number(fit.translating_disk_criterion)},
+      {"seconds", fit.seconds}};
+  nlohmann::json curve = nlohmann::json::array();
+  for (size_t i = 0;
+       i < fit.centroid_offsets.size() && i < fit.criterion.size();
+       ++i) {
+    curve.push_back(
+        {Number(fit.centroid_offsets[i]), Number(fit.criterion[i])});
+  }
+  // Trimmed mean relative residual per centroid offset tried.
+  j["criterion_curve"] = curve;
+  return j;
+}
+
+// "psf": the DP PSF profile the stages used and what self-calibration found.
+nlohmann::json PsfSection(const DPScaleResult& result) {
+  nlohmann::json psf;
+  psf["model"] = result.psf_model;
+  psf["self_calibrated"] = result.psf_self_calibrated;
+  psf["status"] = result.psf_status;
+  if (!result.psf_status.empty()) {
+    psf["fit"] = ProfileFit(result.psf_fit);
+    // A profile that changes across the frame: each column band's fit.
+    nlohmann::json bands = nlohmann::json::array();
+    for (const SplitProfileFit& band : result.psf_band_fits) {
+      bands.push_back(
+          {{"translating_disk_kept", band.translating_disk},
+           {"split_exponent", Number(band.params.split_exponent)},
+           {"crosstalk", Number(band.params.crosstalk)},
+           {"centroid_offset_per_radius", Number(band.centroid_offset)},
+           {"centroid_offset_ci",
+            Interval(band.centroid_offset_ci_low,
+                     band.centroid_offset_ci_high)},
+           {"consistent_centroid_offsets",
+            Interval(band.consistent_low, band.consistent_high)},
+           {"patches", band.num_patches}});
+    }
+    psf["fit"]["bands"] = bands;
+  }
+  psf["scale_factors_allowed_by_profile"] = Interval(
+      result.profile_scale_factor_low, result.profile_scale_factor_high);
+  return psf;
+}
+
+nlohmann::json CueJson(const ScaleCue& c) {
+  nlohmann::json j = {{"valid", c.valid}};
+  j["scale"] = c.valid ? Number(c.scale) : nullptr;
+  j["ci"] = c.valid ? Interval(c.ci_low, c.ci_high) : nullptr;
+  return j;
+}
+
+// Where the scale itself came from: the DP data, the recorded focus
+// distances, or both (core/scale/scale_cues.h), the two cues themselves,
+// and the recorded focus as evidence.
+void AddScaleSources(const DPScaleResult& result, nlohmann::json* report) {
+  nlohmann::json& r = *report;
+  if (!result.focus_check.empty()) {
+    r["focus_check"] = {
+        {"scale_from_recorded_focus", Number(result.focus_scale)},
+        {"ratio", Number(result.focus_scale_ratio)},
+        {"agrees", result.focus_agrees},
+        {"status", result.focus_check}};
+  }
+  r["scale_source"] =
+      result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue
+          ? "dual_pixel+recorded_focus"
+          : (result.scale_from_recorded_focus ? "recorded_focus"
+                                              : "dual_pixel");
+  if (result.scale_from_cues) {
+    r["pinned_profile_strength"] = Number(result.pinned_profile_strength);
+  }
+  r["cues"] = {
+      {"dual_pixel", CueJson(result.dp_cue)},
+      {"recorded_focus", CueJson(result.focus_cue)},
+      {"agreement",
+       result.cue_agreement == CueAgreement::kAgree
+           ? "agree"
+           : (result.cue_agreement == CueAgreement::kDisagree ? "disagree"
+                                                              : "one cue")},
+      {"how", result.combination}};
+  if (result.focus_cue.valid) {
+    r["cues"]["recorded_focus"]["views"] = result.focus_cue.num_views;
+  }
+  r["lens_geometry_uncertainty"] = Number(result.lens_geometry_uncertainty);
+}
+
+// What the COLMAP layer knows of a view: where its lens data, DP frames and
+// depth came from.
+void AddViewSources(const ViewSource& s, nlohmann::json* entry) {
+  nlohmann::json& e = *entry;
+  e["lens"]["sources"] = {{"focal_length_mm", s.lens.focal_length_source},
+                          {"f_number", s.lens.f_number_source},
+                          {"pixel_pitch_um", s.lens.pixel_pitch_source}};
+  if (!s.lens.focus_source.empty()) {
+    e["lens"]["sources"]["focus_distance_m"] = s.lens.focus_source;
+  }
+  e["dp_left"] = s.dp.left;
+  e[s.dp.right.empty() ? "dp_sum" : "dp_right"] =
+      s.dp.right.empty() ? s.dp.sum : s.dp.right;
+  e["depth_source"] = s.depth_source;
+}
+
+// What the blur stage did with a view.
+void AddViewSummary(const DPViewSummary& s, nlohmann::json* entry) {
+  nlohmann::json& e = *entry;
+  e["blur_seconds"] = s.seconds;
+  e["working_size"] = {s.working_size.width, s.working_size.height};
+  e["patch_size"] = s.patch_size;
+  e["max_radius_px"] = s.max_radius_px;
+  nlohmann::json rejections = nlohmann::json::object();
+  for (const auto& rejection : s.rejections) {
+    rejections[rejection.first] = rejection.second;
+  }
+  e["patch_rejections"] = rejections;
+}
+
+nlohmann::json ViewEntry(const DPScaleResult& result,
+                         const DPViewResult& view) {
+  nlohmann::json entry;
+  entry["used"] = view.used;
+  entry["reason"] = view.reason;
+  entry["focus_distance_m"] =
+      result.success ? Number(view.focus_distance_m) : nullptr;
+  if (std::isfinite(view.recorded_focus_m)) {
+    entry["recorded_focus_distance_m"] = view.recorded_focus_m;
+    entry["scale_from_recorded_focus"] = Number(view.focus_scale);
+  }
+  entry["frames"] = {{"encoding", DPEncodingName(view.frames.encoding)},
+                     {"decided_by", view.frames.encoding_reason},
+                     {"bits", view.frames.bits},
+                     {"lossy", view.frames.lossy}};
+  entry["focus_distance_model"] = Number(view.focus_distance_model);
+  entry["single_view_scale"] = Number(view.single_view_scale);
+  entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);
+  entry["median_abs_residual_px"] = Number(view.median_abs_residual_px);
+  entry["patches"] = {{"tried", view.patches_tried},
+                      {"searched", view.patches_searched},
+                      {"valid", view.patches_valid},
+                      {"selected", view.patches_selected}};
+  entry["lens"] = {{"focal_length_mm", view.lens.focal_length_mm},
+                   {"f_number", view.lens.f_number},
+                   {"dp_pixel_pitch_um", view.lens.pixel_pitch_um}};
+  return entry;
+}
+
+// "views": per view by name, with its sources and blur-stage summary when
+// the COLMAP layer has them.
+nlohmann::json ViewsSection(const DPScaleResult& result,
+                            const std::vector<ViewSource>& sources,
+                            const std::vector<DPViewSummary>& summaries) {
+  std::map<std::string, const ViewSource*> source_by_name;
+  for (const ViewSource& source : sources) {
+    source_by_name[source.image_name] = &source;
+  }
+  std::map<std::string, const DPViewSummary*> summary_by_name;
+  for (const DPViewSummary& summary : summaries) {
+    summary_by_name[summary.name] = &summary;
+  }
+  nlohmann::json views = nlohmann::json::object();
+  for (const DPViewResult& view : result.views) {
+    nlohmann::json entry = ViewEntry(result, view);
+    const auto source = source_by_name.find(view.name);
+    if (source != source_by_name.end()) AddViewSources(*source->second, &entry);
+    const auto summary = summary_by_name.find(view.name);
+    if (summary != summary_by_name.end()) {
+      AddViewSummary(*summary->second, &entry);
+    }
+    views[view.name] = entry;
+  }
+  return views;
+}
+
+// "patches": the selected patches, with their blur measured and predicted.
+nlohmann::json PatchesSection(const DPScaleResult& result) {
+  nlohmann::json patches = nlohmann::json::array();
+  for (const PatchSample& patch : result.patches) {
+    if (!patch.selected) continue;
+    patches.push_back(
+        {{"view", result.views.at(patch.view).name},
+         {"x", patch.x},
+         {"y", patch.y},
+         {"depth_model", patch.depth},
+         {"radius_px", Number(patch.radius_px)},
+         {"predicted_radius_px", Number(patch.predicted_radius_px)},
+         {"confidence", Number(patch.confidence)},
+         {"used", patch.used}});
+  }
+  return patches;
+}
+
+}  // namespace
 
 nlohmann::json MakeReport(const DPScaleResult& result,
                           const std::vector<ViewSource>& sources,
@@ -53,201 +285,15 @@ nlohmann::json MakeReport(const DPScaleResult& result,
           ? Interval(result.scale_initial_ci_low, result.scale_initial_ci_high)
           : nullptr;
   report["units"] = "scale: metres per model unit (metric = scale * model)";
-
-  nlohmann::json intensity;
-  intensity["used"] = result.intensity_used;
-  intensity["status"] = result.intensity_status;
-  intensity["scale"] = Number(result.scale_intensity);
-  intensity["ci"] = Interval(result.intensity_ci_low, result.intensity_ci_high);
-  intensity["loss"] = result.intensity_loss;
-  intensity["failed_evaluations"] = result.intensity_failed_evaluations;
-  nlohmann::json curve = nlohmann::json::array();
-  for (size_t i = 0;
-       i < result.candidate_scales.size() && i < result.candidate_losses.size();
-       ++i) {
-    curve.push_back({Number(result.candidate_scales[i]),
-                     Number(result.candidate_losses[i])});
-  }
-  intensity["loss_curve"] = curve;
-  report["intensity"] = intensity;
-
-  // The DP PSF profile the stages used and what self-calibration found.
-  nlohmann::json psf;
-  psf["model"] = result.psf_model;
-  psf["self_calibrated"] = result.psf_self_calibrated;
-  psf["status"] = result.psf_status;
-  if (!result.psf_status.empty()) {
-    const SplitProfileFit& fit = result.psf_fit;
-    psf["fit"] = {
-        {"determined", fit.determined},
-        {"at_edge_of_family", fit.at_edge},
-        {"translating_disk_kept", fit.translating_disk},
-        {"split_exponent", Number(fit.params.split_exponent)},
-        {"crosstalk", Number(fit.params.crosstalk)},
-        {"centroid_offset_per_radius", Number(fit.centroid_offset)},
-        {"centroid_offset_ci",
-         Interval(fit.centroid_offset_ci_low, fit.centroid_offset_ci_high)},
-        {"consistent_centroid_offsets",
-         Interval(fit.consistent_low, fit.consistent_high)},
-        {"translating_disk_centroid_offset",
-         Number(fit.translating_disk_centroid_offset)},
-        {"patches", fit.num_patches},
-        {"mean_relative_residual", Number(fit.mean_relative_residual)},
-        {"translating_disk_criterion", Number(fit.translating_disk_criterion)},
-        {"seconds", fit.seconds}};
-    nlohmann::json curve = nlohmann::json::array();
-    for (size_t i = 0;
-         i < fit.centroid_offsets.size() && i < fit.criterion.size();
-         ++i) {
-      curve.push_back(
-          {Number(fit.centroid_offsets[i]), Number(fit.criterion[i])});
-    }
-    // Trimmed mean relative residual per centroid offset tried.
-    psf["fit"]["criterion_curve"] = curve;
-    // A profile that changes across the frame: each column band's fit.
-    nlohmann::json bands = nlohmann::json::array();
-    for (const SplitProfileFit& band : result.psf_band_fits) {
-      bands.push_back(
-          {{"translating_disk_kept", band.translating_disk},
-           {"split_exponent", Number(band.params.split_exponent)},
-           {"crosstalk", Number(band.params.crosstalk)},
-           {"centroid_offset_per_radius", Number(band.centroid_offset)},
-           {"centroid_offset_ci",
-            Interval(band.centroid_offset_ci_low,
-                     band.centroid_offset_ci_high)},
-           {"consistent_centroid_offsets",
-            Interval(band.consistent_low, band.consistent_high)},
-           {"patches", band.num_patches}});
-    }
-    psf["fit"]["bands"] = bands;
-  }
-  if (!result.focus_check.empty()) {
-    report["focus_check"] = {
-        {"scale_from_recorded_focus", Number(result.focus_scale)},
-        {"ratio", Number(result.focus_scale_ratio)},
-        {"agrees", result.focus_agrees},
-        {"status", result.focus_check}};
-  }
-  // Where the scale itself came from: the DP data, the recorded focus
-  // distances, or both (core/scale/scale_cues.h), and the two cues themselves.
-  report["scale_source"] =
-      result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue
-          ? "dual_pixel+recorded_focus"
-          : (result.scale_from_recorded_focus ? "recorded_focus"
-                                              : "dual_pixel");
-  if (result.scale_from_cues) {
-    report["pinned_profile_strength"] = Number(result.pinned_profile_strength);
-  }
-  auto cue = [](const ScaleCue& c) {
-    nlohmann::json j = {{"valid", c.valid}};
-    j["scale"] = c.valid ? Number(c.scale) : nullptr;
-    j["ci"] = c.valid ? Interval(c.ci_low, c.ci_high) : nullptr;
-    return j;
-  };
-  report["cues"] = {
-      {"dual_pixel", cue(result.dp_cue)},
-      {"recorded_focus", cue(result.focus_cue)},
-      {"agreement",
-       result.cue_agreement == CueAgreement::kAgree
-           ? "agree"
-           : (result.cue_agreement == CueAgreement::kDisagree ? "disagree"
-                                                              : "one cue")},
-      {"how", result.combination}};
-  if (result.focus_cue.valid) {
-    report["cues"]["recorded_focus"]["views"] = result.focus_cue.num_views;
-  }
-  report["lens_geometry_uncertainty"] =
-      Number(result.lens_geometry_uncertainty);
-  psf["scale_factors_allowed_by_profile"] = Interval(
-      result.profile_scale_factor_low, result.profile_scale_factor_high);
-  report["psf"] = psf;
-
-  std::map<std::string, const ViewSource*> source_by_name;
-  for (const ViewSource& source : sources) {
-    source_by_name[source.image_name] = &source;
-  }
-  std::map<std::string, const DPViewSummary*> summary_by_name;
-  for (const DPViewSummary& summary : summaries) {
-    summary_by_name[summary.name] = &summary;
-  }
-
-  nlohmann::json views = nlohmann::json::object();
-  for (const DPViewResult& view : result.views) {
-    nlohmann::json entry;
-    entry["used"] = view.used;
-    entry["reason"] = view.reason;
-    entry["focus_distance_m"] =
-        result.success ? Number(view.focus_distance_m) : nullptr;
-    if (std::isfinite(view.recorded_focus_m)) {
-      entry["recorded_focus_distance_m"] = view.recorded_focus_m;
-      entry["scale_from_recorded_focus"] = Number(view.focus_scale);
-    }
-    entry["frames"] = {{"encoding", DPEncodingName(view.frames.encoding)},
-                       {"decided_by", view.frames.encoding_reason},
-                       {"bits", view.frames.bits},
-                       {"lossy", view.frames.lossy}};
-    entry["focus_distance_model"] = Number(view.focus_distance_model);
-    entry["single_view_scale"] = Number(view.single_view_scale);
-    entry["predicted_blur_range_px"] = Number(view.predicted_blur_range_px);
-    entry["median_abs_residual_px"] = Number(view.median_abs_residual_px);
-    entry["patches"] = {{"tried", view.patches_tried},
-                        {"searched", view.patches_searched},
-                        {"valid", view.patches_valid},
-                        {"selected", view.patches_selected}};
-    entry["lens"] = {{"focal_length_mm", view.lens.focal_length_mm},
-                     {"f_number", view.lens.f_number},
-                     {"dp_pixel_pitch_um", view.lens.pixel_pitch_um}};
-    const auto source = source_by_name.find(view.name);
-    if (source != source_by_name.end()) {
-      const ViewSource& s = *source->second;
-      entry["lens"]["sources"] = {
-          {"focal_length_mm", s.lens.focal_length_source},
-          {"f_number", s.lens.f_number_source},
-          {"pixel_pitch_um", s.lens.pixel_pitch_source}};
-      if (!s.lens.focus_source.empty()) {
-        entry["lens"]["sources"]["focus_distance_m"] = s.lens.focus_source;
-      }
-      entry["dp_left"] = s.dp.left;
-      entry[s.dp.right.empty() ? "dp_sum" : "dp_right"] =
-          s.dp.right.empty() ? s.dp.sum : s.dp.right;
-      entry["depth_source"] = s.depth_source;
-    }
-    const auto summary = summary_by_name.find(view.name);
-    if (summary != summary_by_name.end()) {
-      const DPViewSummary& s = *summary->second;
-      entry["blur_seconds"] = s.seconds;
-      entry["working_size"] = {s.working_size.width, s.working_size.height};
-      entry["patch_size"] = s.patch_size;
-      entry["max_radius_px"] = s.max_radius_px;
-      nlohmann::json rejections = nlohmann::json::object();
-      for (const auto& rejection : s.rejections) {
-        rejections[rejection.first] = rejection.second;
-      }
-      entry["patch_rejections"] = rejections;
-    }
-    views[view.name] = entry;
-  }
-  report["views"] = views;
+  report["intensity"] = IntensitySection(result);
+  AddScaleSources(result, &report);
+  report["psf"] = PsfSection(result);
+  report["views"] = ViewsSection(result, sources, summaries);
   report["num_patches"] = result.num_patches;
   report["num_views_used"] = result.num_views_used;
   report["linear_median_abs_residual_px"] =
       Number(result.linear_median_abs_residual_px);
-
-  nlohmann::json patches = nlohmann::json::array();
-  for (const PatchSample& patch : result.patches) {
-    if (!patch.selected) continue;
-    patches.push_back(
-        {{"view", result.views.at(patch.view).name},
-         {"x", patch.x},
-         {"y", patch.y},
-         {"depth_model", patch.depth},
-         {"radius_px", Number(patch.radius_px)},
-         {"predicted_radius_px", Number(patch.predicted_radius_px)},
-         {"confidence", Number(patch.confidence)},
-         {"used", patch.used}});
-  }
-  report["patches"] = patches;
-
+  report["patches"] = PatchesSection(result);
   report["seconds"] = timings.total;
   report["timings"] = {{"read", timings.read},
                        {"read_wait", timings.read_wait},
@@ -261,22 +307,12 @@ nlohmann::json MakeReport(const DPScaleResult& result,
 }
 
 void WriteJsonFile(const std::string& path, const nlohmann::json& json) {
-  const std::string temporary = path + ".tmp";
-  {
-    std::ofstream file(temporary);
-    if (!file) {
-      throw InputError("cannot write " + path);
-    }
-    file << json.dump(2) << "\n";
-    if (!file) {
-      throw InputError("cannot write " + path);
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw InputError("cannot write " + path);
+  // Through the one home of durable writes (tmp, fsync, rename): a report
+  // is never left half written.
+  try {
+    WriteFileAtomically(path, json.dump(2) + "\n");
+  } catch (const std::runtime_error& error) {
+    throw InputError("cannot write " + path + " (" + error.what() + ")");
   }
 }
 

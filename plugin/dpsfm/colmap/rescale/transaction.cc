@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "colmap/util/logging.h"
 #include "dpsfm/colmap/util/durable_file.h"
 #include "dpsfm/colmap/util/input_error.h"
 
@@ -305,10 +306,14 @@ CommitTransaction::CommitTransaction(const std::string& workspace_root) {
 }
 
 CommitTransaction::~CommitTransaction() {
+  // A destructor must not throw. Leftover staged files are harmless (the
+  // next run's recovery deletes them), but they are said, not swallowed.
   try {
     Abort();
-  } catch (...) {
-    // Leftover staged files are harmless; recovery deletes them.
+  } catch (const std::exception& error) {
+    LOG(WARNING) << "could not remove the staged files of an abandoned "
+                    "rescale (the next run deletes them): "
+                 << error.what();
   }
 }
 
