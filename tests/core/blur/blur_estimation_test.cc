@@ -1,6 +1,5 @@
 #include "dpsfm/core/blur/blur_estimation.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -258,35 +257,6 @@ TEST(EstimatePatchBlur, RejectsBadInput) {
   const PatchBlurEstimate estimate =
       EstimatePatchBlur(pair.left, pair.right, psf, options);
   EXPECT_FALSE(estimate.valid);
-}
-
-TEST(EstimatePatchBlur, Timing) {
-  const TranslatingDiskPsf psf;
-  const BlurEstimationOptions options;  // |r| <= 20
-  auto start = std::chrono::steady_clock::now();
-  const PatchBlurEstimator estimator(psf, options, cv::Size(kPatch, kPatch));
-  const double setup_ms = std::chrono::duration<double, std::milli>(
-                              std::chrono::steady_clock::now() - start)
-                              .count();
-  std::vector<DPPair> pairs;
-  for (int i = 0; i < 8; ++i) {
-    pairs.push_back(MakePatch(-12 + 3.3 * i, 200 + i, 0.01));
-  }
-  const int repeats = 4;
-  start = std::chrono::steady_clock::now();
-  for (int k = 0; k < repeats; ++k) {
-    for (const DPPair& pair : pairs) {
-      estimator.Estimate(pair.left, pair.right);
-    }
-  }
-  const double per_patch_ms = std::chrono::duration<double, std::milli>(
-                                  std::chrono::steady_clock::now() - start)
-                                  .count() /
-                              (repeats * pairs.size());
-  std::printf("setup %.1f ms, %.3f ms per 111x111 patch (|r| <= 20)\n",
-              setup_ms,
-              per_patch_ms);
-  EXPECT_LT(per_patch_ms, 50.0);  // a gross regression guard only
 }
 
 TEST(PatchGeometry, Defaults) {

@@ -9,36 +9,87 @@
 namespace dpsfm {
 namespace {
 
-// A view with its own lens (multi-camera), focus g' and depths around it.
+// The blur radius the data are made from, written out here from the thin
+// lens rather than taken from lens_model.h (whose functions the estimator
+// solves with: a formula wrong in both would otherwise pass). Aperture
+// L = f / N; blur circle on the sensor b = L f (z - g) / (z (g - f)), b > 0
+// farther than the focal plane; radius r = b / (2 pitch). Lengths in mm; s
+// in metres per model unit, so g = 1000 s g' and z = 1000 s z' in mm.
+double ThinLensRadiusPx(double focal_mm,
+                        double f_number,
+                        double pitch_mm,
+                        double scale,
+                        double focus_model,
+                        double depth_model) {
+  const double g = 1000 * scale * focus_model;
+  const double z = 1000 * scale * depth_model;
+  const double aperture = focal_mm / f_number;
+  const double b = aperture * focal_mm * (z - g) / (z * (g - focal_mm));
+  return b / (2 * pitch_mm);
+}
+
+TEST(ThinLensRadiusPx, HandComputedValue) {
+  // 50 mm f/1.8 (L = 27.778 mm), focus 1.5 m, object 3 m: b = 27.778 * 50 *
+  // 1500 / (3000 * 1450) = 0.478927 mm; on 10.72 um pixels (5.36 um resized
+  // by 0.5) r = 0.478927 / 0.02144 = 22.3380 px; s = 0.25 m per model unit
+  // puts them at g' = 6, z' = 12.
+  EXPECT_NEAR(ThinLensRadiusPx(50, 1.8, 0.01072, 0.25, 6, 12),
+              22.338022531023043,
+              1e-9);
+}
+
+// A view with its own lens (multi-camera), focus g' and depths around it;
+// the radii from ThinLensRadiusPx. `focus_model` (optional) receives the
+// view's true g'.
 LinearViewData MakeView(int index,
                         double scale,
                         int num_samples,
                         std::mt19937* rng,
-                        double depth_spread = 0.6) {
+                        double* focus_model = nullptr) {
   LinearViewData view;
   view.name = "view" + std::to_string(index);
   const double focals[] = {35, 50, 85, 4.38};
   const double fnums[] = {1.8, 2.8, 1.4, 1.73};
-  const double pitches[] = {5.36, 5.36, 5.36, 2.8};
+  const double pitches_um[] = {5.36, 5.36, 5.36, 2.8};
   const int k = index % 4;
   view.lens.focal_length_mm = focals[k];
   view.lens.f_number = fnums[k];
-  view.lens.pixel_pitch_um = pitches[k];
-  view.pixel_pitch_mm = view.lens.PixelPitchMm() * (k == 3 ? 1 : 2);
+  view.lens.pixel_pitch_um = pitches_um[k];
+  // Frames resized by 0.5 (the phone's not): pixels twice the pitch.
+  view.pixel_pitch_mm = pitches_um[k] * 1e-3 * (k == 3 ? 1 : 2);
   // Focus between 1 and 3 m (0.3-0.6 m for the phone), in model units.
   std::uniform_real_distribution<double> u(0, 1);
   const double g_m = k == 3 ? 0.3 + 0.3 * u(*rng) : 1.0 + 2.0 * u(*rng);
   const double g_model = g_m / scale;
+  if (focus_model != nullptr) *focus_model = g_model;
+  const double depth_spread = 0.6;
   for (int j = 0; j < num_samples; ++j) {
     const double z_model =
         g_model * (1.0 - depth_spread + 2 * depth_spread * u(*rng)) + 1e-6;
     LinearSample s;
     s.depth = z_model;
-    s.radius_px = PredictBlurRadiusPx(
-        view.lens, view.pixel_pitch_mm, scale, g_model, z_model);
+    s.radius_px = ThinLensRadiusPx(
+        focals[k], fnums[k], view.pixel_pitch_mm, scale, g_model, z_model);
     view.samples.push_back(s);
   }
   return view;
+}
+
+// One row of the linear system by hand: f = 50 mm, N = 2 (L = 25 mm), pixels
+// of 5 um, r = 3 px at z' = 4. b = 2 r p = 0.03 mm; the row b z'/f =
+// z' (b + L) gbar - L sbar divided by 2 p z' / f = 0.04 / 50:
+//   gamma   = z' (b + L) f / (2 p z') = 25.03 * 50 / 0.01 = 125150,
+//   minus_l = -L f / (2 p z')         = -1250 / 0.04     = -31250,
+//   rhs     = b z' / f * f / (2 p z') = b / (2 p)        = 3.
+TEST(LinearRow, CoefficientsByHand) {
+  DPLensData lens;
+  lens.focal_length_mm = 50;
+  lens.f_number = 2;
+  lens.pixel_pitch_um = 5;
+  const LinearRow row = MakeLinearRow(lens, 0.005, 3.0, 4.0);
+  EXPECT_NEAR(row.gamma, 125150, 1e-8);
+  EXPECT_NEAR(row.minus_l, -31250, 1e-9);
+  EXPECT_NEAR(row.rhs, 3, 1e-12);
 }
 
 TEST(Irls, ExactOnNoiselessSamplesForAnyViewCount) {
@@ -46,7 +97,10 @@ TEST(Irls, ExactOnNoiselessSamplesForAnyViewCount) {
   for (int n = 1; n <= 9; ++n) {
     std::mt19937 rng(n);
     std::vector<LinearViewData> views;
-    for (int i = 0; i < n; ++i) views.push_back(MakeView(i, scale, 12, &rng));
+    std::vector<double> focus(n);
+    for (int i = 0; i < n; ++i) {
+      views.push_back(MakeView(i, scale, 12, &rng, &focus[i]));
+    }
     DPLinearSystem system;
     system.num_views = n;
     for (int i = 0; i < n; ++i) {
@@ -59,7 +113,13 @@ TEST(Irls, ExactOnNoiselessSamplesForAnyViewCount) {
     }
     const IrlsResult fit = SolveL1Irls(system, IrlsOptions());
     ASSERT_TRUE(fit.success) << n;
-    EXPECT_NEAR(ScaleFromSbar(fit.x[n]) / scale, 1.0, 1e-7) << n;
+    // The unknowns against the chosen truth: sbar = 1 / (1000 s) and
+    // gbar_i = 1 / g_i = 1 / (1000 s g'_i), in 1/mm.
+    EXPECT_NEAR(fit.x[n] * 1000 * scale, 1.0, 1e-7) << n;
+    for (int i = 0; i < n; ++i) {
+      EXPECT_NEAR(fit.x[i] * 1000 * scale * focus[i], 1.0, 1e-7)
+          << "view " << i << " of " << n;
+    }
     EXPECT_LT(fit.residuals.cwiseAbs().maxCoeff(), 1e-6);
   }
 }
@@ -67,7 +127,8 @@ TEST(Irls, ExactOnNoiselessSamplesForAnyViewCount) {
 TEST(Irls, MinimalTwoPatchSystem) {
   // Paper: two patches with distinct depths in one view determine s.
   std::mt19937 rng(3);
-  LinearViewData view = MakeView(1, 2.5, 2, &rng);
+  double focus = 0;
+  LinearViewData view = MakeView(1, 2.5, 2, &rng, &focus);
   DPLinearSystem system;
   system.num_views = 1;
   for (const auto& s : view.samples) {
@@ -76,7 +137,8 @@ TEST(Irls, MinimalTwoPatchSystem) {
   }
   const IrlsResult fit = SolveL1Irls(system, IrlsOptions());
   ASSERT_TRUE(fit.success);
-  EXPECT_NEAR(ScaleFromSbar(fit.x[1]) / 2.5, 1.0, 1e-8);
+  EXPECT_NEAR(fit.x[1] * 1000 * 2.5, 1.0, 1e-8);
+  EXPECT_NEAR(fit.x[0] * 1000 * 2.5 * focus, 1.0, 1e-8);
 }
 
 TEST(Irls, RankDeficientWithoutDepthVariation) {
@@ -104,8 +166,9 @@ TEST(Irls, RecoversScaleWith30PercentGrossOutliers) {
     std::uniform_real_distribution<double> gross(2, 8);
     std::uniform_real_distribution<double> u(0, 1);
     std::vector<LinearViewData> views;
+    std::vector<double> focus(4);
     for (int i = 0; i < 4; ++i) {
-      views.push_back(MakeView(i, scale, 100, &rng));
+      views.push_back(MakeView(i, scale, 100, &rng, &focus[i]));
       for (auto& s : views.back().samples) {
         s.radius_px +=
             u(rng) < 0.3 ? (u(rng) < 0.5 ? -1 : 1) * gross(rng) : noise(rng);
@@ -116,6 +179,11 @@ TEST(Irls, RecoversScaleWith30PercentGrossOutliers) {
     const LinearEstimate est = EstimateScaleLinear(views, options);
     ASSERT_TRUE(est.success) << est.failure_reason;
     EXPECT_NEAR(est.scale / scale, 1.0, 0.005) << "trial " << trial;
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_TRUE(est.views[i].used) << est.views[i].reason;
+      EXPECT_NEAR(est.views[i].focus_model / focus[i], 1.0, 0.005)
+          << "trial " << trial << ", view " << i;
+    }
     EXPECT_LE(est.scale_ci_low, est.scale);
     EXPECT_GE(est.scale_ci_high, est.scale);
   }
@@ -241,10 +309,12 @@ TEST(EstimateScaleLinear, RejectsViewsWhoseBlurIgnoresDepth) {
 
 TEST(EstimateScaleLinear, SingleViewWorks) {
   std::mt19937 rng(9);
-  const LinearEstimate est = EstimateScaleLinear({MakeView(0, 3.0, 20, &rng)},
-                                                 LinearEstimatorOptions());
+  double focus = 0;
+  const LinearEstimate est = EstimateScaleLinear(
+      {MakeView(0, 3.0, 20, &rng, &focus)}, LinearEstimatorOptions());
   ASSERT_TRUE(est.success) << est.failure_reason;
   EXPECT_NEAR(est.scale / 3.0, 1.0, 1e-7);
+  EXPECT_NEAR(est.views[0].focus_model / focus, 1.0, 1e-7);
 }
 
 TEST(LinearEstimatorOptions, CheckIsActedOn) {
