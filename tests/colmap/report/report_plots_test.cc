@@ -1,6 +1,7 @@
 // Report pictures: files are written as PNGs of the expected size with
-// content, patch colours mean what the legend says, and odd results (NaN,
-// empty, failed) still give pictures instead of exceptions.
+// content, patch colours mean what the legend says, odd results (NaN, empty,
+// failed) still give pictures instead of exceptions, and pictures that cannot
+// be written are reported with the reason.
 #include "dpsfm/colmap/report/report_plots.h"
 
 #include <cmath>
@@ -287,14 +288,15 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
   odd.views[0].focus_distance_model = kNaN;
   odd.views[0].focus_distance_m = kNaN;
   const cv::Mat frame(800, 1200, CV_32FC3, cv::Scalar::all(0.3));
-  std::vector<std::string> written;
+  ReportPlotFiles files;
   EXPECT_NO_THROW(
-      written = WriteReportPlots(odd,
-                                 {{0, frame}, {99, frame}, {-1, cv::Mat()}},
-                                 dir / "failed.json",
-                                 33));
-  EXPECT_EQ(written.size(), 4u);
-  for (const std::string& path : written) {
+      files = WriteReportPlots(odd,
+                               {{0, frame}, {99, frame}, {-1, cv::Mat()}},
+                               dir / "failed.json",
+                               33));
+  EXPECT_EQ(files.written.size(), 4u);
+  EXPECT_TRUE(files.failures.empty());
+  for (const std::string& path : files.written) {
     EXPECT_TRUE(IsPng(path)) << path;
     const cv::Mat picture = cv::imread(path);
     EXPECT_GT(PixelStdDev(picture), 5) << path;
@@ -318,14 +320,15 @@ TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
   test::TempDir dir;
   const DPScaleResult result = RealisticResult(4);
   const cv::Mat frame(800, 1200, CV_32FC1, cv::Scalar(0.2));
-  const std::vector<std::string> written = WriteReportPlots(
+  const ReportPlotFiles files = WriteReportPlots(
       result, {{0, frame}, {2, frame}}, dir / "report.json", 33);
   const std::vector<std::string> expected = {
       dir / "report_blur_fit.png",
       dir / "report_loss.png",
       dir / "report_patches_cam0_DP_0.png",
       dir / "report_patches_cam2_DP_2.png"};
-  EXPECT_EQ(written, expected);
+  EXPECT_EQ(files.written, expected);
+  EXPECT_TRUE(files.failures.empty());
   for (const std::string& path : expected) {
     EXPECT_TRUE(IsPng(path)) << path;
   }
@@ -336,14 +339,41 @@ TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
   DPScaleResult twins = result;
   twins.views[1].name = "cam0_DP_0.jpg";
   const std::vector<std::string> twin_paths =
-      WriteReportPlots(twins, {{0, frame}, {1, frame}}, dir / "twins", 33);
+      WriteReportPlots(twins, {{0, frame}, {1, frame}}, dir / "twins", 33)
+          .written;
   ASSERT_EQ(twin_paths.size(), 4u);
   EXPECT_NE(twin_paths[2], twin_paths[3]);
+}
 
-  // An unwritable location gives no paths and no exception.
-  EXPECT_TRUE(WriteReportPlots(
-                  result, {{0, frame}}, dir / "missing/dir/report.json", 33)
-                  .empty());
+TEST(ReportPlots, PicturesThatCannotBeWrittenAreReportedWithTheReason) {
+  test::TempDir dir;
+  const DPScaleResult result = RealisticResult(2);
+  const cv::Mat frame(800, 1200, CV_32FC1, cv::Scalar(0.2));
+  // An unwritable location: no paths, no exception, one failure a picture.
+  ReportPlotFiles files;
+  EXPECT_NO_THROW(
+      files = WriteReportPlots(
+          result, {{0, frame}}, dir / "missing/dir/report.json", 33));
+  EXPECT_TRUE(files.written.empty());
+  ASSERT_EQ(files.failures.size(), 3u);
+  const std::vector<std::string> plots = {
+      "blur_fit", "loss", "patches_cam0_DP_0"};
+  for (size_t i = 0; i < plots.size(); ++i) {
+    EXPECT_EQ(files.failures[i].plot, plots[i]);
+    EXPECT_EQ(files.failures[i].path,
+              dir / ("missing/dir/report_" + plots[i] + ".png"));
+    EXPECT_FALSE(files.failures[i].error.empty()) << plots[i];
+  }
+
+  // The writers say why: OpenCV's exception for a format it does not know,
+  // an empty picture for an empty image.
+  std::string error;
+  EXPECT_FALSE(WriteBlurFitPlot(result, dir / "blur.unknown", &error));
+  EXPECT_NE(error.find("could not find a writer"), std::string::npos) << error;
+  error.clear();
+  EXPECT_FALSE(
+      WritePatchOverlay(cv::Mat(), "x", 0, result, 40, dir / "o.png", &error));
+  EXPECT_EQ(error, "empty picture");
 }
 
 TEST(ReportPlots, FileComponentsAreSafe) {
