@@ -102,6 +102,9 @@ TEST(EndToEnd, DenseWorkspaceInPlace) {
     EXPECT_TRUE(view.value().contains("focus_distance_m"));
   }
   EXPECT_GT(report.at("seconds").get<double>(), 0);
+  // The pictures next to the report are listed, none missing.
+  EXPECT_GE(report.at("plots").at("written").size(), 2u);
+  EXPECT_TRUE(report.at("plots").at("failures").empty());
 
   // Every metric artefact is the original times s; nothing else changed.
   ExpectModelScaled(original, scene / "dense/sparse", scale);

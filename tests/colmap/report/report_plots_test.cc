@@ -1,19 +1,26 @@
 // Report pictures: files are written as PNGs of the expected size with
-// content, patch colours mean what the legend says, and odd results (NaN,
-// empty, failed) still give pictures instead of exceptions.
+// content, marks land where the axes put their data, patch colours mean what
+// the legend says, odd results (NaN, empty, failed) still give pictures
+// instead of exceptions, and pictures that cannot be written are reported
+// with the reason.
 #include "dpsfm/colmap/report/report_plots.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "dpsfm/colmap/report/plot_axes.h"
+#include "dpsfm/colmap/report/plot_canvas.h"
 #include "dpsfm/core/optics/lens_model.h"
 #include "tests/test_utils.h"
 
@@ -144,6 +151,89 @@ TEST(ReportPlots, BlurFitShowsEveryUsedViewInItsColour) {
   EXPECT_GT(count, 200);
 }
 
+// Pixel at `p` (rounded), as doubles.
+cv::Vec3d PixelAt(const cv::Mat& image, const cv::Point2d& p) {
+  const cv::Vec3b v = image.at<cv::Vec3b>(static_cast<int>(std::lround(p.y)),
+                                          static_cast<int>(std::lround(p.x)));
+  return cv::Vec3d(v[0], v[1], v[2]);
+}
+
+// Largest per-channel difference.
+double ColourDistance(const cv::Vec3d& a, const cv::Vec3d& b) {
+  return std::max(
+      {std::abs(a[0] - b[0]), std::abs(a[1] - b[1]), std::abs(a[2] - b[2])});
+}
+
+bool Inside(const cv::Rect& area, const cv::Point2d& p, int margin) {
+  return p.x >= area.x + margin && p.x <= area.x + area.width - margin &&
+         p.y >= area.y + margin && p.y <= area.y + area.height - margin;
+}
+
+// Of the used patches whose point falls inside `axes`' area (4 px from its
+// edges), how many are drawn in `colour` at the pixel the axes map them to,
+// and the first that is not.
+struct Landing {
+  int inside = 0, landed = 0;
+  std::string first_miss;
+};
+template <typename ToData>
+Landing PointsLanding(const cv::Mat& image,
+                      const plot::Axes& axes,
+                      const DPScaleResult& result,
+                      const cv::Vec3d& colour,
+                      ToData to_data) {
+  Landing landing;
+  for (const PatchSample& s : result.patches) {
+    if (!s.used) continue;
+    const cv::Point2d data = to_data(s);
+    const cv::Point2d p = axes.ToPixel(data.x, data.y);
+    if (!Inside(axes.area, p, 4)) continue;
+    ++landing.inside;
+    const cv::Vec3d pixel = PixelAt(image, p);
+    if (ColourDistance(pixel, colour) < 10) {
+      ++landing.landed;
+    } else if (landing.first_miss.empty()) {
+      std::ostringstream miss;
+      miss << "data " << data << " at pixel " << p << " is " << pixel;
+      landing.first_miss = miss.str();
+    }
+  }
+  return landing;
+}
+
+TEST(ReportPlots, BlurFitPointsLandWhereThePanelsPutTheirData) {
+  const cv::Vec3d tab_blue(180, 119, 31);  // the view with the most points
+  // Right panel: measured against predicted radius (the model line is in the
+  // left panel only, so a blue pixel there is a point).
+  const DPScaleResult result = RealisticResult(1);
+  const Landing right = PointsLanding(
+      RenderBlurFitPlot(result),
+      BlurFitAxes(result).right,
+      result,
+      tab_blue,
+      [](const PatchSample& s) {
+        return cv::Point2d(s.predicted_radius_px, s.radius_frame_px);
+      });
+  EXPECT_GE(right.inside, 30);
+  EXPECT_EQ(right.landed, right.inside) << right.first_miss;
+
+  // Left panel: against 1/z'. Without predictions or a lens there is no
+  // model line, so again a blue pixel is a point.
+  DPScaleResult bare = result;
+  bare.views[0].lens = DPLensData();
+  for (PatchSample& s : bare.patches) s.predicted_radius_px = kNaN;
+  const Landing left =
+      PointsLanding(RenderBlurFitPlot(bare),
+                    BlurFitAxes(bare).left,
+                    bare,
+                    tab_blue,
+                    [](const PatchSample& s) {
+                      return cv::Point2d(1.0 / s.depth, s.radius_frame_px);
+                    });
+  EXPECT_GE(left.inside, 30);
+  EXPECT_EQ(left.landed, left.inside) << left.first_miss;
+}
+
 TEST(ReportPlots, ManyViewsAndResizedFramesStillDraw) {
   const DPScaleResult result = RealisticResult(14, 0.5);
   const cv::Mat image = RenderBlurFitPlot(result);
@@ -198,6 +288,50 @@ TEST(ReportPlots, OverlayColoursPositiveBlurRedAndNegativeBlue) {
   EXPECT_GT(near[0], near[2] + 40) << near;  // blue over red
   // Grey background, untouched by the other view's patch.
   EXPECT_NEAR(background[0], background[2], 3) << background;
+}
+
+TEST(ReportPlots, OverlayFillsEachUsedPatchSquareWithItsColour) {
+  const cv::Mat image(300, 400, CV_32FC1, cv::Scalar(0.05));
+  const DPScaleResult result = TwoPatchResult();
+  const double patch_size = 40;
+  const cv::Mat overlay =
+      RenderPatchOverlay(image, "DP_0001.jpg", 0, result, patch_size);
+  ASSERT_FALSE(overlay.empty());
+  // Picture pixels per frame pixel, and the squares' half side.
+  const double d = PatchOverlayPoint(image.size(), 1, 0).x -
+                   PatchOverlayPoint(image.size(), 0, 0).x;
+  const double half = 0.5 * patch_size * d;
+  ASSERT_GT(half, 10);
+  const cv::Vec3d background =
+      PixelAt(overlay, PatchOverlayPoint(image.size(), 200, 150));
+  // Both patches are at the colour map's ends (|r| = 3 is the limit); a
+  // used square is the colour blended 70 % over the image.
+  for (int k = 0; k < 2; ++k) {
+    const PatchSample& s = result.patches[k];
+    SCOPED_TRACE("patch at " + std::to_string(s.x) + "," + std::to_string(s.y));
+    const cv::Scalar colour = plot::DivergingColour(s.radius_frame_px / 3);
+    const cv::Vec3d fill =
+        0.3 * background + 0.7 * cv::Vec3d(colour[0], colour[1], colour[2]);
+    const cv::Point2d c = PatchOverlayPoint(image.size(), s.x, s.y);
+    // At the centre and 4 px inside each edge: the fill; 4 px outside each
+    // edge: the image.
+    const double in = half - 4, out = half + 4;
+    const std::vector<std::pair<cv::Point2d, cv::Vec3d>> expected = {
+        {{0, 0}, fill},
+        {{-in, 0}, fill},
+        {{in, 0}, fill},
+        {{0, -in}, fill},
+        {{0, in}, fill},
+        {{-out, 0}, background},
+        {{out, 0}, background},
+        {{0, -out}, background},
+        {{0, out}, background}};
+    for (const auto& [offset, want] : expected) {
+      const cv::Vec3d pixel = PixelAt(overlay, c + offset);
+      EXPECT_LT(ColourDistance(pixel, want), 3)
+          << "at offset " << offset << ": " << pixel << ", expected " << want;
+    }
+  }
 }
 
 TEST(ReportPlots, OverlayOfLargeColourFrameIsDownscaledTo1600) {
@@ -287,14 +421,15 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
   odd.views[0].focus_distance_model = kNaN;
   odd.views[0].focus_distance_m = kNaN;
   const cv::Mat frame(800, 1200, CV_32FC3, cv::Scalar::all(0.3));
-  std::vector<std::string> written;
+  ReportPlotFiles files;
   EXPECT_NO_THROW(
-      written = WriteReportPlots(odd,
-                                 {{0, frame}, {99, frame}, {-1, cv::Mat()}},
-                                 dir / "failed.json",
-                                 33));
-  EXPECT_EQ(written.size(), 4u);
-  for (const std::string& path : written) {
+      files = WriteReportPlots(odd,
+                               {{0, frame}, {99, frame}, {-1, cv::Mat()}},
+                               dir / "failed.json",
+                               33));
+  EXPECT_EQ(files.written.size(), 4u);
+  EXPECT_TRUE(files.failures.empty());
+  for (const std::string& path : files.written) {
     EXPECT_TRUE(IsPng(path)) << path;
     const cv::Mat picture = cv::imread(path);
     EXPECT_GT(PixelStdDev(picture), 5) << path;
@@ -314,18 +449,75 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
   MaybeDump(loss, "skipped_loss.png");
 }
 
+// The column of the pixel in row `y` of `area` closest to `colour`.
+int ClosestColumn(const cv::Mat& image,
+                  const cv::Rect& area,
+                  int y,
+                  const cv::Vec3d& colour) {
+  int best = -1;
+  double best_distance = 1e9;
+  for (int x = area.x + 2; x < area.x + area.width - 2; ++x) {
+    const double distance =
+        ColourDistance(PixelAt(image, {double(x), double(y)}), colour);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = x;
+    }
+  }
+  return best;
+}
+
+TEST(ReportPlots, LossCurveMarksLandAtTheirScales) {
+  // Final scale, linear estimate and minimiser apart from each other.
+  DPScaleResult result = RealisticResult(2);
+  result.scale = 0.55;
+  result.scale_ci_low = 0.53;
+  result.scale_ci_high = 0.57;
+  result.scale_initial = 0.3;
+  const cv::Mat image = RenderLossCurvePlot(result);
+  const plot::Axes axes = LossCurveAxes(result);
+  EXPECT_EQ(axes.area.br().y, 530);
+  MaybeDump(image, "marks_loss.png");
+
+  // The final scale's line: in rows below the legend and above the curve,
+  // the pixel closest to its colour is where the axes put s.
+  const cv::Vec3d final_colour(170, 90, 20);
+  const double final_x = axes.ToPixel(result.scale, 0).x;
+  for (const double fraction : {0.45, 0.55, 0.65}) {
+    const int y = axes.area.y + static_cast<int>(fraction * axes.area.height);
+    const int x = ClosestColumn(image, axes.area, y, final_colour);
+    EXPECT_NEAR(x, final_x, 1) << "row " << y;
+    EXPECT_LT(
+        ColourDistance(PixelAt(image, {double(x), double(y)}), final_colour),
+        40)
+        << "row " << y;
+  }
+
+  // The minimiser's diamond on the curve at s = 0.42, where the loss is 10.
+  const cv::Vec3d minimum_colour(50, 40, 215);
+  const cv::Point2d minimum = axes.ToPixel(result.scale_intensity, 10);
+  for (const cv::Point2d& offset :
+       {cv::Point2d(0, 0), cv::Point2d(0, -4), cv::Point2d(0, 4)}) {
+    EXPECT_LT(ColourDistance(PixelAt(image, minimum + offset), minimum_colour),
+              10)
+        << "minimiser at " << minimum << " + " << offset << ": "
+        << PixelAt(image, minimum + offset);
+  }
+}
+
 TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
   test::TempDir dir;
   const DPScaleResult result = RealisticResult(4);
   const cv::Mat frame(800, 1200, CV_32FC1, cv::Scalar(0.2));
-  const std::vector<std::string> written = WriteReportPlots(
+  const ReportPlotFiles files = WriteReportPlots(
       result, {{0, frame}, {2, frame}}, dir / "report.json", 33);
   const std::vector<std::string> expected = {
       dir / "report_blur_fit.png",
       dir / "report_loss.png",
       dir / "report_patches_cam0_DP_0.png",
       dir / "report_patches_cam2_DP_2.png"};
-  EXPECT_EQ(written, expected);
+  EXPECT_EQ(files.written, expected);
+  EXPECT_TRUE(files.failures.empty());
   for (const std::string& path : expected) {
     EXPECT_TRUE(IsPng(path)) << path;
   }
@@ -336,14 +528,41 @@ TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
   DPScaleResult twins = result;
   twins.views[1].name = "cam0_DP_0.jpg";
   const std::vector<std::string> twin_paths =
-      WriteReportPlots(twins, {{0, frame}, {1, frame}}, dir / "twins", 33);
+      WriteReportPlots(twins, {{0, frame}, {1, frame}}, dir / "twins", 33)
+          .written;
   ASSERT_EQ(twin_paths.size(), 4u);
   EXPECT_NE(twin_paths[2], twin_paths[3]);
+}
 
-  // An unwritable location gives no paths and no exception.
-  EXPECT_TRUE(WriteReportPlots(
-                  result, {{0, frame}}, dir / "missing/dir/report.json", 33)
-                  .empty());
+TEST(ReportPlots, PicturesThatCannotBeWrittenAreReportedWithTheReason) {
+  test::TempDir dir;
+  const DPScaleResult result = RealisticResult(2);
+  const cv::Mat frame(800, 1200, CV_32FC1, cv::Scalar(0.2));
+  // An unwritable location: no paths, no exception, one failure a picture.
+  ReportPlotFiles files;
+  EXPECT_NO_THROW(
+      files = WriteReportPlots(
+          result, {{0, frame}}, dir / "missing/dir/report.json", 33));
+  EXPECT_TRUE(files.written.empty());
+  ASSERT_EQ(files.failures.size(), 3u);
+  const std::vector<std::string> plots = {
+      "blur_fit", "loss", "patches_cam0_DP_0"};
+  for (size_t i = 0; i < plots.size(); ++i) {
+    EXPECT_EQ(files.failures[i].plot, plots[i]);
+    EXPECT_EQ(files.failures[i].path,
+              dir / ("missing/dir/report_" + plots[i] + ".png"));
+    EXPECT_FALSE(files.failures[i].error.empty()) << plots[i];
+  }
+
+  // The writers say why: OpenCV's exception for a format it does not know,
+  // an empty picture for an empty image.
+  std::string error;
+  EXPECT_FALSE(WriteBlurFitPlot(result, dir / "blur.unknown", &error));
+  EXPECT_NE(error.find("could not find a writer"), std::string::npos) << error;
+  error.clear();
+  EXPECT_FALSE(
+      WritePatchOverlay(cv::Mat(), "x", 0, result, 40, dir / "o.png", &error));
+  EXPECT_EQ(error, "empty picture");
 }
 
 TEST(ReportPlots, FileComponentsAreSafe) {

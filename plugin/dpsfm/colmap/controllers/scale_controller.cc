@@ -394,16 +394,51 @@ std::string ScaleLine(const DPScaleResult& result) {
   return line.str();
 }
 
+// The pictures next to the report (none without one). A picture that could
+// not be written is a warning, never an error: the scale does not depend on
+// it.
+ReportPlotFiles WritePlots(const ScaleRunOptions& options,
+                           const ScaleRun& run) {
+  if (options.report_path.empty()) return {};
+  const ReportPlotFiles plots =
+      WriteReportPlots(run.result,
+                       run.overlay_images,
+                       options.report_path,
+                       run.summaries.empty() ? 0 : run.summaries[0].patch_size);
+  for (const std::string& plot : plots.written) {
+    LOG(INFO) << "Plot: " << plot;
+  }
+  for (const PlotFailure& failure : plots.failures) {
+    LOG(WARNING) << "Plot " << failure.plot << " not written (" << failure.path
+                 << "): " << failure.error;
+  }
+  return plots;
+}
+
+// The report's account of the pictures: the paths written and, for each one
+// that was not, which and why.
+nlohmann::json PlotsReport(const ReportPlotFiles& plots) {
+  nlohmann::json failures = nlohmann::json::array();
+  for (const PlotFailure& failure : plots.failures) {
+    failures.push_back({{"plot", failure.plot},
+                        {"path", failure.path},
+                        {"error", failure.error}});
+  }
+  return {{"written", plots.written}, {"failures", failures}};
+}
+
 // The report: the estimate, the inputs, the profile's source, the view
-// budget, and (after a rescale) what was rescaled.
+// budget, the pictures, and (after a rescale) what was rescaled.
 nlohmann::json RunReport(const ScaleRun& run,
                          const std::vector<ViewSource>& sources,
                          const WorkspaceReader& reader,
-                         const std::string& psf_source) {
+                         const std::string& psf_source,
+                         const ReportPlotFiles& plots) {
   nlohmann::json report = ReportWithSource(
       MakeReport(run.result, sources, run.summaries, run.timings), psf_source);
   report["view_budget"] = ViewBudgetReport(run, reader);
   report["warnings"] = FrameWarnings(run.result);
+  report["plots"] = PlotsReport(plots);
   return report;
 }
 
@@ -496,18 +531,10 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   // Without a rescale to follow, the report is complete now.
   const bool rescale = result.success && !options.dry_run;
   timings.total = total_timer.ElapsedSeconds();
-  if (!options.report_path.empty()) {
-    for (const std::string& plot : WriteReportPlots(
-             result,
-             run.overlay_images,
-             options.report_path,
-             run.summaries.empty() ? 0 : run.summaries[0].patch_size)) {
-      LOG(INFO) << "Plot: " << plot;
-    }
-  }
+  const ReportPlotFiles plots = WritePlots(options, run);
   if (!options.report_path.empty() && !rescale) {
     WriteJsonFile(options.report_path,
-                  RunReport(run, sources, reader, profile.source));
+                  RunReport(run, sources, reader, profile.source, plots));
     LOG(INFO) << "Report: " << options.report_path;
   }
   if (!result.success) {
@@ -533,7 +560,8 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   timings.rescale = rescale_timer.ElapsedSeconds();
   timings.total = total_timer.ElapsedSeconds();
   if (!options.report_path.empty()) {
-    nlohmann::json report = RunReport(run, sources, reader, profile.source);
+    nlohmann::json report =
+        RunReport(run, sources, reader, profile.source, plots);
     report["rescaled_files"] = rescaled.rescaled_files;
     report["cumulative_scale"] = rescaled.entry.cumulative_scale;
     report["record_path"] = rescaled.record_path;

@@ -1,0 +1,225 @@
+#include "dpsfm/colmap/report/plot_text.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+namespace dpsfm {
+namespace plot {
+namespace {
+
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+
+}  // namespace
+
+std::string Printable(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (u == '\n' || u == '\t' || u == '\r') {
+      out += ' ';
+    } else if (u < 32 || u >= 127) {
+      out += '?';
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string Format(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+std::string FormatValue(double value) {
+  if (!Finite(value)) return "n/a";
+  const double a = std::abs(value);
+  if (a != 0 && (a < 1e-3 || a >= 1e6)) return Format("%.3g", value);
+  return Format("%.4g", value);
+}
+
+cv::Size TextSize(const std::string& text, double scale, int thickness) {
+  int baseline = 0;
+  return cv::getTextSize(text, kFont, scale, thickness, &baseline);
+}
+
+void PutText(cv::Mat& canvas,
+             const std::string& text,
+             cv::Point anchor,
+             double scale,
+             const cv::Scalar& colour,
+             int thickness,
+             Align align) {
+  const std::string printable = Printable(text);
+  const cv::Size size = TextSize(printable, scale, thickness);
+  if (align == Align::kCenter) anchor.x -= size.width / 2;
+  if (align == Align::kRight) anchor.x -= size.width;
+  cv::putText(
+      canvas, printable, anchor, kFont, scale, colour, thickness, cv::LINE_AA);
+}
+
+std::string Ellipsize(const std::string& text,
+                      double scale,
+                      int thickness,
+                      int max_width) {
+  std::string out = Printable(text);
+  if (TextSize(out, scale, thickness).width <= max_width) return out;
+  while (!out.empty() &&
+         TextSize(out + "...", scale, thickness).width > max_width) {
+    out.pop_back();
+  }
+  return out + "...";
+}
+
+std::vector<std::string> WrapText(const std::string& text,
+                                  double scale,
+                                  int thickness,
+                                  int max_width,
+                                  int max_lines) {
+  std::vector<std::string> words;
+  std::istringstream stream(Printable(text));
+  std::string word;
+  while (stream >> word) words.push_back(word);
+  std::vector<std::string> lines;
+  std::string line;
+  for (size_t i = 0; i < words.size(); ++i) {
+    const std::string candidate =
+        line.empty() ? words[i] : line + " " + words[i];
+    if (line.empty() ||
+        TextSize(candidate, scale, thickness).width <= max_width) {
+      line = candidate;
+      continue;
+    }
+    lines.push_back(line);
+    line = words[i];
+  }
+  if (!line.empty()) lines.push_back(line);
+  if (static_cast<int>(lines.size()) > max_lines) {
+    std::string last = lines[max_lines - 1];
+    for (size_t i = max_lines; i < lines.size(); ++i) last += " " + lines[i];
+    lines.resize(max_lines);
+    lines.back() = last;
+  }
+  for (std::string& l : lines) l = Ellipsize(l, scale, thickness, max_width);
+  return lines;
+}
+
+int PutWrapped(cv::Mat& canvas,
+               const std::string& text,
+               int x,
+               int y,
+               int max_width,
+               int max_lines,
+               double scale,
+               const cv::Scalar& colour,
+               int thickness,
+               int line_height) {
+  if (line_height <= 0) {
+    line_height = TextSize("Ag", scale, thickness).height * 17 / 10;
+  }
+  const std::vector<std::string> lines =
+      WrapText(text, scale, thickness, max_width, max_lines);
+  for (const std::string& line : lines) {
+    PutText(canvas, line, {x, y}, scale, colour, thickness);
+    y += line_height;
+  }
+  return y;
+}
+
+void PutVerticalText(cv::Mat& canvas,
+                     const std::string& text,
+                     cv::Point centre,
+                     double scale,
+                     const cv::Scalar& colour,
+                     int thickness) {
+  const std::string printable = Printable(text);
+  int baseline = 0;
+  const cv::Size size =
+      cv::getTextSize(printable, kFont, scale, thickness, &baseline);
+  cv::Mat flat(size.height + baseline + 4, size.width + 4, CV_8UC3, kWhite);
+  cv::putText(flat,
+              printable,
+              {2, size.height + 2},
+              kFont,
+              scale,
+              colour,
+              thickness,
+              cv::LINE_AA);
+  cv::Mat rotated;
+  cv::rotate(flat, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
+  cv::Rect target(centre.x - rotated.cols / 2,
+                  centre.y - rotated.rows / 2,
+                  rotated.cols,
+                  rotated.rows);
+  const cv::Rect clipped = target & cv::Rect(0, 0, canvas.cols, canvas.rows);
+  if (clipped.area() <= 0) return;
+  // Darken-only blend: the patch's white background leaves the canvas as is.
+  cv::Mat destination = canvas(clipped);
+  cv::Mat source = rotated(cv::Rect(clipped.x - target.x,
+                                    clipped.y - target.y,
+                                    clipped.width,
+                                    clipped.height));
+  cv::min(destination, source, destination);
+}
+
+int DrawHeader(cv::Mat& canvas,
+               const std::string& alert,
+               const std::string& title,
+               const std::string& subtitle,
+               int bottom) {
+  const int width = canvas.cols - 40;
+  const int kBold = 26, kThin = 20;
+  int y = 30;
+  // Lines `line` px apart that fit from baseline y (descenders need ~6 px),
+  // keeping `reserve` px for later blocks; at least one.
+  auto fit = [&](int line, int reserve, int wanted) {
+    const int room = (bottom - reserve - 6 - y) / line + 1;
+    return std::max(1, std::min(wanted, room));
+  };
+  const int subtitle_room = subtitle.empty() ? 0 : kThin;
+  if (!alert.empty()) {
+    y = PutWrapped(canvas,
+                   alert,
+                   20,
+                   y,
+                   width,
+                   fit(kBold, kBold + subtitle_room, 2),
+                   0.62,
+                   kFailureColour,
+                   2,
+                   kBold);
+  }
+  y = PutWrapped(canvas,
+                 title,
+                 20,
+                 y,
+                 width,
+                 fit(kBold, subtitle_room, 2),
+                 0.62,
+                 kTextColour,
+                 2,
+                 kBold);
+  if (!subtitle.empty() && y - 4 + 6 <= bottom) {
+    y -= 4;
+    y = PutWrapped(canvas,
+                   subtitle,
+                   20,
+                   y,
+                   width,
+                   fit(kThin, 0, 2),
+                   0.48,
+                   kMutedText,
+                   1,
+                   kThin);
+  }
+  return y;
+}
+
+}  // namespace plot
+}  // namespace dpsfm
