@@ -1,5 +1,6 @@
-// The JSON report of a run (shared cli-contract "Outputs", plus what helps a
-// user judge the result: intervals, per-view reasons, lens sources, timings).
+// The JSON report of a run (docs/user-guide.md, "Reading the report": the
+// outputs the command promises, plus what helps a user judge the result:
+// intervals, per-view reasons, lens sources, plots, timings).
 #pragma once
 
 #include <string>
@@ -30,8 +31,9 @@ nlohmann::json MakeReport(const DPScaleResult& result,
                           const std::vector<DPViewSummary>& summaries,
                           const RunTimings& timings);
 
-// Writes JSON to `path` atomically (temporary file, then rename), so a
-// reader never sees half a report. Throws InputError on failure.
+// Writes JSON to `path` atomically (colmap/util/durable_file.h: temporary
+// file, fsync, rename), so a reader never sees half a report. Throws
+// InputError on failure.
 void WriteJsonFile(const std::string& path, const nlohmann::json& json);
 
 }  // namespace dpsfm

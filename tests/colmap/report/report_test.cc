@@ -1,0 +1,154 @@
+// MakeReport on hand-made results: every field it promises, where it reads
+// it from, and what a refused run must not claim.
+#include "dpsfm/colmap/report/report.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace dpsfm {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Two views; view 0 used, view 1 not; three patches of which two selected.
+DPScaleResult HandMadeResult() {
+  DPScaleResult result;
+  result.success = true;
+  result.scale = 0.5;
+  result.scale_ci_low = 0.45;
+  result.scale_ci_high = 0.56;
+  result.scale_initial = 0.51;
+  result.scale_initial_ci_low = 0.44;
+  result.scale_initial_ci_high = 0.58;
+  result.intensity_used = true;
+  result.intensity_status = "used";
+  result.scale_intensity = 0.5;
+  result.intensity_ci_low = kNaN;  // JSON has no NaN: null
+  result.intensity_ci_high = 0.52;
+  result.intensity_failed_evaluations = 3;
+  result.candidate_scales = {0.4, 0.5, 0.6};
+  result.candidate_losses = {2.0, 1.0};  // one short: two points only
+  result.dp_cue.valid = true;
+  result.dp_cue.scale = 0.5;
+  result.dp_cue.ci_low = 0.45;
+  result.dp_cue.ci_high = 0.56;
+  result.scale_source = "DP data";
+  result.combination = "the DP data alone (no recorded focus)";
+  result.views.resize(2);
+  result.views[0].name = "a.jpg";
+  result.views[0].used = true;
+  result.views[0].reason = "used";
+  result.views[0].focus_distance_m = 1.25;
+  result.views[0].lens.focal_length_mm = 50;
+  result.views[1].name = "b.jpg";
+  result.views[1].reason = "too few patches";
+  result.views[1].recorded_focus_m = 2.0;
+  result.views[1].focus_scale = 0.48;
+  PatchSample p;
+  p.view = 0;
+  p.x = 10;
+  p.selected = true;
+  p.used = true;
+  result.patches.push_back(p);
+  p.view = 1;
+  p.x = 20;
+  p.used = false;
+  result.patches.push_back(p);
+  p.selected = false;  // not selected: not reported
+  result.patches.push_back(p);
+  result.num_patches = 2;
+  return result;
+}
+
+TEST(MakeReport, FieldsOfASuccessfulRun) {
+  ViewSource source;
+  source.image_name = "a.jpg";
+  source.dp.left = "dp/left/a.jpg";
+  source.dp.sum = "dp/sum/a.jpg";  // no right view: reported as dp_sum
+  source.lens.focal_length_source = "lens.csv line 2";
+  source.depth_source = "stereo/depth_maps/a.jpg.geometric.bin";
+  DPViewSummary summary;
+  summary.name = "b.jpg";
+  summary.patch_size = 43;
+  summary.rejections = {{"across a depth edge", 7}};
+  RunTimings timings;
+  timings.total = 12.5;
+  const nlohmann::json r =
+      MakeReport(HandMadeResult(), {source}, {summary}, timings);
+
+  EXPECT_EQ(r["success"], true);
+  EXPECT_FALSE(r.contains("reason"));
+  EXPECT_DOUBLE_EQ(r["scale"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(r["scale_ci_low"].get<double>(), 0.45);
+  EXPECT_DOUBLE_EQ(r["scale_initial_ci"][1].get<double>(), 0.58);
+  EXPECT_EQ(r["scale_source"], "dual_pixel");
+  EXPECT_EQ(r["cues"]["agreement"], "one cue");
+  EXPECT_TRUE(r["cues"]["recorded_focus"]["scale"].is_null());
+  EXPECT_EQ(r["intensity"]["failed_evaluations"], 3);
+  EXPECT_TRUE(r["intensity"]["ci"][0].is_null());  // NaN
+  ASSERT_EQ(r["intensity"]["loss_curve"].size(), 2u);
+  EXPECT_DOUBLE_EQ(r["intensity"]["loss_curve"][1][1].get<double>(), 1.0);
+
+  const nlohmann::json& a = r["views"]["a.jpg"];
+  EXPECT_EQ(a["used"], true);
+  EXPECT_DOUBLE_EQ(a["focus_distance_m"].get<double>(), 1.25);
+  EXPECT_EQ(a["lens"]["sources"]["focal_length_mm"], "lens.csv line 2");
+  EXPECT_EQ(a["dp_sum"], "dp/sum/a.jpg");
+  EXPECT_FALSE(a.contains("dp_right"));
+  EXPECT_FALSE(a.contains("recorded_focus_distance_m"));
+  EXPECT_FALSE(a.contains("patch_rejections"));  // no summary for a.jpg
+  const nlohmann::json& b = r["views"]["b.jpg"];
+  EXPECT_EQ(b["reason"], "too few patches");
+  EXPECT_DOUBLE_EQ(b["recorded_focus_distance_m"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(b["scale_from_recorded_focus"].get<double>(), 0.48);
+  EXPECT_EQ(b["patch_rejections"]["across a depth edge"], 7);
+  EXPECT_EQ(b["patch_size"], 43);
+
+  // Only the selected patches, with their view's name.
+  ASSERT_EQ(r["patches"].size(), 2u);
+  EXPECT_EQ(r["patches"][0]["view"], "a.jpg");
+  EXPECT_EQ(r["patches"][1]["view"], "b.jpg");
+  EXPECT_EQ(r["patches"][1]["used"], false);
+  EXPECT_DOUBLE_EQ(r["timings"]["total"].get<double>(), 12.5);
+}
+
+TEST(MakeReport, ARefusedRunClaimsNoScale) {
+  DPScaleResult result = HandMadeResult();
+  result.success = false;
+  result.failure_reason = "too few usable patches";
+  const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
+  EXPECT_EQ(r["success"], false);
+  EXPECT_EQ(r["reason"], "too few usable patches");
+  // No scale and no interval of it (null, never 0 or a stale value); what
+  // the stages computed stays under scale_initial.
+  EXPECT_TRUE(r["scale"].is_null());
+  EXPECT_TRUE(r["scale_ci_low"].is_null());
+  EXPECT_TRUE(r["scale_ci_high"].is_null());
+  EXPECT_DOUBLE_EQ(r["scale_initial"].get<double>(), 0.51);
+  EXPECT_TRUE(r["views"]["a.jpg"]["focus_distance_m"].is_null());
+}
+
+TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
+  DPScaleResult result = HandMadeResult();
+  result.scale_from_cues = true;
+  result.cue_agreement = CueAgreement::kAgree;
+  result.focus_cue.valid = true;
+  result.focus_cue.scale = 0.49;
+  result.focus_cue.ci_low = 0.42;
+  result.focus_cue.ci_high = 0.57;
+  result.focus_cue.num_views = 2;
+  result.pinned_profile_strength = 1.1;
+  const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
+  EXPECT_EQ(r["scale_source"], "dual_pixel+recorded_focus");
+  EXPECT_EQ(r["cues"]["agreement"], "agree");
+  EXPECT_DOUBLE_EQ(r["cues"]["recorded_focus"]["ci"][0].get<double>(), 0.42);
+  EXPECT_EQ(r["cues"]["recorded_focus"]["views"], 2);
+  EXPECT_DOUBLE_EQ(r["pinned_profile_strength"].get<double>(), 1.1);
+}
+
+}  // namespace
+}  // namespace dpsfm
