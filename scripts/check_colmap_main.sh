@@ -47,7 +47,7 @@ stage "configure against $(grep -o 'COLMAP_VERSION "[^"]*"' "$source_dir/CMakeLi
 # COLMAP libraries they link.
 mapfile -t files < <(python3 - "$build_dir/compile_commands.json" <<'PY'
 import json, re, sys
-pattern = re.compile(r"/(plugin/dpsfm/(colmap|exe)|examples|tests/(colmap|e2e|scripts))/[^/]+\.cc$")
+pattern = re.compile(r"/(plugin/dpsfm/(colmap|exe)|examples|tests/(colmap|e2e|scripts))/.+\.cc$")
 for entry in json.load(open(sys.argv[1])):
     if pattern.search(entry["file"]):
         print(entry["file"])
