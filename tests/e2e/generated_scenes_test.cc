@@ -5,6 +5,7 @@
 // same seed gives the same files.
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -21,6 +22,51 @@
 namespace dpsfm {
 namespace test {
 namespace {
+
+// The generator's sensor stated as a profile file: the translating disk,
+// trusted at +-1 % (as a library entry for the paper's camera would be).
+std::vector<std::string> GivenDiskProfile(const SceneCopy& scene) {
+  const std::string path = scene.temp() / "disk.dpsf";
+  std::ofstream file(path);
+  file << "format 1\nmodel translating_disk\nuncertainty 0.01\n";
+  return {"--DPScaleEstimator.psf_model",
+          "calibrated",
+          "--DPScaleEstimator.psf_path",
+          path};
+}
+
+// A dry run on the scene's dense workspace whose blur is too small to see
+// the DP profile: refused, saying the profile is unknown and how to
+// calibrate it (and, for an explicit translating disk, that it could not
+// be checked), not answered on a guessed or unchecked model.
+void ExpectProfileUnknown(const SceneCopy& scene,
+                          const std::vector<std::string>& extra,
+                          const std::string& also) {
+  std::vector<std::string> args = {"--workspace_path",
+                                   scene / "dense",
+                                   "--dp_image_path",
+                                   scene / "dp",
+                                   "--lens_path",
+                                   scene / "lens.csv",
+                                   "--dry_run",
+                                   "1"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const CommandResult run = RunEstimator(args);
+  EXPECT_NE(run.exit_code, 0);
+  for (const std::string& text : {std::string("DP profile is unknown"),
+                                  std::string("dp_psf_calibrator"),
+                                  also}) {
+    EXPECT_NE(run.err.find(text), std::string::npos) << text << "\n" << run.err;
+  }
+}
+
+// --DPScaleEstimator.psf_model translating_disk where the data cannot
+// check it.
+void ExpectUncheckedDiskRefused(const SceneCopy& scene) {
+  ExpectProfileUnknown(scene,
+                       {"--DPScaleEstimator.psf_model", "translating_disk"},
+                       "could not check the translating disk");
+}
 
 namespace fs = std::filesystem;
 
@@ -66,27 +112,14 @@ TEST(GeneratedScenes, PhoneWithHalfSizeDPFrames) {
   EXPECT_EQ(left.rows * 2, static_cast<int>(camera.height));
 
   // The phone's blur stays under 2 px: the default (auto) cannot see the
-  // DP profile and must not answer on a guessed one; given the sensor's
-  // profile (the generator's translating disk) it answers.
-  const CommandResult defaults = RunEstimator({"--workspace_path",
-                                               scene / "dense",
-                                               "--dp_image_path",
-                                               scene / "dp",
-                                               "--lens_path",
-                                               scene / "lens.csv",
-                                               "--dry_run",
-                                               "1"});
-  EXPECT_NE(defaults.exit_code, 0);
-  EXPECT_NE(defaults.err.find("DP profile is unknown"), std::string::npos)
-      << defaults.err;
-  EXPECT_NE(defaults.err.find("dp_psf_calibrator"), std::string::npos)
-      << defaults.err;
+  // DP profile and must not answer on a guessed one, nor can the
+  // translating disk chosen unchecked; given the sensor's profile (the
+  // generator's translating disk, as a profile file) it answers.
+  ExpectProfileUnknown(scene, {}, "");
   const std::string report_path = scene.temp() / "report.json";
+  ExpectUncheckedDiskRefused(scene);
   const double error =
-      ScaleError(scene,
-                 scene / "dense",
-                 report_path,
-                 {"--DPScaleEstimator.psf_model", "translating_disk"});
+      ScaleError(scene, scene / "dense", report_path, GivenDiskProfile(scene));
   EXPECT_LT(error, kMaxScaleError);
   // lens.csv gives the image pixels' pitch; a DP-frame pixel covers 2 x 2.
   const nlohmann::json report = ReadJson(report_path);
@@ -161,10 +194,11 @@ TEST(GeneratedScenes, DepthMapsWithNoiseAndHoles) {
   EXPECT_LT(hole_fraction, 0.3);
   // Few patches with blur enough to see the profile: the sensor's profile
   // (the generator's) is given.
+  ExpectUncheckedDiskRefused(scene);
   EXPECT_LT(ScaleError(scene,
                        scene / "dense",
                        scene.temp() / "report.json",
-                       {"--DPScaleEstimator.psf_model", "translating_disk"}),
+                       GivenDiskProfile(scene)),
             kMaxScaleError);
 }
 

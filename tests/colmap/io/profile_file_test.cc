@@ -146,5 +146,41 @@ TEST(PsfProfileFile, MeasuredKernelsThatAreNoPsfPairAreRefused) {
   EXPECT_THROW(ReadPsfProfile(dir / "p.dpsf"), InputError);
 }
 
+// The paper's model stated for a camera: read with its uncertainty, used
+// as the translating disk (its kernels' centroid offset, 0.2945 R at 8 px,
+// the figure the calibrator and self-calibration quote for it), and taken
+// as given by psf_model calibrated (no self-calibration, no check), while
+// psf_model translating_disk is checked and auto fitted.
+TEST(PsfProfileFile, TranslatingDiskStatedForACamera) {
+  test::TempDir dir;
+  {
+    std::ofstream file(dir / "5d4.dpsf");
+    file << "format 1\nmodel translating_disk\nuncertainty 0.05\n"
+            "camera Canon / Canon EOS 5D Mark IV\n";
+  }
+  const PsfProfileFile profile = ReadPsfProfile(dir / "5d4.dpsf");
+  EXPECT_EQ(profile.model, "translating_disk");
+  EXPECT_DOUBLE_EQ(profile.uncertainty, 0.05);
+  EXPECT_EQ(profile.camera, "Canon / Canon EOS 5D Mark IV");
+  const DPPsfField field = profile.MakeField(dir / "5d4.dpsf");
+  ASSERT_EQ(field.cells.size(), 1u);
+  EXPECT_NE(field.Name().find("translating_disk"), std::string::npos)
+      << field.Name();
+  EXPECT_NEAR(CentroidOffsetPerRadius(*field.cells[0], 8), 0.2945, 0.005);
+
+  DPScaleOptions core;
+  core.psf_self_calibration = true;
+  MakePsfField("calibrated", dir / "5d4.dpsf", &core);
+  EXPECT_FALSE(core.psf_self_calibration);
+  EXPECT_FALSE(core.psf_self_calibration_check_only);
+  EXPECT_DOUBLE_EQ(core.profile_relative_uncertainty, 0.05);
+  MakePsfField("translating_disk", "", &core);
+  EXPECT_TRUE(core.psf_self_calibration);
+  EXPECT_TRUE(core.psf_self_calibration_check_only);
+  MakePsfField("auto", "", &core);
+  EXPECT_TRUE(core.psf_self_calibration);
+  EXPECT_FALSE(core.psf_self_calibration_check_only);
+}
+
 }  // namespace
 }  // namespace dpsfm

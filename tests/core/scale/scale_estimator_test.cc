@@ -104,6 +104,23 @@ struct RunOutput {
   std::vector<DPViewSummary> summaries;
 };
 
+// Six tripod positions, focused from 1.8 m outwards in 0.1 m steps, the
+// lenses alternating (`odd` at odd positions), noise seeds from `seed`.
+std::vector<CaptureSpec> SixPositions(const DPLensData& odd,
+                                      const DPLensData& even,
+                                      int seed) {
+  std::vector<CaptureSpec> specs;
+  for (int i = 0; i < 6; ++i) {
+    CaptureSpec spec;
+    spec.position = i;
+    spec.lens = i % 2 ? odd : even;
+    spec.focus_m = 1.8 + 0.1 * i;
+    spec.noise_seed = seed + i;
+    specs.push_back(spec);
+  }
+  return specs;
+}
+
 std::vector<DPView> RenderAll(const std::vector<CaptureSpec>& specs,
                               double scale,
                               const DPPsfModel& psf = TranslatingDiskPsf()) {
@@ -232,15 +249,8 @@ TEST(DPScaleEstimator, WholeCoreOnSyntheticMultiViewSet) {
 // patches kept, the same scale.
 TEST(DPScaleEstimator, BlurSearchShareKeepsTheScale) {
   const double scale = 0.0731;
-  std::vector<CaptureSpec> specs;
-  for (int i = 0; i < 6; ++i) {
-    CaptureSpec spec;
-    spec.position = i;
-    spec.lens = i % 2 ? Lens(50, 4) : Lens(35, 2.8);
-    spec.focus_m = 1.8 + 0.1 * i;
-    spec.noise_seed = 30 + i;
-    specs.push_back(spec);
-  }
+  const std::vector<CaptureSpec> specs =
+      SixPositions(Lens(50, 4), Lens(35, 2.8), 30);
   const std::vector<DPView> views = RenderAll(specs, scale);
   DPScaleOptions all = SmallFrameOptions();
   all.blur_search_factor = 0;
@@ -275,15 +285,8 @@ TEST(DPScaleEstimator, BlurSearchShareKeepsTheScale) {
 // keeps the translating disk and changes nothing.
 TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   const double scale = 0.0731;
-  std::vector<CaptureSpec> specs;
-  for (int i = 0; i < 6; ++i) {
-    CaptureSpec spec;
-    spec.position = i;
-    spec.lens = i % 2 ? Lens(50, 2.8) : Lens(35, 2);
-    spec.focus_m = 1.8 + 0.1 * i;
-    spec.noise_seed = 50 + i;
-    specs.push_back(spec);
-  }
+  const std::vector<CaptureSpec> specs =
+      SixPositions(Lens(50, 2.8), Lens(35, 2), 50);
   SplitProfileParams sharp;
   sharp.split_exponent = 0.3;
   const std::vector<DPView> views =
@@ -402,6 +405,59 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   std::printf("  %s\n", model.result.psf_status.c_str());
   EXPECT_FALSE(model.result.psf_self_calibrated) << model.result.psf_status;
   EXPECT_LT(std::abs(model.result.scale / scale - 1), 0.02);
+}
+
+// An explicitly chosen translating disk is checked by the self-calibration
+// fit and never replaced: data from a sharper split (which the disk reads
+// ~20 % small) refuse, naming the fix and how far off the disk would be;
+// data from the disk itself keep their answer, unchanged.
+TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
+  const double scale = 0.0731;
+  const std::vector<CaptureSpec> specs =
+      SixPositions(Lens(50, 2.8), Lens(35, 2), 50);
+  DPScaleOptions plain = SmallFrameOptions();
+  DPScaleOptions checked = plain;
+  checked.psf_self_calibration = true;
+  checked.psf_self_calibration_check_only = true;
+
+  SplitProfileParams sharp;
+  sharp.split_exponent = 0.3;
+  const std::vector<DPView> split =
+      RenderAll(specs, scale, SplitProfilePsf(sharp));
+  const RunOutput rejected = RunPipeline(split, checked);
+  std::printf("sharper split, disk checked: %s\n",
+              rejected.result.failure_reason.c_str());
+  EXPECT_FALSE(rejected.result.success);
+  EXPECT_TRUE(rejected.result.psf_rejected);
+  EXPECT_FALSE(rejected.result.psf_self_calibrated);
+  EXPECT_NE(rejected.result.failure_reason.find("reject the translating disk"),
+            std::string::npos);
+  EXPECT_NE(rejected.result.failure_reason.find("psf_model auto"),
+            std::string::npos);
+  // The disk reads this sensor's radii small: the profiles the data allow
+  // put the scale above the disk's, not at it.
+  const std::string factors = "the scale at ";
+  const size_t at = rejected.result.failure_reason.find(factors);
+  ASSERT_NE(at, std::string::npos) << rejected.result.failure_reason;
+  const double low =
+      std::stod(rejected.result.failure_reason.substr(at + factors.size()));
+  EXPECT_GT(low, 1.05);
+  EXPECT_LT(low, 1.6);
+
+  const std::vector<DPView> disk = RenderAll(specs, scale);
+  const RunOutput kept = RunPipeline(disk, checked);
+  const RunOutput given = RunPipeline(disk, plain);
+  ASSERT_TRUE(kept.result.success) << kept.result.failure_reason;
+  ASSERT_TRUE(given.result.success) << given.result.failure_reason;
+  std::printf("translating disk, checked: %s\n",
+              kept.result.psf_status.c_str());
+  EXPECT_FALSE(kept.result.psf_rejected);
+  EXPECT_NE(kept.result.psf_status.find("agree with the translating disk"),
+            std::string::npos);
+  EXPECT_DOUBLE_EQ(kept.result.scale_initial, given.result.scale_initial);
+  EXPECT_LT(std::abs(kept.result.scale / scale - 1), 0.03);
+  EXPECT_LE(kept.result.scale_ci_low, scale);
+  EXPECT_GE(kept.result.scale_ci_high, scale);
 }
 
 // Several apertures from the same tripod positions are more views: the

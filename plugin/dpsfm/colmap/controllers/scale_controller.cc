@@ -509,7 +509,9 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   const DPPsfField psf_field =
       MakePsfField(profile.model, profile.path, &core_options);
   LOG(INFO) << "DP PSF: " << profile.source << " (" << psf_field.Name()
-            << (core_options.psf_self_calibration
+            << (core_options.psf_self_calibration_check_only
+                    ? ", checked against the data before the scale"
+                : core_options.psf_self_calibration
                     ? ", self-calibrated from the data before the scale"
                     : "")
             << ")";

@@ -325,16 +325,27 @@ PsfProfileFile ReadPsfProfile(const std::string& path) {
     ReadMeasuredKernels(entries, &profile);
     return profile;
   }
+  if (model == "translating_disk") {
+    // The paper's model stated for a camera (e.g. a library entry for the
+    // EOS 5D Mark IV the paper measured), with the uncertainty its author
+    // vouches for; unlike --DPScaleEstimator.psf_model translating_disk it
+    // is trusted, not checked, as any calibrated profile is.
+    profile.model = model;
+    return profile;
+  }
   if (model != "split_profile") {
     throw InputError(path +
-                     ": needs 'model split_profile' or 'model "
-                     "measured_kernels'");
+                     ": needs 'model split_profile', 'model "
+                     "measured_kernels' or 'model translating_disk'");
   }
   ReadSplitProfile(entries, &profile);
   return profile;
 }
 
 DPPsfField PsfProfileFile::MakeField(const std::string& path) const {
+  if (model == "translating_disk") {
+    return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  }
   DPPsfField field;
   if (model == "measured_kernels") {
     field.layout = layout;
@@ -466,7 +477,10 @@ DPPsfField MakePsfField(const std::string& psf_model,
           "--DPScaleEstimator.psf_model calibrated (got " +
           psf_model + ")");
     }
-    core->psf_self_calibration = psf_model == "auto";
+    // An explicit translating disk is checked by the same fit, never
+    // replaced (DPScaleOptions::psf_self_calibration_check_only).
+    core->psf_self_calibration = true;
+    core->psf_self_calibration_check_only = psf_model == "translating_disk";
     return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   }
   if (psf_model == "calibrated") {
@@ -477,6 +491,7 @@ DPPsfField MakePsfField(const std::string& psf_model,
           "dp_psf_calibrator, or measured kernels)");
     }
     core->psf_self_calibration = false;
+    core->psf_self_calibration_check_only = false;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     CheckProfileLight(profile, psf_path);
     core->profile_relative_uncertainty = profile.uncertainty;

@@ -1,7 +1,7 @@
 // DP PSF profiles on disk, and the PSF a run uses.
 //
 // A profile file is plain text, one "key value" pair per line, '#' starts a
-// comment (docs/user-guide.md, "DP PSF profiles"). Two models:
+// comment (docs/user-guide.md, "DP PSF profiles"). Three models:
 //
 //   format 1
 //   model split_profile
@@ -24,8 +24,14 @@
 //                                 (rows, cols, K, K) or
 //   right kernels_right.npy       (K, K) for one cell; relative to the file
 //
+//   format 1
+//   model translating_disk        the paper's model, stated for a camera
+//   uncertainty 0.05              (its author's word; trusted like any
+//                                 profile file, unlike psf_model
+//                                 translating_disk, which is checked)
+//
 // (docs/user-guide.md, "Profile files": published calibrations import as
-// they are). Both may carry
+// they are). All may carry
 //   camera <EXIF Make> / <EXIF Model>   lens <EXIF LensModel>
 // for the profile library, uncertainty <relative 95 % of the strength>,
 // light <linear|srgb> (what the kernels were measured in), and
@@ -46,7 +52,8 @@
 namespace dpsfm {
 
 struct PsfProfileFile {
-  std::string model = "split_profile";  // or "measured_kernels"
+  // or "measured_kernels", "translating_disk"
+  std::string model = "split_profile";
   // split_profile.
   SplitProfileParams params;
   // Empty = one profile for the whole frame.
@@ -87,11 +94,13 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
 void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
 
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
-// model), "calibrated" (the profile in psf_path: a split profile from
-// dp_psf_calibrator, one per column band if it has bands, or measured
-// kernels), or "auto" (the translating disk, self-calibrated from the data:
-// sets core->psf_self_calibration). Throws InputError for an unknown model,
-// a missing or malformed psf_path, or a psf_path the model does not use.
+// model, checked against the data: sets core->psf_self_calibration and
+// core->psf_self_calibration_check_only), "calibrated" (the profile in
+// psf_path: a split profile from dp_psf_calibrator, one per column band if it
+// has bands, or measured kernels), or "auto" (the translating disk,
+// self-calibrated from the data: sets core->psf_self_calibration). Throws
+// InputError for an unknown model, a missing or malformed psf_path, or a
+// psf_path the model does not use.
 DPPsfField MakePsfField(const std::string& psf_model,
                         const std::string& psf_path,
                         DPScaleOptions* core);

@@ -3,12 +3,14 @@
 // crops searched again with it, and the factors the fit leaves open.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
 #include <utility>
 
 #include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/scale_estimator_data.h"
 #include "dpsfm/core/util/threads.h"
@@ -187,6 +189,10 @@ void DPScaleEstimator::CalibrateProfile(
     calibration.summary = e.what();  // said in the status below
   }
   result->psf_fit = calibration.frame;
+  if (options_.psf_self_calibration_check_only) {
+    CheckTranslatingDisk(calibration, result);
+    return;
+  }
   const SplitProfileFit& fit = calibration.frame;
   std::ostringstream status;
   // The profiles to use: one for the whole frame, or one per band (a band
@@ -236,6 +242,42 @@ void DPScaleEstimator::CalibrateProfile(
   result->psf_status = status.str();
   result->psf_self_calibrated = true;
   *field = fitted_field;
+}
+
+void DPScaleEstimator::CheckTranslatingDisk(
+    const SplitProfileCalibration& calibration, DPScaleResult* result) const {
+  const SplitProfileFit& fit = calibration.frame;
+  if (!calibration.banded && !fit.determined) {
+    // The scale carries the offsets the data allow (ProfileScaleFactors).
+    result->psf_status =
+        "self-calibration could not check the translating "
+        "disk (" +
+        calibration.summary + ")";
+    return;
+  }
+  if (!calibration.banded && fit.translating_disk) {
+    result->psf_status =
+        "the data agree with the translating disk (" + fit.reason + ")";
+    return;
+  }
+  // The data determine another profile (for the frame, or for a band): the
+  // scale under the disk would be off by the ratio of the offsets they
+  // allow to the disk's.
+  std::vector<SplitProfileFit> fits = calibration.banded
+                                          ? calibration.bands
+                                          : std::vector<SplitProfileFit>{fit};
+  double low = std::numeric_limits<double>::infinity(), high = 0;
+  for (const SplitProfileFit& f : fits) {
+    if (f.translating_disk || !(f.translating_disk_centroid_offset > 0)) {
+      continue;
+    }
+    low = std::min(low, f.consistent_low / f.translating_disk_centroid_offset);
+    high =
+        std::max(high, f.consistent_high / f.translating_disk_centroid_offset);
+  }
+  result->psf_rejected = true;
+  result->psf_status = RejectedTranslatingDiskReason(
+      calibration.banded ? calibration.summary : fit.reason, low, high);
 }
 
 void DPScaleEstimator::ProfileScaleFactors(const DPPsfField& field,

@@ -142,6 +142,24 @@ std::string UnknownProfileReason(const std::string& fit_reason,
   return s.str();
 }
 
+std::string RejectedTranslatingDiskReason(const std::string& fit_summary,
+                                          double factor_low,
+                                          double factor_high) {
+  std::ostringstream s;
+  s << "the DP data reject the translating disk (--DPScaleEstimator."
+       "psf_model translating_disk, the paper's model of another sensor): "
+       "self-calibration fits "
+    << fit_summary;
+  if (factor_low <= factor_high) {
+    s << std::setprecision(3) << "; the profiles the data allow put the "
+      << "scale at " << factor_low << " to " << factor_high
+      << " times the disk's";
+  }
+  s << ". Run with --DPScaleEstimator.psf_model auto (the profile fitted "
+       "to the data) or calibrated (colmap dp_psf_calibrator)";
+  return s.str();
+}
+
 std::string DisagreementAdvice(const ScaleCue& dp,
                                const ScaleCue& focus,
                                double width,

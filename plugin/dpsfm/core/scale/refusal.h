@@ -71,6 +71,13 @@ std::string UnknownProfileReason(const std::string& fit_reason,
                                  double ci_low,
                                  double ci_high);
 
+// An explicitly chosen translating disk that the data reject: the fit's
+// summary, and the factors by which the profiles they allow would move the
+// scale against the disk's (low > high when not bounded).
+std::string RejectedTranslatingDiskReason(const std::string& fit_summary,
+                                          double factor_low,
+                                          double factor_high);
+
 // The DP data and the recorded focus disagree and an interval covering
 // both is `width` of the scale, over `limit`: both cues, and which to trust
 // when (`calibrated`: the DP profile was given, not fitted to these data).

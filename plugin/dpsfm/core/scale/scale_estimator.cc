@@ -78,6 +78,9 @@ bool DPScaleOptions::Check() const {
       psf_fit_radius_factor);
   DPSFM_CHECK_OPTION_GE(psf_fit_bands, 1);
   DPSFM_CHECK_OPTION_GE(max_psf_fit_depth_spread, 0);
+  DPSFM_CHECK_OPTION_VALUE(
+      !psf_self_calibration_check_only || psf_self_calibration,
+      psf_self_calibration_check_only);
   if (psf_self_calibration) {
     DPSFM_CHECK_NESTED_OPTIONS(psf_fit);
   }
@@ -425,6 +428,11 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     const auto fit_start = std::chrono::steady_clock::now();
     CalibrateProfile(&samples, &field, &result);
     result.seconds_psf_fit = SecondsSince(fit_start);
+    if (result.psf_rejected) {
+      result.psf_model = field.Name();
+      result.failure_reason = result.psf_status;
+      return result;
+    }
   }
   result.psf_model = field.Name();
 

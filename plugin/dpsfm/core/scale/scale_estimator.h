@@ -196,6 +196,16 @@ struct DPScaleOptions {
   // stages use those patches and profiles; otherwise the given PSF is kept
   // and the result says why.
   bool psf_self_calibration = false;
+  // With psf_self_calibration: the fit only checks the given translating
+  // disk (an explicitly chosen --DPScaleEstimator.psf_model
+  // translating_disk) and never replaces it. When the data determine
+  // another profile the run refuses (the paper's disk is not this
+  // sensor's: the R6 II's real scenes read 2.2-2.8x off under it with
+  // narrow intervals, docs/psf-profiles.md); when they cannot determine
+  // one, the scale carries the range of profiles they allow, as under
+  // `auto`. A model chosen without evidence from this camera is checked,
+  // not trusted.
+  bool psf_self_calibration_check_only = false;
   SplitProfileFitOptions psf_fit;
   // At most this many patches feed the fit (evenly over the views).
   int max_psf_fit_patches = 400;
@@ -323,6 +333,9 @@ struct DPScaleResult {
   std::string psf_model;
   std::string psf_status;
   bool psf_self_calibrated = false;  // a fitted profile replaced the given one
+  // psf_self_calibration_check_only: the data determined another profile
+  // than the given translating disk (the run refuses; psf_status says why).
+  bool psf_rejected = false;
   // The whole frame's fit (and, for a profile changing across the frame,
   // the bands' fits, left to right, when they were used).
   SplitProfileFit psf_fit;
@@ -442,6 +455,10 @@ class DPScaleEstimator {
   void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
                         DPPsfField* field,
                         DPScaleResult* result) const;
+  // psf_self_calibration_check_only: what the fit says of the given
+  // translating disk (agrees, cannot tell, or rejects it: psf_rejected).
+  void CheckTranslatingDisk(const SplitProfileCalibration& calibration,
+                            DPScaleResult* result) const;
   // A stored crop: its view and its index among the view's stored crops.
   struct StoredRef {
     int view, stored;
