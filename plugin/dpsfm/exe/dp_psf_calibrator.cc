@@ -50,6 +50,13 @@ int RunDPPsfCalibrator(int argc, char** argv) {
       "how the DP frames encode light: auto (PNG/EXIF colour tags, else "
       "8-bit = srgb, 16-bit = linear), linear or srgb; the profile is "
       "measured in linear light either way");
+  manager.AddDefault(
+      "DPPsfCalibrator.entrance_pupil_mm",
+      &options.entrance_pupil_mm,
+      "where the lens's entrance pupil (the no-parallax point of panorama "
+      "heads) lies in front of the focal-plane mark at the captures' focus, "
+      "in mm; scene depths are measured from it (0: unknown, the thin "
+      "lens's position)");
   manager.AddDefault("DPPsfCalibrator.measure_shape",
                      &options.measure_shape,
                      "measure the kernels' shape against stopped-down "

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "dpsfm/core/calibration/target_solver.h"
 #include "tests/core/synthetic_dp.h"
 
 namespace dpsfm {
@@ -153,6 +154,24 @@ TEST(CalibrateFromTargets, RefusesWhatTheCapturesDoNotDetermine) {
                                              Capture(sensor, 1010, 1000, 60)};
   const TargetCalibration sharp = CalibrateFromTargets(focused, Options());
   EXPECT_FALSE(sharp.determined);
+}
+
+// The predicted radius of a plane 600 mm from the sensor, focus 1000 mm,
+// f = 50 mm at f/8, 12 um pixels, by hand (b = L f / (1 - f/g) (1/g - 1/z),
+// r = b / (2 p)): from the thin lens focused there (u_g = 947.2136 mm, the
+// lens 52.7864 mm from the sensor: -10.60831 px), and from an entrance
+// pupil 40 mm in front of the sensor (g = 960, z = 560 mm: -10.22043 px).
+TEST(PredictedRadiusPx, ThinLensOrEntrancePupil) {
+  CalibrationCapture capture;
+  capture.lens = Lens();
+  capture.working_pitch_mm = kPitchMm;
+  capture.target_distance_mm = 600;
+  EXPECT_NEAR(PredictedRadiusPx(capture, 1000), -10.60831, 1e-4);
+  EXPECT_NEAR(PredictedRadiusPx(capture, 1000), TrueRadius(600, 1000), 1e-9);
+  capture.entrance_pupil_mm = 40;
+  EXPECT_NEAR(PredictedRadiusPx(capture, 1000), -10.22043, 1e-4);
+  // A focus within a focal length of the pupil has no real image.
+  EXPECT_TRUE(std::isnan(PredictedRadiusPx(capture, 80)));
 }
 
 }  // namespace dpsfm

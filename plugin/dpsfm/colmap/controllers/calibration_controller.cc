@@ -35,7 +35,8 @@ bool CalibrationRunOptions::Check() const {
   DPSFM_CHECK_OPTION_VALUE(
       transfer_uncertainty >= 0 && transfer_uncertainty < 1,
       transfer_uncertainty);
-  DPSFM_CHECK_OPTION_GE(patch_size, 0);  // 0: auto
+  DPSFM_CHECK_OPTION_GE(entrance_pupil_mm, 0);  // 0: the thin lens's
+  DPSFM_CHECK_OPTION_GE(patch_size, 0);         // 0: auto
   DPSFM_CHECK_OPTION_GE(stride, 0);
   DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
   DPSFM_CHECK_OPTION_GE(min_texture_snr, 0);
@@ -262,6 +263,17 @@ CalibrationCapture MakeCapture(const CalibrationTarget& target,
       target.lens.PixelPitchMm() / geometry.resize_factor;
   capture.target_distance_mm = 1000 * target.target_distance_m;
   capture.focus_distance_mm = 1000 * target.focus_distance_m;  // NaN stays
+  capture.entrance_pupil_mm = options.entrance_pupil_mm;
+  if (options.entrance_pupil_mm > 0 &&
+      !(capture.target_distance_mm - options.entrance_pupil_mm >
+        2 * target.lens.focal_length_mm)) {
+    throw InputError("target " + target.name + " at " +
+                     std::to_string(target.target_distance_m) +
+                     " m lies within two focal lengths of the entrance "
+                     "pupil (--DPPsfCalibrator.entrance_pupil_mm " +
+                     std::to_string(options.entrance_pupil_mm) +
+                     " mm): check the option's unit (mm) and the distances");
+  }
   const std::vector<ProfilePatch> found =
       ExtractProfilePatches(left,
                             right,
@@ -426,6 +438,15 @@ void AddFitInfo(const TargetCalibration& calibration,
                   std::to_string(calibration.focus_ci_high_mm / 1000) + " m)"
             : ")");
   add("focus_distance", v.str());
+  v.str("");
+  if (options.entrance_pupil_mm > 0) {
+    v << "entrance pupil, " << options.entrance_pupil_mm
+      << " mm in front of the focal-plane mark";
+  } else {
+    v << "the thin lens focused at the fitted focus (entrance pupil not "
+         "given)";
+  }
+  add("distance_origin", v.str());
   v.str("");
   for (int c = 0; c < calibration.layout.NumCells(); ++c) {
     v << (c ? " " : "") << calibration.cell_centroid_offsets[c];

@@ -25,6 +25,16 @@ struct CalibrationRunOptions {
   // leave-one-scene-out; docs/psf-profiles.md, "Transfer"). 0 for a
   // simulated camera whose scenes come from the same renderer.
   double transfer_uncertainty = 0.22;
+  // Where the lens's entrance pupil lies in front of the focal-plane mark
+  // at the captures' focus, in mm (0: unknown, the thin lens's position,
+  // about f + f^2 / (g - f) from the sensor). Scene depths from SfM or a
+  // registered depth camera are measured from the entrance pupil, so a
+  // profile calibrated against distances from elsewhere reads them with
+  // the difference: for the Canon RF 50 mm f/1.8 at ~1 m the pupil is
+  // ~40 mm in front of the mark (the patent prescription, whole-group
+  // focus), the thin lens puts it at ~52.5 mm, and the two planes' strength
+  // moves by ~3 % (docs/psf-profiles.md, "Transfer").
+  double entrance_pupil_mm = 0;
   // Patch geometry on the working frame; 0 = DefaultPatchGeometry.
   int patch_size = 0;
   int stride = 0;

@@ -41,6 +41,10 @@ struct CalibrationCapture {
   double target_distance_mm = 0;
   // NaN = unknown (fitted, shared by every capture that leaves it unknown).
   double focus_distance_mm = std::numeric_limits<double>::quiet_NaN();
+  // Where the lens's entrance pupil (the no-parallax point; the origin of
+  // SfM depths) lies in front of the focal-plane mark at this focus, in mm;
+  // 0 = unknown: the thin lens's position (PredictedRadiusPx).
+  double entrance_pupil_mm = 0;
 };
 
 struct TargetCalibrationOptions {

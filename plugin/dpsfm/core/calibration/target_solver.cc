@@ -109,9 +109,15 @@ TargetReadings ReadAlongPath(const std::vector<double>& kappas,
 
 double PredictedRadiusPx(const CalibrationCapture& c, double focus_mm) {
   const double f = c.lens.focal_length_mm;
-  const double u_g = FocusObjectDistanceMm(focus_mm, f);
+  // Object distances as the scenes' depths will be: from the entrance
+  // pupil when it is known, else from the thin lens focused at focus_mm.
+  const bool pupil = c.entrance_pupil_mm > 0;
+  const double u_g = pupil ? focus_mm - c.entrance_pupil_mm
+                           : FocusObjectDistanceMm(focus_mm, f);
   const double u_t =
-      ObjectDistanceFromSensorMm(c.target_distance_mm, focus_mm, f);
+      pupil ? c.target_distance_mm - c.entrance_pupil_mm
+            : ObjectDistanceFromSensorMm(c.target_distance_mm, focus_mm, f);
+  if (!(u_g > f)) return std::numeric_limits<double>::quiet_NaN();
   return BlurRadiusPxFromDiameterMm(SignedBlurDiameterMm(c.lens, u_g, u_t),
                                     c.working_pitch_mm);
 }

@@ -25,7 +25,9 @@ TargetReadings ReadAlongPath(const std::vector<double>& kappas,
                              const TargetCalibrationOptions& options);
 
 // The signed blur radius (px) the thin lens predicts for a capture's target
-// with the focus (sensor distance, mm) at focus_mm.
+// with the focus (sensor distance, mm) at focus_mm: object distances from
+// the capture's entrance pupil when it is given, else from the thin lens
+// (NaN when the focus lies within a focal length of the pupil).
 double PredictedRadiusPx(const CalibrationCapture& c, double focus_mm);
 
 // NaN where the captures determine nothing.
