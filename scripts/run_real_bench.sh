@@ -11,8 +11,11 @@
 # and without its transfer term. `colmap dp_scale_estimator` then runs per
 # scene and mode: the defaults (auto profile) without and with the
 # recorded "1 m" focus in lens.csv, the calibrated profile without and
-# with it, the paper's translating disk, and the planes' own profile
-# (no transfer term). Prints per run r_s = s_est / s_true, its 95 %
+# with it, the paper's translating disk (checked against the data) without
+# and with it, and the planes' own profile (no transfer term), with the
+# target distances from the thin lens's position and from the lens's
+# entrance pupil (39.9 mm in front of the focal-plane mark: the RF 50 mm's
+# patent prescription traced paraxially, whole-group focus at ~0.95 m). Prints per run r_s = s_est / s_true, its 95 %
 # interval, and the two cues; per encoding and mode the answers, how many
 # are within 10 %, how many intervals hold the truth, the confidently
 # wrong ones and e_s; and the transfer table: the planes' own profile on
@@ -47,6 +50,7 @@ start=$SECONDS
 # The frames as given (8-bit sRGB) and as 16-bit linear light (their inverse
 # sRGB, as DPRSplit output would be): the answers must agree.
 encodings=(srgb8 linear16)
+pupil_mm=39.9
 calibrate() {  # encoding
   local enc="$1" cal="$out/calibration/$1" d f
   mkdir -p "$cal/dp/left" "$cal/dp/right"
@@ -72,13 +76,20 @@ calibrate() {  # encoding
   "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
     --targets_path "$cal/targets.csv" --output_path "$cal/planes_only.dpsf" \
     --DPPsfCalibrator.transfer_uncertainty 0 >"$cal/planes_only.log" 2>&1 || true
+  # The same with the distances from the entrance pupil (the origin of the
+  # scenes' depths) instead of the thin lens's position.
+  "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
+    --targets_path "$cal/targets.csv" --output_path "$cal/planes_pupil.dpsf" \
+    --DPPsfCalibrator.transfer_uncertainty 0 \
+    --DPPsfCalibrator.entrance_pupil_mm "$pupil_mm" >"$cal/planes_pupil.log" 2>&1 || true
+  log "  planes only: $(grep -o 'strength [0-9.]* R' "$cal/planes_only.dpsf" | head -n 1); with the entrance pupil at $pupil_mm mm: $(grep -o 'strength [0-9.]* R' "$cal/planes_pupil.dpsf" | head -n 1)"
 }
 for enc in "${encodings[@]}"; do calibrate "$enc"; done
 
 scenes=(casual/orbbec/001 casual/orbbec/002 casual/orbbec/003
         casual/iphone/001 casual/iphone/002 box/001 box/002)
 modes=(defaults defaults_focus calibrated calibrated_focus translating_disk
-       translating_disk_focus planes_only)
+       translating_disk_focus planes_only planes_pupil)
 results="$out/results.tsv"
 : >"$results"
 for enc in "${encodings[@]}"; do
@@ -106,8 +117,10 @@ for enc in "${encodings[@]}"; do
                                 --DPScaleEstimator.psf_path "$profile") ;;
         planes_only) args+=(--DPScaleEstimator.psf_model calibrated
                             --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_only.dpsf") ;;
+        planes_pupil) args+=(--DPScaleEstimator.psf_model calibrated
+                             --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_pupil.dpsf") ;;
       esac
-      if [[ "$mode" == calibrated* || "$mode" == planes_only ]] && [ ! -f "$profile" ]; then
+      if [[ "$mode" == calibrated* || "$mode" == planes_* ]] && [ ! -f "$profile" ]; then
         printf '%s\t%s\t%s\t\t\t\t\tno profile (calibration refused)\t\t\t\t\n' "$enc" "$name" "$mode" >>"$results"
         continue
       fi
@@ -157,7 +170,7 @@ for enc, name, mode, rs, lo, hi, g, why, dp, fc, agree, source in rows:
 print("\n| encoding | mode | answered | within 10 % | intervals holding the truth | confidently wrong | e_s over answers |")
 print("|---|---|---|---|---|---|---|")
 for enc in ["srgb8", "linear16"]:
-    for mode in ["defaults", "defaults_focus", "calibrated", "calibrated_focus", "translating_disk", "translating_disk_focus", "planes_only"]:
+    for mode in ["defaults", "defaults_focus", "calibrated", "calibrated_focus", "translating_disk", "translating_disk_focus", "planes_only", "planes_pupil"]:
         mine = [r for r in rows if r[0] == enc and r[2] == mode]
         ans = [r for r in mine if r[3]]
         es = sum(abs(1 - float(r[3])) for r in ans) / len(ans) if ans else float("nan")
@@ -231,7 +244,18 @@ for enc in ["srgb8", "linear16"]:
             name, s, lo, hi, g / 1000, k, by, t, lo2, hi2, "yes" if ok else "NO"))
     if rows:
         errs = [abs(math.log(v[0])) for v in rows.values()]
-        print("%s: held-out intervals holding the truth %d of %d; |ln r_s| median %.3f, largest %.3f" % (
-            enc, held, len(rows), median(errs), max(errs)))
+        print("%s: held-out intervals holding the truth %d of %d; |ln r_s| median %.3f, largest %.3f; mean ln r_s %+.3f" % (
+            enc, held, len(rows), median(errs), max(errs), sum(math.log(v[0]) for v in rows.values()) / len(rows)))
+    # The same profile measured with the distances from the entrance pupil.
+    pupil = []
+    for fn in sorted(glob.glob(os.path.join(out, enc, "*.planes_pupil.json"))):
+        c = json.load(open(fn)).get("cues", {}).get("dual_pixel", {})
+        if c.get("valid"):
+            pupil.append((os.path.basename(fn).split(".")[0], c["scale"] / truth))
+    if pupil:
+        ln = [math.log(v) for _, v in pupil]
+        print("%s: distances from the entrance pupil: r_s %s; |ln r_s| median %.3f, largest %.3f; mean ln r_s %+.3f" % (
+            enc, ", ".join("%s %.3f" % (n, v) for n, v in pupil), median([abs(x) for x in ln]),
+            max(abs(x) for x in ln), sum(ln) / len(ln)))
 PY
 log "total $((SECONDS - start)) s; reports, logs and the profiles in $out"

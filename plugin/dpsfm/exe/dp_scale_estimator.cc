@@ -131,7 +131,7 @@ void AddDPProfileOptions(CommandOptions* manager,
       "the sensor's DP blur profile: auto (a library profile for the "
       "camera and lens, else fitted to the data), calibrated (the file in "
       "psf_path, from colmap dp_psf_calibrator) or translating_disk (the "
-      "paper's)");
+      "paper's, kept only where the data agree with it)");
   manager->AddDefault("DPScaleEstimator.psf_path",
                       &options->psf_path,
                       "DP profile file (.dpsf) for psf_model calibrated");
