@@ -251,7 +251,9 @@ Run Estimate(const std::vector<DPView>& views,
              double scale,
              double profile_uncertainty = 0) {
   DPScaleOptions options = Options();
-  options.psf_self_calibration = self_calibration;
+  options.psf_self_calibration = self_calibration
+                                     ? DPScaleOptions::SelfCalibration::kFit
+                                     : DPScaleOptions::SelfCalibration::kOff;
   options.profile_relative_uncertainty = profile_uncertainty;
   // Renders of a thin lens: no lens-geometry term.
   options.lens_geometry_uncertainty = 0;

@@ -15,8 +15,9 @@
 # and with it, and the planes' own profile (no transfer term), with the
 # target distances from the thin lens's position and from the lens's
 # entrance pupil (39.9 mm in front of the focal-plane mark: the RF 50 mm's
-# patent prescription traced paraxially, whole-group focus at ~0.95 m). Prints per run r_s = s_est / s_true, its 95 %
-# interval, and the two cues; per encoding and mode the answers, how many
+# patent prescription traced paraxially, whole-group focus at ~0.95 m).
+# Prints per run r_s = s_est / s_true, its 95 % interval, and the two
+# cues; per encoding and mode the answers, how many
 # are within 10 %, how many intervals hold the truth, the confidently
 # wrong ones and e_s; and the transfer table: the planes' own profile on
 # every scene, left out in turn. Gates nothing.
@@ -157,9 +158,10 @@ PY
   done
 done
 
-python3 - "$results" <<'PY'
+python3 - "$results" "${encodings[*]}" "${modes[*]}" <<'PY'
 import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
+encodings, modes = sys.argv[2].split(), sys.argv[3].split()
 print("\n| encoding | scene | mode | r_s | 95 % interval | from | focus (m) | DP cue | recorded-focus cue | or refused because |")
 print("|---|---|---|---|---|---|---|---|---|---|")
 for enc, name, mode, rs, lo, hi, g, why, dp, fc, agree, source in rows:
@@ -169,8 +171,8 @@ for enc, name, mode, rs, lo, hi, g, why, dp, fc, agree, source in rows:
         print("| %s | %s | %s | | | | | %s | %s | %s |" % (enc, name, mode, dp, fc, why))
 print("\n| encoding | mode | answered | within 10 % | intervals holding the truth | confidently wrong | e_s over answers |")
 print("|---|---|---|---|---|---|---|")
-for enc in ["srgb8", "linear16"]:
-    for mode in ["defaults", "defaults_focus", "calibrated", "calibrated_focus", "translating_disk", "translating_disk_focus", "planes_only", "planes_pupil"]:
+for enc in encodings:
+    for mode in modes:
         mine = [r for r in rows if r[0] == enc and r[2] == mode]
         ans = [r for r in mine if r[3]]
         es = sum(abs(1 - float(r[3])) for r in ans) / len(ans) if ans else float("nan")
@@ -189,9 +191,9 @@ PY
 # thin lens predicts from the measured depth (focus fitted, L1), by true
 # |r| (px): a profile that did not transfer would show it at every blur,
 # a kernel that changes shape at small blur only below ~2 px.
-python3 - "$out" "$truth" <<'PY'
+python3 - "$out" "$truth" "${encodings[*]}" <<'PY'
 import glob, json, math, os, re, sys
-out, truth = sys.argv[1], float(sys.argv[2])
+out, truth, encodings = sys.argv[1], float(sys.argv[2]), sys.argv[3].split()
 f_mm, f_number, pitch = 49.57, 4.0, 0.046875
 aperture = f_mm / f_number
 def r_true(z, g):
@@ -199,7 +201,7 @@ def r_true(z, g):
 def median(v):
     v = sorted(v); n = len(v)
     return float("nan") if n == 0 else (v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2]))
-for enc in ["srgb8", "linear16"]:
+for enc in encodings:
     prof = os.path.join(out, "calibration", enc, "planes_only.dpsf")
     if not os.path.exists(prof):
         continue

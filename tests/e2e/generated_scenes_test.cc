@@ -35,15 +35,13 @@ std::vector<std::string> GivenDiskProfile(const SceneCopy& scene) {
           path};
 }
 
-// A dry run on the scene's dense workspace whose blur is too small to see
-// the DP profile: refused, saying the profile is unknown and how to
-// calibrate it (and, for an explicit translating disk, that it could not
-// be checked), not answered on a guessed or unchecked model.
-void ExpectProfileUnknown(const SceneCopy& scene,
-                          const std::vector<std::string>& extra,
-                          const std::string& also) {
+// The arguments of a dry run on `workspace` (a workspace of `scene`) with
+// the scene's DP views and lens.csv, then `extra`.
+std::vector<std::string> DryRunArgs(const SceneCopy& scene,
+                                    const std::string& workspace,
+                                    const std::vector<std::string>& extra) {
   std::vector<std::string> args = {"--workspace_path",
-                                   scene / "dense",
+                                   workspace,
                                    "--dp_image_path",
                                    scene / "dp",
                                    "--lens_path",
@@ -51,7 +49,18 @@ void ExpectProfileUnknown(const SceneCopy& scene,
                                    "--dry_run",
                                    "1"};
   args.insert(args.end(), extra.begin(), extra.end());
-  const CommandResult run = RunEstimator(args);
+  return args;
+}
+
+// A dry run on the scene's dense workspace whose blur is too small to see
+// the DP profile: refused, saying the profile is unknown and how to
+// calibrate it (and, for an explicit translating disk, that it could not
+// be checked), not answered on a guessed or unchecked model.
+void ExpectProfileUnknown(const SceneCopy& scene,
+                          const std::vector<std::string>& extra,
+                          const std::string& also) {
+  const CommandResult run =
+      RunEstimator(DryRunArgs(scene, scene / "dense", extra));
   EXPECT_NE(run.exit_code, 0);
   for (const std::string& text : {std::string("DP profile is unknown"),
                                   std::string("dp_psf_calibrator"),
@@ -80,18 +89,9 @@ double ScaleError(const SceneCopy& scene,
                   const std::string& workspace,
                   const std::string& report_path,
                   const std::vector<std::string>& extra = {}) {
-  std::vector<std::string> args = {"--workspace_path",
-                                   workspace,
-                                   "--dp_image_path",
-                                   scene / "dp",
-                                   "--lens_path",
-                                   scene / "lens.csv",
-                                   "--dry_run",
-                                   "1",
-                                   "--report_path",
-                                   report_path};
+  std::vector<std::string> args = {"--report_path", report_path};
   args.insert(args.end(), extra.begin(), extra.end());
-  const CommandResult result = RunEstimator(args);
+  const CommandResult result = RunEstimator(DryRunArgs(scene, workspace, args));
   EXPECT_EQ(result.exit_code, 0) << result.err;
   if (result.exit_code != 0) return 1;
   const double scale = ReadJson(report_path).at("scale").get<double>();

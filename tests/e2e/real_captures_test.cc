@@ -9,7 +9,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -135,9 +134,7 @@ TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
   const std::string profile = dir_ / "library/r6m2.dpsf";
   const CommandResult calibrated = Calibrate(dir, profile);
   ASSERT_EQ(calibrated.exit_code, 0) << calibrated.err;
-  std::ifstream file(profile);
-  std::string text((std::istreambuf_iterator<char>(file)),
-                   std::istreambuf_iterator<char>());
+  const std::string text = ReadTextFile(profile);
   EXPECT_NE(text.find("model measured_kernels"), std::string::npos) << text;
   EXPECT_NE(text.find("\nlight linear"), std::string::npos) << text;
   // The stated uncertainty: the planes' own ~4 % and the 22 % transfer term
@@ -473,9 +470,7 @@ TEST_F(RealCaptures, EntrancePupilMovesTheStrengthAsTheGeometrySays) {
       Calibrate(dir, pupil, {"--DPPsfCalibrator.entrance_pupil_mm", "39.9"});
   ASSERT_EQ(given.exit_code, 0) << given.err;
   auto strength = [](const std::string& path) {
-    std::ifstream file(path);
-    const std::string text((std::istreambuf_iterator<char>(file)),
-                           std::istreambuf_iterator<char>());
+    const std::string text = ReadTextFile(path);
     const size_t at = text.find("; strength ");
     EXPECT_NE(at, std::string::npos) << path;
     return at == std::string::npos ? 0.0 : std::stod(text.substr(at + 11));
@@ -484,11 +479,9 @@ TEST_F(RealCaptures, EntrancePupilMovesTheStrengthAsTheGeometrySays) {
   std::printf("strength with the pupil / thin lens: %.4f\n", ratio);
   EXPECT_GT(ratio, 1.01);
   EXPECT_LT(ratio, 1.07);
-  std::ifstream file(pupil);
-  const std::string text((std::istreambuf_iterator<char>(file)),
-                         std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("fit_distance_origin entrance pupil, 39.9 mm"),
-            std::string::npos);
+  EXPECT_NE(
+      ReadTextFile(pupil).find("fit_distance_origin entrance pupil, 39.9 mm"),
+      std::string::npos);
   const CommandResult metres = Calibrate(
       dir, dir_ / "bad.dpsf", {"--DPPsfCalibrator.entrance_pupil_mm", "600"});
   EXPECT_NE(metres.exit_code, 0);

@@ -169,17 +169,15 @@ TEST(PsfProfileFile, TranslatingDiskStatedForACamera) {
   EXPECT_NEAR(CentroidOffsetPerRadius(*field.cells[0], 8), 0.2945, 0.005);
 
   DPScaleOptions core;
-  core.psf_self_calibration = true;
+  using SelfCalibration = DPScaleOptions::SelfCalibration;
+  core.psf_self_calibration = SelfCalibration::kFit;
   MakePsfField("calibrated", dir / "5d4.dpsf", &core);
-  EXPECT_FALSE(core.psf_self_calibration);
-  EXPECT_FALSE(core.psf_self_calibration_check_only);
+  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kOff);
   EXPECT_DOUBLE_EQ(core.profile_relative_uncertainty, 0.05);
   MakePsfField("translating_disk", "", &core);
-  EXPECT_TRUE(core.psf_self_calibration);
-  EXPECT_TRUE(core.psf_self_calibration_check_only);
+  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kCheck);
   MakePsfField("auto", "", &core);
-  EXPECT_TRUE(core.psf_self_calibration);
-  EXPECT_FALSE(core.psf_self_calibration_check_only);
+  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kFit);
 }
 
 }  // namespace

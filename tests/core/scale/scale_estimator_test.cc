@@ -293,7 +293,7 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
       RenderAll(specs, scale, SplitProfilePsf(sharp));
   DPScaleOptions plain = SmallFrameOptions();
   DPScaleOptions self = plain;
-  self.psf_self_calibration = true;
+  self.psf_self_calibration = DPScaleOptions::SelfCalibration::kFit;
   const RunOutput disk = RunPipeline(views, plain);
   // With the defaults a fitted profile carries +-20 % for shapes outside
   // the family: a single answer from it would be over 40 % wide, so the run
@@ -417,8 +417,7 @@ TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
       SixPositions(Lens(50, 2.8), Lens(35, 2), 50);
   DPScaleOptions plain = SmallFrameOptions();
   DPScaleOptions checked = plain;
-  checked.psf_self_calibration = true;
-  checked.psf_self_calibration_check_only = true;
+  checked.psf_self_calibration = DPScaleOptions::SelfCalibration::kCheck;
 
   SplitProfileParams sharp;
   sharp.split_exponent = 0.3;

@@ -383,6 +383,19 @@ void LogResult(const DPScaleResult& result) {
   }
 }
 
+// What the run does with the profile before the scale, for the log.
+const char* SelfCalibrationNote(DPScaleOptions::SelfCalibration mode) {
+  switch (mode) {
+    case DPScaleOptions::SelfCalibration::kFit:
+      return ", self-calibrated from the data before the scale";
+    case DPScaleOptions::SelfCalibration::kCheck:
+      return ", checked against the data before the scale";
+    case DPScaleOptions::SelfCalibration::kOff:
+      break;
+  }
+  return "";
+}
+
 // "Scale S metres per model unit (95 % interval [lo, hi], from <source>)".
 std::string ScaleLine(const DPScaleResult& result) {
   std::ostringstream line;
@@ -509,12 +522,7 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   const DPPsfField psf_field =
       MakePsfField(profile.model, profile.path, &core_options);
   LOG(INFO) << "DP PSF: " << profile.source << " (" << psf_field.Name()
-            << (core_options.psf_self_calibration_check_only
-                    ? ", checked against the data before the scale"
-                : core_options.psf_self_calibration
-                    ? ", self-calibrated from the data before the scale"
-                    : "")
-            << ")";
+            << SelfCalibrationNote(core_options.psf_self_calibration) << ")";
 
   // Step 5: the view loop and the estimate. One thread asked for means no
   // reading thread either.

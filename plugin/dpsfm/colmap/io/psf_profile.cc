@@ -478,9 +478,10 @@ DPPsfField MakePsfField(const std::string& psf_model,
           psf_model + ")");
     }
     // An explicit translating disk is checked by the same fit, never
-    // replaced (DPScaleOptions::psf_self_calibration_check_only).
-    core->psf_self_calibration = true;
-    core->psf_self_calibration_check_only = psf_model == "translating_disk";
+    // replaced (DPScaleOptions::SelfCalibration::kCheck).
+    core->psf_self_calibration = psf_model == "auto"
+                                     ? DPScaleOptions::SelfCalibration::kFit
+                                     : DPScaleOptions::SelfCalibration::kCheck;
     return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   }
   if (psf_model == "calibrated") {
@@ -490,8 +491,7 @@ DPPsfField MakePsfField(const std::string& psf_model,
           "--DPScaleEstimator.psf_path (a profile written by colmap "
           "dp_psf_calibrator, or measured kernels)");
     }
-    core->psf_self_calibration = false;
-    core->psf_self_calibration_check_only = false;
+    core->psf_self_calibration = DPScaleOptions::SelfCalibration::kOff;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     CheckProfileLight(profile, psf_path);
     core->profile_relative_uncertainty = profile.uncertainty;

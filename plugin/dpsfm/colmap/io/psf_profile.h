@@ -94,11 +94,11 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
 void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
 
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
-// model, checked against the data: sets core->psf_self_calibration and
-// core->psf_self_calibration_check_only), "calibrated" (the profile in
+// model, checked against the data: core->psf_self_calibration kCheck),
+// "calibrated" (the profile in
 // psf_path: a split profile from dp_psf_calibrator, one per column band if it
 // has bands, or measured kernels), or "auto" (the translating disk,
-// self-calibrated from the data: sets core->psf_self_calibration). Throws
+// self-calibrated from the data: kFit; calibrated sets kOff). Throws
 // InputError for an unknown model, a missing or malformed psf_path, or a
 // psf_path the model does not use.
 DPPsfField MakePsfField(const std::string& psf_model,

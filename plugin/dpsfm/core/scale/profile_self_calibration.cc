@@ -30,6 +30,16 @@ std::shared_ptr<const DPPsfModel> ProfileOf(const SplitProfileFit& fit) {
   return std::make_shared<SplitProfilePsf>(fit.params);
 }
 
+// Widens [*low, *high] by the ratios of the centroid offsets the fit allows
+// to `used`: the factors by which those profiles move the scale.
+void WidenByConsistentOffsets(const SplitProfileFit& fit,
+                              double used,
+                              double* low,
+                              double* high) {
+  *low = std::min(*low, fit.consistent_low / used);
+  *high = std::max(*high, fit.consistent_high / used);
+}
+
 // Scale factors the self-calibrated profile leaves open (see
 // DPScaleResult::profile_scale_factor_low): per cell of the field, the
 // consistent centroid offsets over the one used (the translating disk's
@@ -44,8 +54,7 @@ void ProfileScaleFactorsOf(const std::vector<SplitProfileFit>& fits,
     const double used = fitted_profile_used && !fit.translating_disk
                             ? fit.centroid_offset
                             : fit.translating_disk_centroid_offset;
-    *low = std::min(*low, fit.consistent_low / used);
-    *high = std::max(*high, fit.consistent_high / used);
+    WidenByConsistentOffsets(fit, used, low, high);
   }
 }
 
@@ -189,7 +198,8 @@ void DPScaleEstimator::CalibrateProfile(
     calibration.summary = e.what();  // said in the status below
   }
   result->psf_fit = calibration.frame;
-  if (options_.psf_self_calibration_check_only) {
+  if (options_.psf_self_calibration ==
+      DPScaleOptions::SelfCalibration::kCheck) {
     CheckTranslatingDisk(calibration, result);
     return;
   }
@@ -271,9 +281,8 @@ void DPScaleEstimator::CheckTranslatingDisk(
     if (f.translating_disk || !(f.translating_disk_centroid_offset > 0)) {
       continue;
     }
-    low = std::min(low, f.consistent_low / f.translating_disk_centroid_offset);
-    high =
-        std::max(high, f.consistent_high / f.translating_disk_centroid_offset);
+    WidenByConsistentOffsets(
+        f, f.translating_disk_centroid_offset, &low, &high);
   }
   result->psf_rejected = true;
   result->psf_status = RejectedTranslatingDiskReason(

@@ -126,7 +126,8 @@ bool DPScaleEstimator::AdoptCombinedCues(const LinearEstimate& linear,
                                      result->focus_cue,
                                      width,
                                      options_.max_scale_ci_relative_width,
-                                     !options_.psf_self_calibration);
+                                     options_.psf_self_calibration ==
+                                         DPScaleOptions::SelfCalibration::kOff);
     } else {
       *refusal << "; with the recorded focus of " << result->focus_cue.num_views
                << " view(s): " << combined.how << ", " << std::fixed

@@ -78,10 +78,7 @@ bool DPScaleOptions::Check() const {
       psf_fit_radius_factor);
   DPSFM_CHECK_OPTION_GE(psf_fit_bands, 1);
   DPSFM_CHECK_OPTION_GE(max_psf_fit_depth_spread, 0);
-  DPSFM_CHECK_OPTION_VALUE(
-      !psf_self_calibration_check_only || psf_self_calibration,
-      psf_self_calibration_check_only);
-  if (psf_self_calibration) {
+  if (psf_self_calibration != SelfCalibration::kOff) {
     DPSFM_CHECK_NESTED_OPTIONS(psf_fit);
   }
   DPSFM_CHECK_NESTED_OPTIONS(blur);
@@ -99,7 +96,9 @@ DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
     : options_(options), field_(std::move(field)) {
   DPSFM_CHECK_OPTIONS(options_, "DPScaleOptions");
   field_.CheckValid();
-  DPSFM_CHECK(field_.cells.size() == 1 || !options_.psf_self_calibration)
+  DPSFM_CHECK(field_.cells.size() == 1 ||
+              options_.psf_self_calibration ==
+                  DPScaleOptions::SelfCalibration::kOff)
       << "self-calibration fits one profile for the whole frame";
   psf_ = field_.cells[0];
 }
@@ -288,7 +287,7 @@ double DPScaleEstimator::LensGeometryTerm(
 
 void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
                                               DPScaleResult* result) const {
-  if (options_.psf_self_calibration) {
+  if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
     ProfileScaleFactors(field,
                         *result,
                         &result->profile_scale_factor_low,
@@ -337,7 +336,8 @@ std::string DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
   } else if (no_interval) {
     s << "the scale's interval could not be measured ("
       << linear.interval_status << "): a scale without one is not reported";
-  } else if (profile_open && !options_.psf_self_calibration) {
+  } else if (profile_open && options_.psf_self_calibration ==
+                                 DPScaleOptions::SelfCalibration::kOff) {
     s << CalibratedProfileOpenReason(options_.profile_relative_uncertainty,
                                      linear.scale,
                                      linear.scale_ci_low,
@@ -424,17 +424,17 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   std::vector<std::vector<PatchSample>> samples(num_views);
   for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
   DPPsfField field = field_;
-  if (options_.psf_self_calibration && field_.cells.size() == 1) {
+  if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff &&
+      field_.cells.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
     CalibrateProfile(&samples, &field, &result);
     result.seconds_psf_fit = SecondsSince(fit_start);
-    if (result.psf_rejected) {
-      result.psf_model = field.Name();
-      result.failure_reason = result.psf_status;
-      return result;
-    }
   }
   result.psf_model = field.Name();
+  if (result.psf_rejected) {
+    result.failure_reason = result.psf_status;
+    return result;
+  }
 
   // --- Linear stage. ---
   LinearEstimate linear;

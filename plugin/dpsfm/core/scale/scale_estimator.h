@@ -187,25 +187,25 @@ struct DPScaleOptions {
   // (the report's focus_check), and such runs refuse.
   bool pin_to_recorded_focus = true;
 
-  // DP PSF self-calibration (the `auto` profile, issue 7): before the
-  // linear stage, fit the split profile to the stored patches of all views,
-  // for the whole frame and for psf_fit_bands column bands
-  // (CalibrateSplitProfile). When the data determine a profile other than
-  // the translating disk, the stored patches' blur is searched again with
-  // it (each band's where the profile changes across the frame) and both
-  // stages use those patches and profiles; otherwise the given PSF is kept
-  // and the result says why.
-  bool psf_self_calibration = false;
-  // With psf_self_calibration: the fit only checks the given translating
-  // disk (an explicitly chosen --DPScaleEstimator.psf_model
-  // translating_disk) and never replaces it. When the data determine
-  // another profile the run refuses (the paper's disk is not this
-  // sensor's: the R6 II's real scenes read 2.2-2.8x off under it with
-  // narrow intervals, docs/psf-profiles.md); when they cannot determine
-  // one, the scale carries the range of profiles they allow, as under
-  // `auto`. A model chosen without evidence from this camera is checked,
-  // not trusted.
-  bool psf_self_calibration_check_only = false;
+  // DP PSF self-calibration: before the linear stage, fit the split
+  // profile to the stored patches of all views, for the whole frame and for
+  // psf_fit_bands column bands (CalibrateSplitProfile).
+  // - kFit (the `auto` profile, issue 7): when the data determine a profile
+  //   other than the translating disk, the stored patches' blur is searched
+  //   again with it (each band's where the profile changes across the
+  //   frame) and both stages use those patches and profiles; otherwise the
+  //   given PSF is kept and the result says why.
+  // - kCheck (an explicitly chosen --DPScaleEstimator.psf_model
+  //   translating_disk): the fit only checks the given disk and never
+  //   replaces it. When the data determine another profile the run refuses
+  //   (the paper's disk is not this sensor's: the R6 II's real scenes read
+  //   2.2-2.8x off under it with narrow intervals, docs/psf-profiles.md);
+  //   when they cannot determine one, the scale carries the range of
+  //   profiles they allow, as under kFit. A model chosen without evidence
+  //   from this camera is checked, not trusted.
+  // - kOff: the profile is given (calibrated) and taken as it is.
+  enum class SelfCalibration { kOff, kFit, kCheck };
+  SelfCalibration psf_self_calibration = SelfCalibration::kOff;
   SplitProfileFitOptions psf_fit;
   // At most this many patches feed the fit (evenly over the views).
   int max_psf_fit_patches = 400;
@@ -333,8 +333,8 @@ struct DPScaleResult {
   std::string psf_model;
   std::string psf_status;
   bool psf_self_calibrated = false;  // a fitted profile replaced the given one
-  // psf_self_calibration_check_only: the data determined another profile
-  // than the given translating disk (the run refuses; psf_status says why).
+  // SelfCalibration::kCheck: the data determined another profile than the
+  // given translating disk (the run refuses; psf_status says why).
   bool psf_rejected = false;
   // The whole frame's fit (and, for a profile changing across the frame,
   // the bands' fits, left to right, when they were used).
@@ -455,8 +455,8 @@ class DPScaleEstimator {
   void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
                         DPPsfField* field,
                         DPScaleResult* result) const;
-  // psf_self_calibration_check_only: what the fit says of the given
-  // translating disk (agrees, cannot tell, or rejects it: psf_rejected).
+  // SelfCalibration::kCheck: what the fit says of the given translating
+  // disk (agrees, cannot tell, or rejects it: psf_rejected).
   void CheckTranslatingDisk(const SplitProfileCalibration& calibration,
                             DPScaleResult* result) const;
   // A stored crop: its view and its index among the view's stored crops.

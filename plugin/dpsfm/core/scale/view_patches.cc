@@ -255,7 +255,7 @@ std::vector<StoredCrop> StoreBestCrops(
         return samples[a].confidence > samples[b].confidence;
       });
   int store_border = border;
-  if (options.psf_self_calibration) {
+  if (options.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
     for (const auto& psf : field.cells) {
       store_border = std::max(
           store_border,
