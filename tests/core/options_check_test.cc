@@ -32,17 +32,18 @@ void ExpectCheck(const char* name,
                  const std::function<void(Options*)>& spoil,
                  const std::string& expected) {
   SCOPED_TRACE(name);
-  EXPECT_TRUE(options.Check()) << OptionCheckFailure();
+  EXPECT_TRUE(options.Check()) << OptionCheckFailure(options);
   spoil(&options);
-  EXPECT_FALSE(options.Check());
-  EXPECT_NE(OptionCheckFailure().find(expected), std::string::npos)
-      << OptionCheckFailure();
+  std::string failure;
+  EXPECT_FALSE(options.Check(&failure));
+  EXPECT_NE(failure.find(expected), std::string::npos) << failure;
+  EXPECT_EQ(OptionCheckFailure(options), failure);
   try {
     DPSFM_CHECK_OPTIONS(options, name);
     ADD_FAILURE() << "DPSFM_CHECK_OPTIONS did not throw";
   } catch (const std::invalid_argument& error) {
     EXPECT_EQ(std::string(error.what()),
-              std::string("invalid ") + name + ": " + OptionCheckFailure());
+              std::string("invalid ") + name + ": " + failure);
   }
 }
 
@@ -187,16 +188,32 @@ TEST(OptionsCheck, LinearEstimatorOptions) {
       "min_samples_per_view >= 2 (got 1)");
 }
 
-TEST(OptionsCheck, FailureIsPerThreadAndOverwritten) {
+TEST(OptionsCheck, FailureIsReturnedToTheCallerOnly) {
+  // Each Check() answers for its own struct: no failure is kept between
+  // calls (the old per-thread failure text leaked from one check to the
+  // next).
   ViewBudgetOptions a;
   a.min_views = 0;
-  EXPECT_FALSE(a.Check());
-  EXPECT_NE(OptionCheckFailure().find("min_views"), std::string::npos);
+  std::string failure_a;
+  EXPECT_FALSE(a.Check(&failure_a));
+  EXPECT_NE(failure_a.find("min_views"), std::string::npos) << failure_a;
   IrlsOptions b;
   b.epsilon = 0;
+  std::string failure_b = "untouched";
+  EXPECT_FALSE(b.Check(&failure_b));
+  EXPECT_EQ(failure_b.find("min_views"), std::string::npos) << failure_b;
+  EXPECT_NE(failure_b.find("epsilon"), std::string::npos) << failure_b;
+  // A passing check leaves the caller's text alone and needs none.
+  std::string untouched = "untouched";
+  EXPECT_TRUE(IrlsOptions().Check(&untouched));
+  EXPECT_EQ(untouched, "untouched");
+  EXPECT_TRUE(IrlsOptions().Check());
   EXPECT_FALSE(b.Check());
-  EXPECT_EQ(OptionCheckFailure().find("min_views"), std::string::npos);
-  EXPECT_NE(OptionCheckFailure().find("epsilon"), std::string::npos);
+  // A nested struct's failure is prefixed with its field.
+  DPScaleOptions nested;
+  nested.linear.irls.epsilon = 0;
+  EXPECT_EQ(OptionCheckFailure(nested).find("linear.irls.epsilon"), 0u)
+      << OptionCheckFailure(nested);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "colmap/scene/reconstruction.h"
+#include "dpsfm/colmap/io/workspace_reader.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "tests/test_utils.h"
 
@@ -49,6 +50,24 @@ inline void ExpectModelScaled(const std::string& before_dir,
   for (const auto& point : before.Points3D()) {
     EXPECT_TRUE(after.Point3D(point.first)
                     .xyz.isApprox(scale * point.second.xyz, 1e-12));
+  }
+}
+
+// The depth map at after_path is the one at before_path with every valid
+// (> 0) depth multiplied by `scale` and every other value kept.
+inline void ExpectDepthMapScaled(const std::string& before_path,
+                                 const std::string& after_path,
+                                 double scale) {
+  const cv::Mat before = ReadColmapDepthMap(before_path);
+  const cv::Mat after = ReadColmapDepthMap(after_path);
+  ASSERT_EQ(before.size(), after.size());
+  for (int r = 0; r < before.rows; ++r) {
+    for (int c = 0; c < before.cols; ++c) {
+      const float d = before.at<float>(r, c);
+      const float expected = d > 0 ? static_cast<float>(scale * d) : d;
+      ASSERT_NEAR(after.at<float>(r, c), expected, 1e-6 * std::abs(expected))
+          << after_path << " at " << c << "," << r;
+    }
   }
 }
 

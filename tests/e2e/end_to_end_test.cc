@@ -32,22 +32,6 @@ namespace fs = std::filesystem;
 // Largest accepted |1 - s_est / s_true| on the clean generated DSLR scene.
 constexpr double kMaxScaleError = 0.03;
 
-void ExpectDepthMapScaled(const std::string& before_path,
-                          const std::string& after_path,
-                          double scale) {
-  const cv::Mat before = ReadColmapDepthMap(before_path);
-  const cv::Mat after = ReadColmapDepthMap(after_path);
-  ASSERT_EQ(before.size(), after.size());
-  for (int r = 0; r < before.rows; ++r) {
-    for (int c = 0; c < before.cols; ++c) {
-      const float d = before.at<float>(r, c);
-      const float expected = d > 0 ? static_cast<float>(scale * d) : d;
-      ASSERT_NEAR(after.at<float>(r, c), expected, 1e-6 * std::abs(expected))
-          << after_path << " at " << c << "," << r;
-    }
-  }
-}
-
 // fused.ply: binary little-endian, 27 bytes per vertex (xyz, normal, rgb).
 void ExpectFusedPlyScaled(const std::string& before,
                           const std::string& after,

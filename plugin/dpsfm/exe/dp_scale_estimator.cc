@@ -273,7 +273,6 @@ int RunDPScaleEstimator(int argc, char** argv) {
   AddCommandOptions(&command, &options, &core_options);
   int exit_code = EXIT_SUCCESS;
   if (!command.Parse(argc, argv, std::cout, &exit_code)) return exit_code;
-  options.num_threads = core_options.num_threads;
 
   return RunAtCommandBoundary("dp_scale_estimator", [&] {
     return RunScaleEstimation(options, core_options);

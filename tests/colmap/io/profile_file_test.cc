@@ -171,12 +171,12 @@ TEST(PsfProfileFile, TranslatingDiskStatedForACamera) {
   DPScaleOptions core;
   using SelfCalibration = DPScaleOptions::SelfCalibration;
   core.psf_self_calibration = SelfCalibration::kFit;
-  MakePsfField("calibrated", dir / "5d4.dpsf", &core);
+  MakePsfField("calibrated", dir / "5d4.dpsf").ApplyTo(&core);
   EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kOff);
   EXPECT_DOUBLE_EQ(core.profile_relative_uncertainty, 0.05);
-  MakePsfField("translating_disk", "", &core);
+  MakePsfField("translating_disk", "").ApplyTo(&core);
   EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kCheck);
-  MakePsfField("auto", "", &core);
+  MakePsfField("auto", "").ApplyTo(&core);
   EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kFit);
 }
 

@@ -756,26 +756,27 @@ namespace {
 
 TEST(ScaleRunOptions, CheckNamesTheFlag) {
   ScaleRunOptions options;
-  EXPECT_FALSE(options.Check());
-  EXPECT_NE(OptionCheckFailure().find("give exactly one of --workspace_path"),
+  std::string failure;
+  EXPECT_FALSE(options.Check(&failure));
+  EXPECT_NE(failure.find("give exactly one of --workspace_path"),
             std::string::npos)
-      << OptionCheckFailure();
+      << failure;
   options.input_path = "sparse";
   options.dp_image_path = "dp";
-  EXPECT_TRUE(options.Check()) << OptionCheckFailure();
+  EXPECT_TRUE(options.Check()) << OptionCheckFailure(options);
   options.f_number = -4;
-  EXPECT_FALSE(options.Check());
-  EXPECT_EQ(OptionCheckFailure(),
+  EXPECT_FALSE(options.Check(&failure));
+  EXPECT_EQ(failure,
             "--DPScaleEstimator.f_number must be a positive number, got -4");
   options.f_number = 0;
   options.prefetch_views = 9;
-  EXPECT_FALSE(options.Check());
-  EXPECT_NE(OptionCheckFailure().find("prefetch_views must be in [0, 8]"),
+  EXPECT_FALSE(options.Check(&failure));
+  EXPECT_NE(failure.find("prefetch_views must be in [0, 8]"),
             std::string::npos);
   options.prefetch_views = 1;
   options.view_budget.check_every = 0;
-  EXPECT_FALSE(options.Check());
-  EXPECT_EQ(OptionCheckFailure(),
+  EXPECT_FALSE(options.Check(&failure));
+  EXPECT_EQ(failure,
             "invalid DPScaleEstimator view budget: check_every >= 1 (got 0)");
   // The layout acts on it: an InputError with the same line.
   try {

@@ -396,10 +396,14 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
 
   DPScaleResult odd = RealisticResult(3);
   odd.success = false;
-  odd.failure_reason =
-      "too few views with usable blur: 1 of 3 views passed (need 2); the "
-      "others had predicted blur ranges below T_p = 2 px, so depth does not "
-      "change blur enough in them to tell the scale";
+  // A long refusal: no view passed selection, and where the patches went.
+  odd.refusal.code = ScaleRefusal::kLinearStageFailed;
+  odd.refusal.linear_failure.cause = LinearFailureCause::kNoViewSelected;
+  odd.refusal.linear_failure.min_blur_range_px = 2;
+  odd.refusal.linear_failure.view_rejections = {
+      {2, ViewRejection::kSmallBlurRange}, {1, ViewRejection::kPoorFit}};
+  odd.refusal.patches.tried = 300;
+  odd.refusal.patches.usable = 12;
   odd.scale = kNaN;
   odd.scale_ci_low = kNaN;
   odd.scale_ci_high = kNaN;

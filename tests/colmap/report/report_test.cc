@@ -37,7 +37,7 @@ DPScaleResult HandMadeResult() {
   result.dp_cue.ci_low = 0.45;
   result.dp_cue.ci_high = 0.56;
   result.scale_source = "DP data";
-  result.combination = "the DP data alone (no recorded focus)";
+  result.dp_data_alone = true;  // worded by refusal_text's CombinationText
   result.views.resize(2);
   result.views[0].name = "a.jpg";
   result.views[0].used = true;
@@ -114,15 +114,27 @@ TEST(MakeReport, FieldsOfASuccessfulRun) {
   EXPECT_EQ(r["patches"][1]["view"], "b.jpg");
   EXPECT_EQ(r["patches"][1]["used"], false);
   EXPECT_DOUBLE_EQ(r["timings"]["total"].get<double>(), 12.5);
+  // How the answer was formed, worded by refusal_text.
+  EXPECT_EQ(r["cues"]["how"], "the DP data alone (no recorded focus)");
 }
 
 TEST(MakeReport, ARefusedRunClaimsNoScale) {
   DPScaleResult result = HandMadeResult();
   result.success = false;
-  result.failure_reason = "too few usable patches";
+  result.refusal.code = ScaleRefusal::kScaleOpen;
+  result.refusal.open.cause = OpenScaleCause::kTooFewPatches;
+  result.refusal.open.num_rows = 4;
+  result.refusal.open.min_total_patches = 10;
+  result.refusal.patches.tried = 20;
+  result.refusal.patches.usable = 4;
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(r["success"], false);
-  EXPECT_EQ(r["reason"], "too few usable patches");
+  // The refusal worded by colmap/report/refusal_text.
+  EXPECT_EQ(r["reason"],
+            "too few usable patches for a scale (4 in the joint solve, need "
+            "10); patches over all views: 20 tried, 4 usable. Typical causes: "
+            "sensor noise too strong for the texture, too little defocus blur "
+            "(small aperture, distant subjects), textureless surfaces");
   // No scale and no interval of it (null, never 0 or a stale value); what
   // the stages computed stays under scale_initial.
   EXPECT_TRUE(r["scale"].is_null());
@@ -130,6 +142,25 @@ TEST(MakeReport, ARefusedRunClaimsNoScale) {
   EXPECT_TRUE(r["scale_ci_high"].is_null());
   EXPECT_DOUBLE_EQ(r["scale_initial"].get<double>(), 0.51);
   EXPECT_TRUE(r["views"]["a.jpg"]["focus_distance_m"].is_null());
+}
+
+TEST(MakeReport, ARejectedTranslatingDiskIsTheReasonAndThePsfStatus) {
+  DPScaleResult result = HandMadeResult();
+  result.success = false;
+  result.psf_rejected = true;
+  result.psf_status.clear();
+  result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
+  result.refusal.disk = {"p 2.2 determined", 0.5, 0.75};
+  const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
+  const std::string reason = r["reason"];
+  EXPECT_EQ(reason.find("the DP data reject the translating disk "
+                        "(--DPScaleEstimator.psf_model translating_disk"),
+            0u)
+      << reason;
+  EXPECT_NE(reason.find("put the scale at 0.5 to 0.75 times the disk's"),
+            std::string::npos)
+      << reason;
+  EXPECT_EQ(r["psf"]["status"], reason);
 }
 
 TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
@@ -142,8 +173,11 @@ TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
   result.focus_cue.ci_high = 0.57;
   result.focus_cue.num_views = 2;
   result.pinned_profile_strength = 1.1;
+  result.dp_data_alone = false;
+  result.combination = "the cues agree: their inverse-variance mean";
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(r["scale_source"], "dual_pixel+recorded_focus");
+  EXPECT_EQ(r["cues"]["how"], "the cues agree: their inverse-variance mean");
   EXPECT_EQ(r["cues"]["agreement"], "agree");
   EXPECT_DOUBLE_EQ(r["cues"]["recorded_focus"]["ci"][0].get<double>(), 0.42);
   EXPECT_EQ(r["cues"]["recorded_focus"]["views"], 2);

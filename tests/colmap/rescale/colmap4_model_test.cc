@@ -21,6 +21,7 @@
 
 #include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/colmap/rescale/rescale.h"
+#include "dpsfm/colmap/rescale/rescale_plan.h"
 #include "dpsfm/colmap/rescale/transaction.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "dpsfm/colmap/util/durable_file.h"

@@ -22,6 +22,7 @@
 #include "colmap/scene/reconstruction.h"
 #include "colmap/scene/synthetic.h"
 #include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/colmap/rescale/rescale_plan.h"
 #include "dpsfm/colmap/rescale/transaction.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "tests/test_utils.h"

@@ -25,84 +25,25 @@
 #include "colmap/scene/synthetic.h"
 #include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/colmap/rescale/rescale.h"
+#include "dpsfm/colmap/rescale/rescale_plan.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
+#include "tests/colmap/rescale/workspace_fixture.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
 namespace {
 
 namespace fs = std::filesystem;
+using test::MakeWorkspace;
 using test::ReadTextFile;
 using test::SnapshotTree;
 using test::TempDir;
+using test::WriteModel;
 using test::WriteTextFile;
 
 using Tree = std::map<std::string, std::string>;
 
 constexpr double kScale = 0.0412;
-
-template <typename T>
-void AppendRaw(std::string* bytes, T value) {
-  bytes->append(reinterpret_cast<const char*>(&value), sizeof(T));
-}
-
-std::string MakeDepthMap(int width,
-                         int height,
-                         const std::vector<float>& values) {
-  std::string bytes =
-      std::to_string(width) + "&" + std::to_string(height) + "&1&";
-  for (const float v : values) AppendRaw(&bytes, v);
-  return bytes;
-}
-
-std::string MakeFusedPly(int n) {
-  std::string bytes =
-      "ply\nformat binary_little_endian 1.0\nelement vertex " +
-      std::to_string(n) +
-      "\nproperty float x\nproperty float y\nproperty float z\n"
-      "property float nx\nproperty float ny\nproperty float nz\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-      "end_header\n";
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 6; ++k) AppendRaw(&bytes, 0.5f * i + k);
-    for (int k = 0; k < 3; ++k) AppendRaw(&bytes, static_cast<uint8_t>(i + k));
-  }
-  return bytes;
-}
-
-void WriteModel(const std::string& dir, bool binary, bool text) {
-  colmap::SetPRNGSeed(7);
-  std::srand(7);
-  // On COLMAP 4 one rig of two cameras, so that rigs.* and frames.* both
-  // change when rescaled.
-  colmap::SyntheticDatasetOptions options =
-      SyntheticOptions(2, 4, /*cameras_per_rig=*/2);
-  options.num_points3D = 10;
-  colmap::Reconstruction reconstruction;
-  colmap::SynthesizeDataset(options, &reconstruction);
-  fs::create_directories(dir);
-  if (binary) reconstruction.WriteBinary(dir);
-  if (text) reconstruction.WriteText(dir);
-}
-
-// A small dense workspace with every artefact type.
-void MakeWorkspace(const std::string& root) {
-  WriteModel(root + "/sparse", true, true);
-  for (int i = 0; i < 3; ++i) {
-    const std::string name = "image" + std::to_string(i);
-    const std::vector<float> depths = {0.0f, 1.0f + i, 2.0f, -1.0f, 3.5f, 4.0f};
-    WriteTextFile(root + "/stereo/depth_maps/" + name + ".geometric.bin",
-                  MakeDepthMap(3, 2, depths));
-    WriteTextFile(root + "/stereo/depth_maps/" + name + ".photometric.bin",
-                  MakeDepthMap(2, 3, depths));
-    WriteTextFile(root + "/stereo/normal_maps/" + name + ".geometric.bin",
-                  MakeDepthMap(3, 2, depths));
-    WriteTextFile(root + "/images/" + name, "pixels " + name);
-  }
-  WriteTextFile(root + "/stereo/fusion.cfg", "image0\nimage1\n");
-  WriteTextFile(root + "/fused.ply", MakeFusedPly(4));
-  WriteTextFile(root + "/fused.ply.vis", std::string("\x02\0\0\0", 4));
-}
 
 void CopyTree(const std::string& from, const std::string& to) {
   for (const auto& entry : SnapshotTree(from)) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -177,7 +178,7 @@ TEST(Irls, RecoversScaleWith30PercentGrossOutliers) {
     LinearEstimatorOptions options;
     options.num_bootstrap = 50;
     const LinearEstimate est = EstimateScaleLinear(views, options);
-    ASSERT_TRUE(est.success) << est.failure_reason;
+    ASSERT_TRUE(est.success) << static_cast<int>(est.failure.cause);
     EXPECT_NEAR(est.scale / scale, 1.0, 0.005) << "trial " << trial;
     for (int i = 0; i < 4; ++i) {
       EXPECT_TRUE(est.views[i].used) << est.views[i].reason;
@@ -247,7 +248,7 @@ TEST(EstimateScaleLinear, SelectionRecordsEveryRejection) {
   options.num_selected_views = 4;
   options.num_bootstrap = 20;
   const LinearEstimate est = EstimateScaleLinear(views, options);
-  ASSERT_TRUE(est.success) << est.failure_reason;
+  ASSERT_TRUE(est.success) << static_cast<int>(est.failure.cause);
   EXPECT_NEAR(est.scale / scale, 1.0, 1e-6);
   EXPECT_EQ(est.views[1].rejection, ViewRejection::kTooFewPatches);
   EXPECT_EQ(est.views[2].rejection, ViewRejection::kDegenerate);
@@ -282,13 +283,16 @@ TEST(EstimateScaleLinear, FailureSaysWhy) {
   const LinearEstimate est =
       EstimateScaleLinear(views, LinearEstimatorOptions());
   EXPECT_FALSE(est.success);
-  EXPECT_NE(est.failure_reason.find("no view passed selection: 9 views with "
-                                    "blur range <= 2 px"),
-            std::string::npos)
-      << est.failure_reason;
-  EXPECT_TRUE(
-      EstimateScaleLinear({}, LinearEstimatorOptions()).failure_reason ==
-      "no views");
+  // The 9 views of almost no blur are the most frequent rejection, with
+  // the threshold T_p = 2 px (the default) that rejected them.
+  EXPECT_EQ(est.failure.cause, LinearFailureCause::kNoViewSelected);
+  ASSERT_FALSE(est.failure.view_rejections.empty());
+  EXPECT_EQ(est.failure.view_rejections[0],
+            std::make_pair(9, ViewRejection::kSmallBlurRange));
+  EXPECT_DOUBLE_EQ(est.failure.min_blur_range_px, 2);
+  EXPECT_FALSE(est.failure.SwappedViewsLikely());
+  EXPECT_EQ(EstimateScaleLinear({}, LinearEstimatorOptions()).failure.cause,
+            LinearFailureCause::kNoViews);
 }
 
 TEST(EstimateScaleLinear, RejectsViewsWhoseBlurIgnoresDepth) {
@@ -304,7 +308,7 @@ TEST(EstimateScaleLinear, RejectsViewsWhoseBlurIgnoresDepth) {
       EstimateScaleLinear(views, LinearEstimatorOptions());
   EXPECT_FALSE(est.success);
   for (const auto& v : est.views) EXPECT_FALSE(v.used) << v.reason;
-  std::printf("%s\n", est.failure_reason.c_str());
+  EXPECT_EQ(est.failure.cause, LinearFailureCause::kNoViewSelected);
 }
 
 TEST(EstimateScaleLinear, SingleViewWorks) {
@@ -312,7 +316,7 @@ TEST(EstimateScaleLinear, SingleViewWorks) {
   double focus = 0;
   const LinearEstimate est = EstimateScaleLinear(
       {MakeView(0, 3.0, 20, &rng, &focus)}, LinearEstimatorOptions());
-  ASSERT_TRUE(est.success) << est.failure_reason;
+  ASSERT_TRUE(est.success) << static_cast<int>(est.failure.cause);
   EXPECT_NEAR(est.scale / 3.0, 1.0, 1e-7);
   EXPECT_NEAR(est.views[0].focus_model / focus, 1.0, 1e-7);
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -11,6 +12,11 @@
 
 namespace dpsfm {
 namespace {
+
+// Which refusal, for test messages (the COLMAP layer words it for users).
+std::string Why(const DPScaleResult& result) {
+  return ScaleRefusalName(result.refusal.code);
+}
 
 // One capture of a synthetic scene: fronto-parallel textured planes (vertical
 // bands at several depths), a lens and a focus distance (metres).
@@ -189,7 +195,7 @@ TEST(DPScaleEstimator, WholeCoreOnSyntheticMultiViewSet) {
   }
   const RunOutput out = RunPipeline(specs, scale, SmallFrameOptions());
   const DPScaleResult& r = out.result;
-  ASSERT_TRUE(r.success) << r.failure_reason;
+  ASSERT_TRUE(r.success) << Why(r);
   Print("whole core, 8 views", r, scale);
   const double linear_error = std::abs(r.scale_initial / scale - 1);
   const double final_error = std::abs(r.scale / scale - 1);
@@ -258,8 +264,8 @@ TEST(DPScaleEstimator, BlurSearchShareKeepsTheScale) {
   ASSERT_EQ(share.blur_search_factor, 3);
   const RunOutput every = RunPipeline(views, all);
   const RunOutput best = RunPipeline(views, share);
-  ASSERT_TRUE(every.result.success) << every.result.failure_reason;
-  ASSERT_TRUE(best.result.success) << best.result.failure_reason;
+  ASSERT_TRUE(every.result.success) << Why(every.result);
+  ASSERT_TRUE(best.result.success) << Why(best.result);
   Print("every patch searched", every.result, scale);
   Print("best 3 x T_c searched", best.result, scale);
   int searched_all = 0, searched_share = 0, kept_all = 0, kept_share = 0;
@@ -300,9 +306,11 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   // refuses and says why, though the fit itself is right (below).
   const RunOutput owned = RunPipeline(views, self);
   EXPECT_FALSE(owned.result.success);
-  EXPECT_NE(owned.result.failure_reason.find("beyond the fit"),
-            std::string::npos)
-      << owned.result.failure_reason;
+  EXPECT_EQ(owned.result.refusal.code, ScaleRefusal::kScaleOpen)
+      << Why(owned.result);
+  EXPECT_EQ(owned.result.refusal.open.cause, OpenScaleCause::kUnknownProfile);
+  EXPECT_TRUE(owned.result.refusal.open.self_calibrated);
+  EXPECT_DOUBLE_EQ(owned.result.refusal.open.shape_uncertainty, 0.2);
   EXPECT_TRUE(owned.result.psf_self_calibrated);
   EXPECT_NEAR(owned.result.profile_scale_factor_high /
                   owned.result.profile_scale_factor_low,
@@ -311,7 +319,7 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   // Trusting the family (this sensor is a member), the fit recovers it.
   self.self_calibration_shape_uncertainty = 0;
   const RunOutput fitted = RunPipeline(views, self);
-  ASSERT_TRUE(fitted.result.success) << fitted.result.failure_reason;
+  ASSERT_TRUE(fitted.result.success) << Why(fitted.result);
   Print("sharper split, translating disk", disk.result, scale);
   Print("sharper split, self-calibrated", fitted.result, scale);
   std::printf("  %s (%.1f s)\n",
@@ -347,16 +355,15 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
     EXPECT_LE(checked.result.scale_ci_low, scale);
     EXPECT_GE(checked.result.scale_ci_high, scale);
   } else {
-    std::printf("  refused: %s\n", checked.result.failure_reason.c_str());
-    EXPECT_NE(checked.result.failure_reason.find("disagree"),
-              std::string::npos);
+    std::printf("  refused: %s\n", Why(checked.result).c_str());
+    EXPECT_EQ(checked.result.refusal.cues.cause, CueRefusalCause::kDisagree);
   }
   // With the recorded focus as evidence only, the DP answer stands and the
   // check flags it.
   DPScaleOptions evidence_only = plain;
   evidence_only.pin_to_recorded_focus = false;
   const RunOutput flagged = RunPipeline(recorded, evidence_only);
-  ASSERT_TRUE(flagged.result.success) << flagged.result.failure_reason;
+  ASSERT_TRUE(flagged.result.success) << Why(flagged.result);
   EXPECT_EQ(flagged.result.scale, flagged.result.dp_cue.scale);
   EXPECT_FALSE(flagged.result.focus_agrees) << flagged.result.focus_check;
 
@@ -369,11 +376,15 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   open.profile_relative_uncertainty = 0.4;
   const RunOutput refused = RunPipeline(views, open);
   EXPECT_FALSE(refused.result.success);
-  EXPECT_NE(refused.result.failure_reason.find("own uncertainty"),
-            std::string::npos)
-      << refused.result.failure_reason;
+  EXPECT_EQ(refused.result.refusal.code, ScaleRefusal::kScaleOpen)
+      << Why(refused.result);
+  EXPECT_EQ(refused.result.refusal.open.cause,
+            OpenScaleCause::kCalibratedProfile);
+  EXPECT_DOUBLE_EQ(refused.result.refusal.open.profile_relative_uncertainty,
+                   0.4);
+  EXPECT_FALSE(refused.result.refusal.open.focus_recorded);
   const RunOutput pinned = RunPipeline(recorded, open);
-  ASSERT_TRUE(pinned.result.success) << pinned.result.failure_reason;
+  ASSERT_TRUE(pinned.result.success) << Why(pinned.result);
   Print("sharper split, profile +-40 %, pinned to the focus",
         pinned.result,
         scale);
@@ -400,7 +411,7 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
 
   const std::vector<DPView> model_views = RenderAll(specs, scale);
   const RunOutput model = RunPipeline(model_views, self);
-  ASSERT_TRUE(model.result.success) << model.result.failure_reason;
+  ASSERT_TRUE(model.result.success) << Why(model.result);
   Print("translating disk data, self-calibration on", model.result, scale);
   std::printf("  %s\n", model.result.psf_status.c_str());
   EXPECT_FALSE(model.result.psf_self_calibrated) << model.result.psf_status;
@@ -424,30 +435,29 @@ TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
   const std::vector<DPView> split =
       RenderAll(specs, scale, SplitProfilePsf(sharp));
   const RunOutput rejected = RunPipeline(split, checked);
-  std::printf("sharper split, disk checked: %s\n",
-              rejected.result.failure_reason.c_str());
+  const TranslatingDiskRejection& disk_rejection = rejected.result.refusal.disk;
+  std::printf("sharper split, disk checked: %s (%s; factors %.3f to %.3f)\n",
+              Why(rejected.result).c_str(),
+              disk_rejection.fit_summary.c_str(),
+              disk_rejection.factor_low,
+              disk_rejection.factor_high);
   EXPECT_FALSE(rejected.result.success);
   EXPECT_TRUE(rejected.result.psf_rejected);
   EXPECT_FALSE(rejected.result.psf_self_calibrated);
-  EXPECT_NE(rejected.result.failure_reason.find("reject the translating disk"),
-            std::string::npos);
-  EXPECT_NE(rejected.result.failure_reason.find("psf_model auto"),
-            std::string::npos);
+  EXPECT_EQ(rejected.result.refusal.code,
+            ScaleRefusal::kTranslatingDiskRejected);
+  EXPECT_FALSE(disk_rejection.fit_summary.empty());
   // The disk reads this sensor's radii small: the profiles the data allow
   // put the scale above the disk's, not at it.
-  const std::string factors = "the scale at ";
-  const size_t at = rejected.result.failure_reason.find(factors);
-  ASSERT_NE(at, std::string::npos) << rejected.result.failure_reason;
-  const double low =
-      std::stod(rejected.result.failure_reason.substr(at + factors.size()));
-  EXPECT_GT(low, 1.05);
-  EXPECT_LT(low, 1.6);
+  ASSERT_LE(disk_rejection.factor_low, disk_rejection.factor_high);
+  EXPECT_GT(disk_rejection.factor_low, 1.05);
+  EXPECT_LT(disk_rejection.factor_low, 1.6);
 
   const std::vector<DPView> disk = RenderAll(specs, scale);
   const RunOutput kept = RunPipeline(disk, checked);
   const RunOutput given = RunPipeline(disk, plain);
-  ASSERT_TRUE(kept.result.success) << kept.result.failure_reason;
-  ASSERT_TRUE(given.result.success) << given.result.failure_reason;
+  ASSERT_TRUE(kept.result.success) << Why(kept.result);
+  ASSERT_TRUE(given.result.success) << Why(given.result);
   std::printf("translating disk, checked: %s\n",
               kept.result.psf_status.c_str());
   EXPECT_FALSE(kept.result.psf_rejected);
@@ -489,7 +499,7 @@ TEST(DPScaleEstimator, MultiApertureImprovesOnSingleApertures) {
   options.intensity.num_candidates = 50;
   options.intensity.num_refine_candidates = 12;
   const RunOutput joint = RunPipeline(views, options);
-  ASSERT_TRUE(joint.result.success) << joint.result.failure_reason;
+  ASSERT_TRUE(joint.result.success) << Why(joint.result);
   Print("multi-aperture", joint.result, scale);
   const double joint_error = std::abs(joint.result.scale / scale - 1);
   const double joint_width =
@@ -500,8 +510,7 @@ TEST(DPScaleEstimator, MultiApertureImprovesOnSingleApertures) {
     char label[64];
     std::snprintf(label, sizeof(label), "single aperture f/%.1f", apertures[a]);
     if (!one.result.success) {
-      std::printf(
-          "%s: refused (%s)\n", label, one.result.failure_reason.c_str());
+      std::printf("%s: refused (%s)\n", label, Why(one.result).c_str());
       worst_error = widest = 1;
       continue;
     }
@@ -528,10 +537,11 @@ TEST(DPScaleEstimator, RefusesPanFocusCaptureAndSaysWhy) {
   }
   const RunOutput out = RunPipeline(specs, 1.0, SmallFrameOptions());
   EXPECT_FALSE(out.result.success);
-  EXPECT_NE(out.result.failure_reason.find("no view passed selection"),
-            std::string::npos)
-      << out.result.failure_reason;
-  std::printf("pan-focus refusal: %s\n", out.result.failure_reason.c_str());
+  EXPECT_EQ(out.result.refusal.code, ScaleRefusal::kLinearStageFailed)
+      << Why(out.result);
+  EXPECT_EQ(out.result.refusal.linear_failure.cause,
+            LinearFailureCause::kNoViewSelected);
+  std::printf("pan-focus refusal: %s\n", Why(out.result).c_str());
   for (const DPViewResult& v : out.result.views) {
     EXPECT_FALSE(v.used);
     EXPECT_FALSE(v.reason.empty());
@@ -553,9 +563,9 @@ TEST(DPScaleEstimator, SwappedDPViewsAreRefusedWithAHint) {
   DPScaleOptions options = SmallFrameOptions();
   const RunOutput out = RunPipeline(views, options);
   EXPECT_FALSE(out.result.success);
-  EXPECT_NE(out.result.failure_reason.find("swapped"), std::string::npos)
-      << out.result.failure_reason;
-  std::printf("swapped views refusal: %s\n", out.result.failure_reason.c_str());
+  EXPECT_EQ(out.result.refusal.code, ScaleRefusal::kLinearStageFailed)
+      << Why(out.result);
+  EXPECT_TRUE(out.result.refusal.linear_failure.SwappedViewsLikely());
 }
 
 TEST(DPScaleEstimator, RefusesTexturelessCaptureAndSaysWhy) {
@@ -580,12 +590,13 @@ TEST(DPScaleEstimator, RefusesTexturelessCaptureAndSaysWhy) {
   }
   const DPScaleResult r = estimator.Estimate();
   EXPECT_FALSE(r.success);
-  EXPECT_NE(r.failure_reason.find("no view passed selection"),
-            std::string::npos);
-  // The cause leads the message.
-  EXPECT_EQ(r.failure_reason.find("too little texture"), 0u)
-      << r.failure_reason;
-  std::printf("textureless refusal: %s\n", r.failure_reason.c_str());
+  EXPECT_EQ(r.refusal.code, ScaleRefusal::kLinearStageFailed) << Why(r);
+  EXPECT_EQ(r.refusal.linear_failure.cause,
+            LinearFailureCause::kNoViewSelected);
+  // The cause that leads the message.
+  EXPECT_TRUE(r.refusal.patches.TextureLeads())
+      << r.refusal.patches.texture_too_weak << " of "
+      << r.refusal.patches.tried;
 }
 
 // Sensor noise far above the texture's contrast at the blur scale: a few
@@ -612,12 +623,10 @@ TEST(DPScaleEstimator, RefusesVeryNoisyCaptureAndSaysWhy) {
   // says so in the user's terms.
   EXPECT_FALSE(r.success) << "answered " << r.scale << " (truth " << scale
                           << ")";
-  EXPECT_NE(r.failure_reason.find("no view passed selection"),
-            std::string::npos)
-      << r.failure_reason;
-  EXPECT_NE(r.failure_reason.find("texture too weak for the noise"),
-            std::string::npos)
-      << r.failure_reason;
+  EXPECT_EQ(r.refusal.code, ScaleRefusal::kLinearStageFailed) << Why(r);
+  EXPECT_EQ(r.refusal.linear_failure.cause,
+            LinearFailureCause::kNoViewSelected);
+  EXPECT_GT(r.refusal.patches.texture_too_weak, 0);
 }
 
 // Whatever is reported comes with an interval that covers the truth on a
@@ -636,7 +645,7 @@ TEST(DPScaleEstimator, IntervalCoversTheTruth) {
   }
   const RunOutput out = RunPipeline(specs, scale, SmallFrameOptions());
   const DPScaleResult& r = out.result;
-  ASSERT_TRUE(r.success) << r.failure_reason;
+  ASSERT_TRUE(r.success) << Why(r);
   Print("interval coverage", r, scale);
   EXPECT_LE(r.scale_ci_low, scale);
   EXPECT_GE(r.scale_ci_high, scale);
@@ -676,7 +685,7 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
     EXPECT_GT(s.patches_valid, 10);
   }
   const DPScaleResult r = estimator.Estimate();
-  ASSERT_TRUE(r.success) << r.failure_reason;
+  ASSERT_TRUE(r.success) << Why(r);
   EXPECT_NEAR(r.scale / scale, 1.0, 0.05);
   EXPECT_EQ(r.intensity_status, "disabled; linear estimate kept");
   EXPECT_FALSE(r.intensity_used);
@@ -700,7 +709,7 @@ TEST(DPScaleEstimator, MalformedInputThrowsNamingTheView) {
   }
   const DPScaleResult r = estimator.Estimate();
   EXPECT_FALSE(r.success);
-  EXPECT_FALSE(r.failure_reason.empty());
+  EXPECT_NE(r.refusal.code, ScaleRefusal::kNone);
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ namespace fs = std::filesystem;
 
 namespace dpsfm {
 
-bool CalibrationRunOptions::Check() const {
+bool CalibrationRunOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(IsDPEncodingName(dp_encoding), dp_encoding);
   DPSFM_CHECK_OPTION_VALUE(
       transfer_uncertainty >= 0 && transfer_uncertainty < 1,
@@ -359,8 +359,9 @@ TargetCalibration FitProfile(const std::vector<CalibrationCapture>& captures,
   fit_options.grid_cols = options.grid_cols;
   fit_options.num_bootstrap = options.num_bootstrap;
   fit_options.num_threads = options.num_threads;
-  if (!fit_options.Check()) {
-    throw InputError("invalid calibration options: " + OptionCheckFailure());
+  std::string failure;
+  if (!fit_options.Check(&failure)) {
+    throw InputError("invalid calibration options: " + failure);
   }
   LOG_HEADING2("Fitting the DP profile");
   const TargetCalibration calibration =
@@ -482,9 +483,9 @@ RunOutcome RunPsfCalibration(const CalibrationRunOptions& options) {
   colmap::Timer timer;
   timer.Start();
   LOG_HEADING1("DP PSF calibration");
-  if (!options.Check()) {
-    throw InputError("invalid --DPPsfCalibrator option: " +
-                     OptionCheckFailure());
+  std::string failure;
+  if (!options.Check(&failure)) {
+    throw InputError("invalid --DPPsfCalibrator option: " + failure);
   }
   const std::vector<CalibrationTarget> targets =
       ReadCalibrationTargets(options.targets_path);

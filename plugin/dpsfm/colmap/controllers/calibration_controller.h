@@ -58,9 +58,9 @@ struct CalibrationRunOptions {
   bool measure_shape = true;
   int num_threads = -1;
 
-  // False at the first invalid option; OptionCheckFailure() (core/util/
-  // check.h) names it and its value.
-  bool Check() const;
+  // False at the first invalid option, which *failure (when given) names
+  // with its value (core/util/check.h).
+  bool Check(std::string* failure = nullptr) const;
 };
 
 // The whole calibration after option parsing. Throws InputError for what

@@ -11,9 +11,11 @@
 #include "dpsfm/colmap/io/psf_profile.h"
 #include "dpsfm/colmap/io/view_prefetcher.h"
 #include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/colmap/report/refusal_text.h"
 #include "dpsfm/colmap/report/report.h"
 #include "dpsfm/colmap/report/report_plots.h"
 #include "dpsfm/colmap/rescale/rescale.h"
+#include "dpsfm/colmap/rescale/rescale_plan.h"
 #include "dpsfm/colmap/rescale/transaction.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "dpsfm/core/util/check.h"
@@ -140,7 +142,7 @@ ScaleRun DPScaleController::Run() {
                   << Seconds(check_timer.ElapsedSeconds()) << ")";
       } else {
         LOG(INFO) << "  after " << k + 1 << " views: no scale yet ("
-                  << provisional.failure_reason.substr(0, 120) << "; "
+                  << RefusalText(provisional.refusal).substr(0, 120) << "; "
                   << Seconds(check_timer.ElapsedSeconds()) << ")";
       }
       if (stop) {
@@ -235,22 +237,60 @@ bool FinishInterruptedCommit(const std::string& root) {
   return false;
 }
 
-// Step 2: the already-rescaled policy. Rescaling in place twice needs
-// --force; anything else only warns.
-void CheckAlreadyRescaled(const std::string& root, bool in_place, bool force) {
-  const ScaleRecord record = ReadScaleRecord(root);
-  if (!record.IsRescaled()) return;
-  const ScaleRecordEntry& last = record.entries.back();
-  std::ostringstream note;
-  note << "this workspace was already rescaled by dp_scale_estimator ("
-       << record.entries.size() << " time(s), last on " << last.time << " by "
-       << last.scale << ", total " << record.CumulativeScale() << "; see "
-       << ScaleRecordPath(root) << ")";
-  if (in_place && !force) {
-    throw InputError(note.str() +
-                     "; pass --force 1 to apply another scale on top");
+// Step 2: the plan of what the run will write, made before anything is
+// read for the estimate: every refusal the rescale could make is made here.
+RescalePlan PlanRun(const ScaleRunOptions& options,
+                    const WorkspaceLayout& layout,
+                    const std::string& root) {
+  RescalePlanOptions plan_options;
+  plan_options.mode = options.dry_run               ? RescaleMode::kDryRun
+                      : options.output_path.empty() ? RescaleMode::kInPlace
+                                                    : RescaleMode::kCopy;
+  plan_options.workspace_root = root;
+  plan_options.output_path = options.output_path;
+  plan_options.extra_model_dirs =
+      colmap::CSVToVector<std::string>(options.extra_model_paths);
+  plan_options.force = options.force;
+  plan_options.estimate_model_dir = layout.model_path;
+  const RescalePlan plan = PlanRescale(plan_options);
+  for (const std::string& warning : plan.warnings) {
+    LOG(WARNING) << warning;
   }
-  LOG(WARNING) << note.str();
+  switch (plan.mode) {
+    case RescaleMode::kInPlace:
+      LOG(INFO) << "Rescale planned in place: " << plan.Summary();
+      break;
+    case RescaleMode::kCopy:
+      LOG(INFO) << "Rescaled copy planned into " << plan.output_path << ": "
+                << plan.Summary();
+      break;
+    case RescaleMode::kDryRun:
+      if (plan.refusal.empty()) {
+        LOG(INFO) << "Dry run: a rescale in place would write "
+                  << plan.Summary();
+      } else {
+        LOG(WARNING) << "Dry run: a rescale in place would be refused: "
+                     << plan.refusal;
+      }
+      break;
+  }
+  return plan;
+}
+
+// The report's account of the plan: the mode, what a rescale writes or why
+// it would be refused, and the staged files a dry run read.
+nlohmann::json PlanReport(const RescalePlan& plan) {
+  static const char* const kModes[] = {"in_place", "copy", "dry_run"};
+  nlohmann::json out;
+  out["mode"] = kModes[static_cast<int>(plan.mode)];
+  out["files"] = plan.artefacts.size();
+  out["refusal"] = plan.refusal;
+  out["interrupted_rescale"] = plan.interrupted();
+  if (plan.interrupted()) {
+    out["journal"] = plan.journal_path;
+    out["staged_files_read"] = plan.StagedFilesRead();
+  }
+  return out;
 }
 
 // Step 3: what was read: the database cross-check and each view's lens
@@ -359,15 +399,17 @@ std::vector<std::string> FrameWarnings(const DPScaleResult& result) {
 
 // Step 6: what the estimate found, per view and overall.
 void LogResult(const DPScaleResult& result) {
-  if (!result.psf_status.empty()) {
-    LOG(INFO) << "DP PSF: " << result.psf_status << " ("
+  const std::string psf_status = PsfStatusText(result);
+  if (!psf_status.empty()) {
+    LOG(INFO) << "DP PSF: " << psf_status << " ("
               << Seconds(result.seconds_psf_fit) << ")";
   }
-  if (!result.focus_check.empty()) {
+  const std::string focus_check = FocusCheckText(result);
+  if (!focus_check.empty()) {
     if (result.focus_agrees) {
-      LOG(INFO) << "Recorded focus: " << result.focus_check;
+      LOG(INFO) << "Recorded focus: " << focus_check;
     } else {
-      LOG(WARNING) << "Recorded focus: " << result.focus_check;
+      LOG(WARNING) << "Recorded focus: " << focus_check;
     }
   }
   for (const DPViewResult& view : result.views) {
@@ -441,43 +483,47 @@ nlohmann::json PlotsReport(const ReportPlotFiles& plots) {
 }
 
 // The report: the estimate, the inputs, the profile's source, the view
-// budget, the pictures, and (after a rescale) what was rescaled.
+// budget, the plan, the pictures, and (after a rescale) what was rescaled.
 nlohmann::json RunReport(const ScaleRun& run,
                          const std::vector<ViewSource>& sources,
                          const WorkspaceReader& reader,
                          const std::string& psf_source,
-                         const ReportPlotFiles& plots) {
+                         const ReportPlotFiles& plots,
+                         const RescalePlan& plan) {
   nlohmann::json report = ReportWithSource(
       MakeReport(run.result, sources, run.summaries, run.timings), psf_source);
   report["view_budget"] = ViewBudgetReport(run, reader);
-  report["warnings"] = FrameWarnings(run.result);
+  std::vector<std::string> warnings = plan.warnings;
+  if (!plan.refusal.empty()) {
+    warnings.push_back("a rescale in place would be refused: " + plan.refusal);
+  }
+  for (const std::string& warning : FrameWarnings(run.result)) {
+    warnings.push_back(warning);
+  }
+  report["warnings"] = warnings;
+  report["rescale_plan"] = PlanReport(plan);
   report["plots"] = PlotsReport(plots);
   return report;
 }
 
-// Step 7: the rescale, in place or into a copy.
+// Step 7: the plan executed, in place or into a copy.
 RescaleWorkspaceResult Rescale(const ScaleRunOptions& options,
-                               const std::string& root,
+                               const RescalePlan& plan,
                                double scale) {
-  LOG_HEADING2(options.output_path.empty() ? "Rescaling the workspace in place"
-                                           : "Writing a rescaled copy");
-  RescaleWorkspaceOptions rescale_options;
-  rescale_options.extra_model_dirs =
-      colmap::CSVToVector<std::string>(options.extra_model_paths);
-  rescale_options.force = options.force;
-  rescale_options.tool_version = "dp-sfm " + DPSFMVersion();
+  LOG_HEADING2(plan.mode == RescaleMode::kInPlace
+                   ? "Rescaling the workspace in place"
+                   : "Writing a rescaled copy");
+  RescaleProvenance provenance;
+  provenance.tool_version = "dp-sfm " + DPSFMVersion();
   for (const std::string* input : {&options.workspace_path,
                                    &options.input_path,
                                    &options.dp_image_path,
                                    &options.lens_path,
                                    &options.image_path}) {
-    if (!input->empty()) rescale_options.inputs.push_back(*input);
+    if (!input->empty()) provenance.inputs.push_back(*input);
   }
   const RescaleWorkspaceResult rescaled =
-      options.output_path.empty()
-          ? RescaleWorkspaceInPlace(root, scale, rescale_options)
-          : WriteRescaledCopy(
-                root, options.output_path, scale, rescale_options);
+      ExecuteRescalePlan(plan, scale, provenance);
   for (const std::string& file : rescaled.rescaled_files) {
     VLOG(1) << "  rescaled " << file;
   }
@@ -492,9 +538,9 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   total_timer.Start();
   LOG_HEADING1("DP scale estimation");
   const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  if (!core_options.Check()) {
-    throw InputError("invalid DPScaleEstimator option: " +
-                     OptionCheckFailure());
+  std::string failure;
+  if (!core_options.Check(&failure)) {
+    throw InputError("invalid DPScaleEstimator option: " + failure);
   }
   LOG(INFO) << "Model: " << layout.model_path << " ("
             << (layout.dense ? "dense workspace" : "sparse model") << ")";
@@ -506,33 +552,38 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   if (in_place && FinishInterruptedCommit(root)) {
     return RunOutcome::Success();
   }
-  CheckAlreadyRescaled(root, in_place, options.force);
-  if (!options.dry_run) {
-    // What the rescale at the end would refuse, refused now.
-    CheckRescaleIsPossible(
-        root,
-        colmap::CSVToVector<std::string>(options.extra_model_paths),
-        options.output_path);
+  const RescalePlan plan = PlanRun(options, layout, root);
+  WorkspaceReadOptions read;
+  read.model_checked = true;
+  read.num_threads = core_options.num_threads;
+  if (plan.interrupted()) {
+    read.read_path = [&plan](const std::string& path) {
+      return plan.ReadPath(path);
+    };
   }
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader(options, layout, read);
   const std::vector<ViewSource> sources = LogInputs(options, reader);
 
   LOG_HEADING2("Per-patch DP blur estimation");
   const ProfileChoice profile = ChooseProfile(options, sources);
-  const DPPsfField psf_field =
-      MakePsfField(profile.model, profile.path, &core_options);
-  LOG(INFO) << "DP PSF: " << profile.source << " (" << psf_field.Name()
+  const PsfChoice psf = MakePsfField(profile.model, profile.path);
+  psf.ApplyTo(&core_options);
+  if (!core_options.Check(&failure)) {
+    throw InputError("invalid DPScaleEstimator option with the DP profile " +
+                     profile.source + ": " + failure);
+  }
+  LOG(INFO) << "DP PSF: " << profile.source << " (" << psf.field.Name()
             << SelfCalibrationNote(core_options.psf_self_calibration) << ")";
 
   // Step 5: the view loop and the estimate. One thread asked for means no
   // reading thread either.
-  DPScaleEstimator estimator(core_options, psf_field);
+  DPScaleEstimator estimator(core_options, psf.field);
   DPScaleController controller(
       options.view_budget,
       &reader,
       &estimator,
       !options.report_path.empty(),
-      options.num_threads == 1 ? 0 : options.prefetch_views);
+      core_options.num_threads == 1 ? 0 : options.prefetch_views);
   ScaleRun run = controller.Run();
   const DPScaleResult& result = run.result;
   RunTimings& timings = run.timings;
@@ -544,11 +595,11 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   const ReportPlotFiles plots = WritePlots(options, run);
   if (!options.report_path.empty() && !rescale) {
     WriteJsonFile(options.report_path,
-                  RunReport(run, sources, reader, profile.source, plots));
+                  RunReport(run, sources, reader, profile.source, plots, plan));
     LOG(INFO) << "Report: " << options.report_path;
   }
   if (!result.success) {
-    return RunOutcome::Failure("no scale: " + result.failure_reason +
+    return RunOutcome::Failure("no scale: " + RefusalText(result.refusal) +
                                "; nothing was changed");
   }
   LOG(INFO) << "Linear estimate s* = " << result.scale_initial
@@ -560,18 +611,24 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
             << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
             << ", intensity " << Seconds(timings.intensity);
   if (options.dry_run) {
-    LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed";
+    LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed"
+              << (plan.interrupted()
+                      ? " (estimated on the state that finishing the "
+                        "interrupted rescale will leave: " +
+                            std::to_string(plan.StagedFilesRead().size()) +
+                            " staged files read)"
+                      : std::string());
     return RunOutcome::Success();
   }
 
   colmap::Timer rescale_timer;
   rescale_timer.Start();
-  const RescaleWorkspaceResult rescaled = Rescale(options, root, result.scale);
+  const RescaleWorkspaceResult rescaled = Rescale(options, plan, result.scale);
   timings.rescale = rescale_timer.ElapsedSeconds();
   timings.total = total_timer.ElapsedSeconds();
   if (!options.report_path.empty()) {
     nlohmann::json report =
-        RunReport(run, sources, reader, profile.source, plots);
+        RunReport(run, sources, reader, profile.source, plots, plan);
     report["rescaled_files"] = rescaled.rescaled_files;
     report["cumulative_scale"] = rescaled.entry.cumulative_scale;
     report["record_path"] = rescaled.record_path;

@@ -467,9 +467,18 @@ void CheckProfileLight(const PsfProfileFile& profile, const std::string& path) {
   }
 }
 
-DPPsfField MakePsfField(const std::string& psf_model,
-                        const std::string& psf_path,
-                        DPScaleOptions* core) {
+void PsfChoice::ApplyTo(DPScaleOptions* core) const {
+  core->psf_self_calibration = self_calibration;
+  if (profile_relative_uncertainty > 0) {
+    core->profile_relative_uncertainty = profile_relative_uncertainty;
+  }
+  core->min_auto_radius_px =
+      std::max(core->min_auto_radius_px, reference_radius_px);
+}
+
+PsfChoice MakePsfField(const std::string& psf_model,
+                       const std::string& psf_path) {
+  PsfChoice choice;
   if (psf_model == "translating_disk" || psf_model == "auto") {
     if (!psf_path.empty()) {
       throw InputError(
@@ -479,10 +488,11 @@ DPPsfField MakePsfField(const std::string& psf_model,
     }
     // An explicit translating disk is checked by the same fit, never
     // replaced (DPScaleOptions::SelfCalibration::kCheck).
-    core->psf_self_calibration = psf_model == "auto"
-                                     ? DPScaleOptions::SelfCalibration::kFit
-                                     : DPScaleOptions::SelfCalibration::kCheck;
-    return DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+    choice.self_calibration = psf_model == "auto"
+                                  ? DPScaleOptions::SelfCalibration::kFit
+                                  : DPScaleOptions::SelfCalibration::kCheck;
+    choice.field = DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+    return choice;
   }
   if (psf_model == "calibrated") {
     if (psf_path.empty()) {
@@ -491,18 +501,18 @@ DPPsfField MakePsfField(const std::string& psf_model,
           "--DPScaleEstimator.psf_path (a profile written by colmap "
           "dp_psf_calibrator, or measured kernels)");
     }
-    core->psf_self_calibration = DPScaleOptions::SelfCalibration::kOff;
+    choice.self_calibration = DPScaleOptions::SelfCalibration::kOff;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     CheckProfileLight(profile, psf_path);
-    core->profile_relative_uncertainty = profile.uncertainty;
+    choice.profile_relative_uncertainty = profile.uncertainty;
     // The blur the profile was measured at bounds the automatic search
     // from below (a profile calibrated at 10 px on a camera whose frames
     // the frame-size rule gives 3.5 px).
     if (profile.model == "measured_kernels") {
-      core->min_auto_radius_px =
-          std::max(core->min_auto_radius_px, profile.reference_radius_px);
+      choice.reference_radius_px = profile.reference_radius_px;
     }
-    return profile.MakeField(psf_path);
+    choice.field = profile.MakeField(psf_path);
+    return choice;
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");

@@ -93,17 +93,33 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
 // records no light (written before frames were linearised).
 void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
 
+// What a --DPScaleEstimator.psf_model / psf_path choice found: the PSF
+// and what it means for the estimate's options. The controller applies it
+// (ApplyTo) before DPScaleOptions::Check().
+struct PsfChoice {
+  DPPsfField field;
+  // translating_disk: checked against the data (kCheck); auto: the
+  // translating disk self-calibrated from the data (kFit); calibrated: kOff.
+  DPScaleOptions::SelfCalibration self_calibration =
+      DPScaleOptions::SelfCalibration::kFit;
+  // A profile file's own relative uncertainty (0: none given).
+  double profile_relative_uncertainty = 0;
+  // The blur a measured-kernel profile was measured at: it bounds the
+  // automatic search radius from below (0: no bound).
+  double reference_radius_px = 0;
+
+  // The choice written into the estimate's options.
+  void ApplyTo(DPScaleOptions* core) const;
+};
+
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
-// model, checked against the data: core->psf_self_calibration kCheck),
-// "calibrated" (the profile in
-// psf_path: a split profile from dp_psf_calibrator, one per column band if it
-// has bands, or measured kernels), or "auto" (the translating disk,
-// self-calibrated from the data: kFit; calibrated sets kOff). Throws
-// InputError for an unknown model, a missing or malformed psf_path, or a
-// psf_path the model does not use.
-DPPsfField MakePsfField(const std::string& psf_model,
-                        const std::string& psf_path,
-                        DPScaleOptions* core);
+// model, checked against the data), "calibrated" (the profile in psf_path: a
+// split profile from dp_psf_calibrator, one per column band if it has bands,
+// or measured kernels), or "auto" (the translating disk, self-calibrated from
+// the data). Throws InputError for an unknown model, a missing or malformed
+// psf_path, or a psf_path the model does not use.
+PsfChoice MakePsfField(const std::string& psf_model,
+                       const std::string& psf_path);
 
 // The profile library: a folder of profile files (`*.dpsf`) keyed by their
 // `camera` and `lens` lines, the way lensfun keys lens corrections. Returns

@@ -48,7 +48,7 @@ std::string NotPositive(const char* name, double value) {
 
 }  // namespace
 
-bool ScaleRunOptions::Check() const {
+bool ScaleRunOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_MESSAGE(
       workspace_path.empty() != input_path.empty(),
       "give exactly one of --workspace_path (dense workspace) and "
@@ -77,20 +77,10 @@ bool ScaleRunOptions::Check() const {
       prefetch_views >= 0 && prefetch_views <= 8,
       "--DPScaleEstimator.prefetch_views must be in [0, 8], got " +
           std::to_string(prefetch_views));
-  if (!view_budget.Check()) {
-    internal::SetOptionCheckFailure("invalid DPScaleEstimator view budget: " +
-                                    OptionCheckFailure());
-    return false;
-  }
-  if (!output_path.empty()) {
-    const std::string input =
-        workspace_path.empty() ? input_path : workspace_path;
-    DPSFM_CHECK_OPTION_MESSAGE(
-        !(fs::exists(output_path) && fs::exists(input) &&
-          fs::equivalent(output_path, input)),
-        "--output_path is the input itself; leave it out to rescale in "
-        "place: " +
-            output_path);
+  std::string budget_failure;
+  if (!view_budget.Check(&budget_failure)) {
+    return internal::FailOptionCheck(
+        failure, "invalid DPScaleEstimator view budget: " + budget_failure);
   }
   return true;
 }
@@ -107,7 +97,8 @@ bool IsModelDir(const std::string& dir) {
 }
 
 WorkspaceLayout ResolveWorkspaceLayout(const ScaleRunOptions& options) {
-  if (!options.Check()) throw InputError(OptionCheckFailure());
+  std::string failure;
+  if (!options.Check(&failure)) throw InputError(failure);
   WorkspaceLayout layout;
   if (!options.workspace_path.empty()) {
     layout.dense = true;

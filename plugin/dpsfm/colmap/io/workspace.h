@@ -71,17 +71,16 @@ struct ScaleRunOptions {
   std::string psf_library;
   // Which views to visit and when to stop (large projects).
   ViewBudgetOptions view_budget;
-  // Threads of the COLMAP layer's own loops (-1: all cores); the command
-  // sets it from --DPScaleEstimator.num_threads.
-  int num_threads = -1;
   // Views read ahead of the blur search on as many worker threads (0: read
-  // each when it is needed; num_threads 1 reads in place too). Each one
+  // each when it is needed; the controller reads in place too when the
+  // estimate runs on one thread). Each one
   // waiting costs a view's frames and depth map in memory.
   int prefetch_views = 1;
 
-  // False at the first invalid option; OptionCheckFailure() (core/util/check.h)
-  // says which, in the words of the command line.
-  bool Check() const;
+  // False at the first invalid option, which *failure (when given) names in
+  // the words of the command line (core/util/check.h). Values only: what
+  // is on disk is checked by ResolveWorkspaceLayout and the rescale plan.
+  bool Check(std::string* failure = nullptr) const;
 };
 
 // Where each piece of the input lives on disk.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -76,87 +77,64 @@ cv::Mat ReadColmapDepthMap(const std::string& path) {
 
 namespace {
 
-// cameras.bin's structure: count, then per camera id, model, width,
-// height and the model's number of parameters.
-void CheckCamerasBinary(const std::string& path) {
-  const std::string bytes = ReadFileBytes(path);
-  auto truncated = [&](const std::string& what) {
-    throw InputError("cannot read the model: " + path +
-                     " is truncated or "
-                     "corrupt (" +
-                     what + ")");
-  };
-  if (bytes.size() < 8) truncated("camera count");
-  uint64_t count = 0;
-  std::memcpy(&count, bytes.data(), 8);
-  size_t pos = 8;
-  for (uint64_t i = 0; i < count; ++i) {
-    if (bytes.size() - pos < 24) truncated("camera " + std::to_string(i + 1));
-    int model = 0;
-    std::memcpy(&model, bytes.data() + pos + 4, 4);
-    if (!colmap::ExistsCameraModelWithId(
-            static_cast<colmap::CameraModelId>(model))) {
-      truncated("camera " + std::to_string(i + 1) + " has unknown model id " +
-                std::to_string(model));
-    }
-    const size_t params =
-        colmap::CameraModelNumParams(static_cast<colmap::CameraModelId>(model));
-    pos += 24;
-    if ((bytes.size() - pos) / 8 < params) {
-      truncated("parameters of camera " + std::to_string(i + 1));
-    }
-    pos += 8 * params;
-  }
-  if (pos != bytes.size()) {
-    truncated(std::to_string(bytes.size() - pos) +
-              " unexpected bytes after the last camera");
-  }
-}
+// The model files COLMAP's reader may open in a model folder.
+const char* const kModelFileNames[] = {"cameras.bin",
+                                       "images.bin",
+                                       "points3D.bin",
+                                       "rigs.bin",
+                                       "frames.bin",
+                                       "cameras.txt",
+                                       "images.txt",
+                                       "points3D.txt",
+                                       "rigs.txt",
+                                       "frames.txt"};
 
-// Reads a model with COLMAP after checking the structure of the files it
-// will read (the ones the rescaler parses, and cameras.bin): COLMAP's own
-// readers turn a truncated file into "std::bad_alloc" or worse.
-void ReadModel(const std::string& dir, colmap::Reconstruction* model) {
-  const std::filesystem::path root(dir);
-  const bool binary = std::filesystem::is_regular_file(root / "cameras.bin") &&
-                      std::filesystem::is_regular_file(root / "images.bin") &&
-                      std::filesystem::is_regular_file(root / "points3D.bin");
-  if (binary) CheckCamerasBinary((root / "cameras.bin").string());
-  const std::vector<std::pair<const char*, ArtefactType>> files =
-      binary ? std::vector<
-                   std::pair<const char*,
-                             ArtefactType>>{{"images.bin",
-                                             ArtefactType::kImagesBinary},
-                                            {"points3D.bin",
-                                             ArtefactType::kPoints3DBinary}}
-             : std::vector<std::pair<const char*, ArtefactType>>{
-                   {"images.txt", ArtefactType::kImagesText},
-                   {"points3D.txt", ArtefactType::kPoints3DText}};
-  for (const auto& file : files) {
-    const std::string path = (root / file.first).string();
-    if (!std::filesystem::is_regular_file(path)) continue;
-    std::string bytes = ReadFileBytes(path);
-    try {
-      RescaleContents(file.second, 1.0, path, &bytes);  // parses, all checked
-    } catch (const InputError& error) {
-      std::string what = error.what();
-      const std::string prefix = "cannot rescale ";
-      if (what.compare(0, prefix.size(), prefix) == 0) {
-        what = what.substr(prefix.size());
-      }
-      throw InputError("cannot read the model: " + what);
+// Reads a model with COLMAP. The model was checked first (CheckModel: its
+// structure and cross references, in words), so COLMAP's own checks never
+// fire. COLMAP's readers take a folder: when some of its files are read from
+// elsewhere (a dry run over an interrupted rescale reads their staged
+// versions), the model is read from a temporary folder of links to the files
+// that stand for them.
+void ReadModel(const std::string& dir,
+               const ReadPathFn& read_path,
+               colmap::Reconstruction* model) {
+  std::vector<std::pair<fs::path, fs::path>> links;
+  for (const char* name : kModelFileNames) {
+    const fs::path path = fs::path(dir) / name;
+    if (!fs::is_regular_file(path)) continue;
+    const fs::path read = read_path ? fs::path(read_path(path.string())) : path;
+    links.emplace_back(name, fs::absolute(read));
+  }
+  const bool redirected =
+      std::any_of(links.begin(), links.end(), [&](const auto& link) {
+        return link.second != fs::absolute(fs::path(dir) / link.first);
+      });
+  std::string read_dir = dir;
+  std::string overlay;
+  if (redirected) {
+    std::string pattern =
+        (fs::temp_directory_path() / "dpsfm-model-XXXXXX").string();
+    // mkdtemp: std::filesystem has no unique directory maker.
+    if (mkdtemp(pattern.data()) == nullptr) {
+      throw std::runtime_error("cannot create a temporary folder " + pattern);
+    }
+    overlay = read_dir = pattern;
+    for (const auto& link : links) {
+      fs::create_symlink(link.second, fs::path(overlay) / link.first);
     }
   }
   try {
-    model->Read(dir);
+    model->Read(read_dir);
   } catch (const std::exception& error) {
+    if (!overlay.empty()) fs::remove_all(overlay);
     throw InputError("cannot read the model in " + dir + ": " + error.what());
   }
+  if (!overlay.empty()) fs::remove_all(overlay);
 }
 
-// Sparse mode takes each view's depths from its triangulated points: every
-// point an image refers to must exist (COLMAP's readers do not check), and
-// a view without any has no depth and is left out.
+// Sparse mode takes each view's depths from its triangulated points (that
+// each exists, CheckModel made sure): a view without any has no depth and is
+// left out.
 std::vector<colmap::image_t> ImagesWithTriangulatedPoints(
     const colmap::Reconstruction& model,
     const std::vector<colmap::image_t>& image_ids,
@@ -167,17 +145,7 @@ std::vector<colmap::image_t> ImagesWithTriangulatedPoints(
     const colmap::Image& image = model.Image(image_id);
     int points = 0;
     for (const colmap::Point2D& point2D : image.Points2D()) {
-      if (!point2D.HasPoint3D()) continue;
-      if (!model.ExistsPoint3D(point2D.point3D_id)) {
-        throw InputError(
-            "the model in " + model_path + " is inconsistent: image " +
-            image.Name() + " refers to 3D point " +
-            std::to_string(point2D.point3D_id) +
-            ", which its points3D file does not hold (files of two "
-            "different runs?): export the model again with colmap "
-            "model_converter");
-      }
-      ++points;
+      points += point2D.HasPoint3D();
     }
     if (points == 0) {
       without.push_back(image.Name());
@@ -231,9 +199,11 @@ void WarnUnmatchedLensRows(const colmap::Reconstruction& model,
 }  // namespace
 
 WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
-                                 const WorkspaceLayout& layout)
-    : options_(options), layout_(layout) {
-  ReadModel(layout_.model_path, &reconstruction_);
+                                 const WorkspaceLayout& layout,
+                                 const WorkspaceReadOptions& read)
+    : options_(options), layout_(layout), read_(read) {
+  if (!read_.model_checked) CheckModel(layout_.model_path, read_.read_path);
+  ReadModel(layout_.model_path, read_.read_path, &reconstruction_);
   std::vector<colmap::image_t> image_ids = reconstruction_.RegImageIds();
   if (image_ids.empty()) {
     throw InputError("the model has no registered images: " +
@@ -257,7 +227,8 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
   }
   if (!options_.original_model_path.empty()) {
     colmap::Reconstruction original;
-    ReadModel(options_.original_model_path, &original);
+    CheckModel(options_.original_model_path);
+    ReadModel(options_.original_model_path, nullptr, &original);
     for (const auto& entry : original.Images()) {
       original_model_cameras_[entry.second.Name()] =
           original.Camera(entry.second.CameraId());
@@ -339,6 +310,10 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     }
     sources_.push_back(source);
   }
+}
+
+std::string WorkspaceReader::ReadPath(const std::string& path) const {
+  return read_.read_path ? read_.read_path(path) : path;
 }
 
 std::string WorkspaceReader::DepthMapPath(const std::string& image_name) const {
@@ -452,14 +427,14 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   view.lens.pixel_pitch_um *= k;
 
   if (layout_.dense) {
-    view.depth = ReadColmapDepthMap(source.depth_source);
+    view.depth = ReadColmapDepthMap(ReadPath(source.depth_source));
     if (original != nullptr) {
       view.depth = ResampleDepthToFrame(view.depth,
                                         camera,
                                         *original,
                                         frames.left.size(),
                                         k,
-                                        options_.num_threads);
+                                        read_.num_threads);
     }
     // The depth map covers the camera's field at its own resolution; it
     // must keep the camera's aspect (PatchMatch scales both sides alike).

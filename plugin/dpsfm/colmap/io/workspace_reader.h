@@ -13,6 +13,7 @@
 #include "dpsfm/colmap/io/dp_images.h"
 #include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/workspace.h"
+#include "dpsfm/colmap/rescale/model_check.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 
 namespace dpsfm {
@@ -44,10 +45,25 @@ struct ViewSource {
   std::string depth_source;  // depth map path, or "N triangulated points"
 };
 
+// How the reader reads: where its files come from, as the run's plan
+// decided (colmap/rescale/rescale_plan.h), and on how many threads.
+struct WorkspaceReadOptions {
+  // The file whose bytes stand for a model file or depth map (default: the
+  // path itself; a dry run over an interrupted rescale reads staged files).
+  ReadPathFn read_path;
+  // The plan checked layout.model_path already (CheckModel): it is read
+  // without checking it again. Otherwise the reader checks it.
+  bool model_checked = false;
+  // Threads of the reader's own loops (-1: all cores): the estimate's
+  // DPScaleOptions::num_threads.
+  int num_threads = -1;
+};
+
 class WorkspaceReader {
  public:
   WorkspaceReader(const ScaleRunOptions& options,
-                  const WorkspaceLayout& layout);
+                  const WorkspaceLayout& layout,
+                  const WorkspaceReadOptions& read = WorkspaceReadOptions());
 
   const colmap::Reconstruction& reconstruction() const {
     return reconstruction_;
@@ -63,9 +79,11 @@ class WorkspaceReader {
 
  private:
   std::string DepthMapPath(const std::string& image_name) const;
+  std::string ReadPath(const std::string& path) const;
 
   ScaleRunOptions options_;
   WorkspaceLayout layout_;
+  WorkspaceReadOptions read_;
   colmap::Reconstruction reconstruction_;
   std::unique_ptr<DPImageIndex> dp_index_;
   std::vector<ViewSource> sources_;

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "dpsfm/colmap/report/plot_text.h"
+#include "dpsfm/colmap/report/refusal_text.h"
 #include "dpsfm/core/util/statistics.h"
 
 namespace dpsfm {
@@ -40,9 +41,9 @@ std::string ScaleText(double scale) { return FormatValue(scale) + " m/unit"; }
 
 std::string FailureAlert(const DPScaleResult& result) {
   if (result.success) return "";
-  return "Estimate failed: " + (result.failure_reason.empty()
-                                    ? std::string("no reason given")
-                                    : result.failure_reason);
+  const std::string reason = RefusalText(result.refusal);
+  return "Estimate failed: " +
+         (reason.empty() ? std::string("no reason given") : reason);
 }
 
 std::optional<PatchGeometry> DefaultFrameGeometry(const cv::Size& frame_size) {

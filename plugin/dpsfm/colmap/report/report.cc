@@ -4,6 +4,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "dpsfm/colmap/report/refusal_text.h"
 #include "dpsfm/colmap/util/durable_file.h"
 #include "dpsfm/colmap/util/input_error.h"
 
@@ -88,8 +89,9 @@ nlohmann::json PsfSection(const DPScaleResult& result) {
   nlohmann::json psf;
   psf["model"] = result.psf_model;
   psf["self_calibrated"] = result.psf_self_calibrated;
-  psf["status"] = result.psf_status;
-  if (!result.psf_status.empty()) {
+  const std::string status = PsfStatusText(result);
+  psf["status"] = status;
+  if (!status.empty()) {
     psf["fit"] = ProfileFit(result.psf_fit);
     // A profile that changes across the frame: each column band's fit.
     nlohmann::json bands = nlohmann::json::array();
@@ -125,12 +127,13 @@ nlohmann::json CueJson(const ScaleCue& c) {
 // and the recorded focus as evidence.
 void AddScaleSources(const DPScaleResult& result, nlohmann::json* report) {
   nlohmann::json& r = *report;
-  if (!result.focus_check.empty()) {
+  const std::string focus_check = FocusCheckText(result);
+  if (!focus_check.empty()) {
     r["focus_check"] = {
         {"scale_from_recorded_focus", Number(result.focus_scale)},
         {"ratio", Number(result.focus_scale_ratio)},
         {"agrees", result.focus_agrees},
-        {"status", result.focus_check}};
+        {"status", focus_check}};
   }
   r["scale_source"] =
       result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue
@@ -148,7 +151,7 @@ void AddScaleSources(const DPScaleResult& result, nlohmann::json* report) {
            ? "agree"
            : (result.cue_agreement == CueAgreement::kDisagree ? "disagree"
                                                               : "one cue")},
-      {"how", result.combination}};
+      {"how", CombinationText(result)}};
   if (result.focus_cue.valid) {
     r["cues"]["recorded_focus"]["views"] = result.focus_cue.num_views;
   }
@@ -269,7 +272,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   report["tool"] = "dp-sfm " + DPSFMVersion();
   report["success"] = result.success;
   if (!result.success) {
-    report["reason"] = result.failure_reason;
+    report["reason"] = RefusalText(result.refusal);
   }
   report["scale"] = result.success ? Number(result.scale) : nullptr;
   report["scale_initial"] =

@@ -12,6 +12,7 @@
 #include "dpsfm/colmap/rescale/rescale.h"
 #include "dpsfm/colmap/util/durable_file.h"
 #include "dpsfm/colmap/util/input_error.h"
+#include "dpsfm/colmap/util/paths.h"
 
 namespace dpsfm {
 namespace {
@@ -40,11 +41,6 @@ bool HasModelFiles(const fs::path& dir) {
     if (fs::is_regular_file(dir / file.name)) return true;
   }
   return false;
-}
-
-bool EndsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() &&
-         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 // A model folder may hold only files whose treatment is known: the model

@@ -15,7 +15,8 @@ using rescale::Load;
 using rescale::ScaleFloat;
 using rescale::Store;
 
-bool ParseDepthMapLayout(const std::string& bytes,
+bool ParseDepthMapHeader(const std::string& head,
+                         uint64_t file_size,
                          DepthMapLayout* layout,
                          std::string* problem) {
   // Header "W&H&C&" with positive decimal integers, as colmap::mvs::Mat
@@ -24,12 +25,12 @@ bool ParseDepthMapLayout(const std::string& bytes,
   size_t pos = 0;
   for (int i = 0; i < 3; ++i) {
     const size_t start = pos;
-    while (pos < bytes.size() && pos - start < 10 && bytes[pos] >= '0' &&
-           bytes[pos] <= '9') {
-      dims[i] = dims[i] * 10 + (bytes[pos] - '0');
+    while (pos < head.size() && pos - start < 10 && head[pos] >= '0' &&
+           head[pos] <= '9') {
+      dims[i] = dims[i] * 10 + (head[pos] - '0');
       ++pos;
     }
-    if (pos == start || pos >= bytes.size() || bytes[pos] != '&' ||
+    if (pos == start || pos >= head.size() || head[pos] != '&' ||
         dims[i] == 0) {
       *problem =
           "not a COLMAP depth map (bad \"width&height&channels&\" header)";
@@ -39,7 +40,7 @@ bool ParseDepthMapLayout(const std::string& bytes,
   }
   // The dimensions come from the file: compare them with the data size
   // without forming a product that could overflow.
-  const uint64_t data_bytes = bytes.size() - pos;
+  const uint64_t data_bytes = file_size - pos;
   const uint64_t num_values = data_bytes / 4;
   const bool size_ok = data_bytes % 4 == 0 && dims[0] <= num_values &&
                        dims[1] <= num_values / dims[0] &&
@@ -59,6 +60,12 @@ bool ParseDepthMapLayout(const std::string& bytes,
   layout->channels = dims[2];
   layout->data_offset = pos;
   return true;
+}
+
+bool ParseDepthMapLayout(const std::string& bytes,
+                         DepthMapLayout* layout,
+                         std::string* problem) {
+  return ParseDepthMapHeader(bytes, bytes.size(), layout, problem);
 }
 
 void RescaleDepthMap(double scale,

@@ -125,6 +125,13 @@ struct DepthMapLayout {
 bool ParseDepthMapLayout(const std::string& bytes,
                          DepthMapLayout* layout,
                          std::string* problem);
+// The same from the file's first bytes (`head`: at least its header; 40
+// bytes always suffice) and its size, without reading the data.
+constexpr size_t kDepthMapHeadBytes = 40;
+bool ParseDepthMapHeader(const std::string& head,
+                         uint64_t file_size,
+                         DepthMapLayout* layout,
+                         std::string* problem);
 
 void RescaleDepthMap(double scale,
                      const std::string& path,

@@ -20,8 +20,10 @@
 #include <nlohmann/json.hpp>
 
 #include "colmap/util/logging.h"
+#include "dpsfm/colmap/rescale/rescale.h"
 #include "dpsfm/colmap/util/durable_file.h"
 #include "dpsfm/colmap/util/input_error.h"
+#include "dpsfm/colmap/util/paths.h"
 
 namespace dpsfm {
 
@@ -36,20 +38,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const char kCopyStagingSuffix[] = ".dpsfm-staging";
-
-bool EndsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() &&
-         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-// True if `path` is `dir` or below it (both absolute and normalised).
-bool IsWithin(const fs::path& path, const fs::path& dir) {
-  const fs::path relative = path.lexically_relative(dir);
-  if (relative.empty()) return false;
-  return *relative.begin() != "..";
-}
-
 // Absolute path with resolved symlinks in its folder part; the file itself
 // need not exist, its folder must.
 fs::path ResolveTarget(const std::string& target) {
@@ -59,11 +47,6 @@ fs::path ResolveTarget(const std::string& target) {
     throw InputError("folder of " + target + " does not exist");
   }
   return fs::canonical(parent) / path.filename();
-}
-
-bool Exists(const fs::path& path) {
-  std::error_code ec;
-  return fs::exists(fs::symlink_status(path, ec));
 }
 
 // Journal and staging list paths are stored relative to the root when
@@ -158,32 +141,14 @@ void SweepStagedFiles(const fs::path& root,
   std::sort(doomed.begin(), doomed.end());
   doomed.erase(std::unique(doomed.begin(), doomed.end()), doomed.end());
   for (const fs::path& path : doomed) {
-    if (!Exists(path)) continue;
+    if (!PathExists(path)) continue;
     RemoveOrThrow(path);
     removed->push_back(path.string());
   }
 }
 
-std::string FormatScale(double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
-  return buffer;
-}
-
-void RefuseIfRescaled(const ScaleRecord& record,
-                      const std::string& root,
-                      bool force) {
-  if (record.IsRescaled() && !force) {
-    throw InputError("workspace " + root +
-                     " was already rescaled to metres (cumulative " + "scale " +
-                     FormatScale(record.CumulativeScale()) + ", see " +
-                     ScaleRecordPath(root) +
-                     "); force it to apply another scale on top of that one");
-  }
-}
-
 void RefuseIfJournal(const fs::path& root) {
-  if (Exists(root / kJournalFileName)) {
+  if (PathExists(root / kJournalFileName)) {
     throw InputError("workspace " + root.string() +
                      " holds an interrupted rescale (" +
                      (root / kJournalFileName).string() +
@@ -282,7 +247,7 @@ std::string ScaleRecordPath(const std::string& workspace_root) {
 
 ScaleRecord ReadScaleRecord(const std::string& workspace_root) {
   const std::string path = ScaleRecordPath(workspace_root);
-  if (!Exists(path)) return ScaleRecord();
+  if (!PathExists(path)) return ScaleRecord();
   return ScaleRecord::FromJson(ReadFileBytes(path), path);
 }
 
@@ -335,7 +300,7 @@ void CommitTransaction::RegisterOutsideDir(const std::string& dir) {
 void CommitTransaction::Stage(
     const std::string& target_path,
     const std::function<void(const std::string&)>& write_staged) {
-  if (committed_ || Exists(fs::path(root_) / kJournalFileName)) {
+  if (committed_ || PathExists(fs::path(root_) / kJournalFileName)) {
     throw std::logic_error("CommitTransaction::Stage after Commit");
   }
   const fs::path target = ResolveTarget(target_path);
@@ -366,7 +331,7 @@ void CommitTransaction::StageContents(const std::string& target_path,
                                       int mode) {
   const unsigned int bits =
       mode >= 0 ? static_cast<unsigned int>(mode)
-                : (Exists(target_path) ? FileMode(target_path) : 0644u);
+                : (PathExists(target_path) ? FileMode(target_path) : 0644u);
   Stage(target_path, [&](const std::string& staged) {
     WriteFileDurably(staged, contents, bits);
   });
@@ -417,7 +382,7 @@ void CommitTransaction::Commit() {
 }
 
 void CommitTransaction::Abort() {
-  if (committed_ || Exists(fs::path(root_) / kJournalFileName)) return;
+  if (committed_ || PathExists(fs::path(root_) / kJournalFileName)) return;
   for (const std::string& target : targets_) {
     RemoveOrThrow(target + kStagedSuffix);
   }
@@ -426,6 +391,29 @@ void CommitTransaction::Abort() {
     RemoveOrThrow(fs::path(root_) / kStagingListFileName);
     outside_dirs_.clear();
   }
+}
+
+// ---- the journal ----------------------------------------------------------
+
+std::string JournalPath(const std::string& workspace_root) {
+  const fs::path journal = fs::path(workspace_root) / kJournalFileName;
+  return PathExists(journal) ? journal.string() : std::string();
+}
+
+std::vector<std::string> ReadJournalTargets(const std::string& workspace_root) {
+  const std::string journal = JournalPath(workspace_root);
+  if (journal.empty()) return {};
+  const fs::path root = fs::canonical(workspace_root);
+  std::vector<std::string> targets;
+  for (const fs::path& target :
+       ReadPathList(journal, "targets", root, "rescale journal")) {
+    targets.push_back(target.string());
+  }
+  return targets;
+}
+
+std::string StagedPath(const std::string& target) {
+  return target + kStagedSuffix;
 }
 
 // ---- recovery ------------------------------------------------------------
@@ -458,20 +446,20 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
   RecoveryReport report;
 
   std::vector<fs::path> outside_dirs;
-  if (Exists(staging_list)) {
+  if (PathExists(staging_list)) {
     outside_dirs = ReadPathList(staging_list, "dirs", root, "staging list");
   }
 
-  if (Exists(journal)) {
+  if (PathExists(journal)) {
     const std::vector<fs::path> targets =
         ReadPathList(journal, "targets", root, "rescale journal");
     std::set<std::string> dirs;
     for (const fs::path& target : targets) {
       const fs::path staged = target.string() + kStagedSuffix;
-      if (Exists(staged)) {
+      if (PathExists(staged)) {
         RenameOrThrow(staged, target);
         report.completed.push_back(target.string());
-      } else if (!Exists(target)) {
+      } else if (!PathExists(target)) {
         throw std::runtime_error("cannot finish the interrupted rescale of " +
                                  root.string() + ": neither " +
                                  target.string() + " nor its staged version " +
@@ -486,7 +474,7 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
   }
 
   SweepStagedFiles(root, outside_dirs, &report.removed);
-  if (Exists(staging_list)) {
+  if (PathExists(staging_list)) {
     RemoveOrThrow(staging_list);
     report.removed.push_back(staging_list.string());
   }
@@ -496,171 +484,6 @@ RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root) {
   }
   if (!report.removed.empty()) SyncToDisk(root.string());
   return report;
-}
-
-// ---- rescaling a workspace -------------------------------------------------
-
-void CheckRescaleIsPossible(const std::string& workspace_root,
-                            const std::vector<std::string>& extra_model_dirs,
-                            const std::string& output_path) {
-  const std::vector<Artefact> artefacts =
-      ListArtefactsToRescale(workspace_root, extra_model_dirs);
-  std::set<std::string> dirs;
-  if (output_path.empty()) {
-    dirs.insert(fs::path(workspace_root).string());
-    for (const Artefact& artefact : artefacts) {
-      dirs.insert(fs::path(artefact.path).parent_path().string());
-    }
-  } else {
-    fs::path parent = fs::absolute(output_path).parent_path();
-    dirs.insert(parent.string());
-  }
-  for (const std::string& dir : dirs) {
-    if (::access(dir.c_str(), W_OK) != 0) {
-      const std::string why = std::strerror(errno);
-      throw InputError(
-          (output_path.empty() ? "cannot rescale in place: "
-                               : "cannot write the rescaled copy: ") +
-          dir + " is not writable (" + why + "); nothing was changed. " +
-          (output_path.empty()
-               ? "Make it writable, write a rescaled copy with "
-                 "--output_path DIR, or estimate only with --dry_run 1"
-               : "Choose an --output_path in a writable folder"));
-    }
-  }
-}
-
-RescaleWorkspaceResult RescaleWorkspaceInPlace(
-    const std::string& workspace_root,
-    double scale,
-    const RescaleWorkspaceOptions& options) {
-  CheckScale(scale);
-  if (!fs::is_directory(workspace_root)) {
-    throw InputError("workspace is not a directory: " + workspace_root);
-  }
-  RefuseIfJournal(fs::canonical(workspace_root));
-  ScaleRecord record = ReadScaleRecord(workspace_root);
-  RefuseIfRescaled(record, workspace_root, options.force);
-
-  const std::vector<Artefact> artefacts =
-      ListArtefactsToRescale(workspace_root, options.extra_model_dirs);
-  CommitTransaction transaction(workspace_root);
-  RescaleWorkspaceResult result;
-  for (const Artefact& artefact : artefacts) {
-    transaction.Stage(artefact.path, [&](const std::string& staged) {
-      WriteRescaledArtefact(artefact, scale, staged);
-    });
-    result.rescaled_files.push_back(artefact.path);
-  }
-  result.entry = record.Append(scale, options.inputs, options.tool_version);
-  result.record_path = ScaleRecordPath(workspace_root);
-  transaction.StageContents(result.record_path, record.ToJson(), 0644);
-  transaction.Commit();
-  return result;
-}
-
-RescaleWorkspaceResult WriteRescaledCopy(
-    const std::string& workspace_root,
-    const std::string& output_path,
-    double scale,
-    const RescaleWorkspaceOptions& options) {
-  CheckScale(scale);
-  if (!fs::is_directory(workspace_root)) {
-    throw InputError("workspace is not a directory: " + workspace_root);
-  }
-  const fs::path input = fs::canonical(workspace_root);
-  fs::path output = fs::absolute(output_path).lexically_normal();
-  if (output.filename() == "." || output.filename().empty()) {
-    output = output.parent_path();
-  }
-  if (Exists(output)) {
-    if (!fs::is_directory(output) || !fs::is_empty(output)) {
-      throw InputError("output folder " + output_path +
-                       " already exists and is not empty");
-    }
-  }
-  const fs::path resolved_output = fs::weakly_canonical(output);
-  if (resolved_output == input || IsWithin(resolved_output, input)) {
-    throw InputError("output folder " + output_path +
-                     " lies inside the input workspace " + workspace_root);
-  }
-  RefuseIfJournal(input);
-  ScaleRecord record = ReadScaleRecord(input.string());
-  RefuseIfRescaled(record, workspace_root, options.force);
-
-  std::vector<std::string> extra_dirs;
-  for (const std::string& dir : options.extra_model_dirs) {
-    if (!fs::is_directory(dir) || !IsWithin(fs::canonical(dir), input)) {
-      throw InputError("model folder " + dir + " is not inside the workspace " +
-                       workspace_root +
-                       ", so it cannot be part of the rescaled copy");
-    }
-    extra_dirs.push_back(fs::canonical(dir).string());
-  }
-  // Artefacts by their path relative to the input.
-  std::map<std::string, ArtefactType> artefacts;
-  for (const Artefact& artefact :
-       ListArtefactsToRescale(input.string(), extra_dirs)) {
-    artefacts[fs::path(artefact.path).lexically_relative(input).string()] =
-        artefact.type;
-  }
-
-  const fs::path staging = output.string() + kCopyStagingSuffix;
-  std::error_code ec;
-  fs::remove_all(staging, ec);  // a stale half copy of an interrupted run
-  if (ec) {
-    throw std::runtime_error("cannot remove the stale staging folder " +
-                             staging.string() + ": " + ec.message());
-  }
-  fs::create_directories(output.parent_path());
-  RescaleWorkspaceResult result;
-  try {
-    fs::create_directory(staging);
-    std::vector<std::string> dirs = {staging.string()};
-    for (fs::recursive_directory_iterator it(input), end; it != end; ++it) {
-      const fs::path& from = it->path();
-      const std::string relative = from.lexically_relative(input).string();
-      const fs::path to = staging / relative;
-      const fs::file_status status = fs::symlink_status(from);
-      if (fs::is_symlink(status)) {
-        fs::copy_symlink(from, to);
-      } else if (fs::is_directory(status)) {
-        fs::create_directory(to);
-        dirs.push_back(to.string());
-      } else if (fs::is_regular_file(status)) {
-        const std::string name = from.filename().string();
-        if (EndsWith(name, kStagedSuffix) || relative == kScaleRecordFileName ||
-            relative == kStagingListFileName ||
-            relative == std::string(kJournalFileName) + kAtomicWriteSuffix ||
-            relative ==
-                std::string(kStagingListFileName) + kAtomicWriteSuffix) {
-          continue;  // transaction leftovers; the record is written below
-        }
-        const auto artefact = artefacts.find(relative);
-        if (artefact != artefacts.end()) {
-          WriteRescaledArtefact(
-              {artefact->second, from.string()}, scale, to.string());
-          result.rescaled_files.push_back((output / relative).string());
-        } else {
-          CopyFileDurably(from, to);
-        }
-      }
-      // Sockets, fifos and devices are not workspace data; skipped.
-    }
-    result.entry = record.Append(scale, options.inputs, options.tool_version);
-    WriteFileDurably((staging / kScaleRecordFileName).string(),
-                     record.ToJson());
-    for (const std::string& dir : dirs) SyncToDisk(dir);
-    // rename(2) replaces an empty folder, so an existing empty output is
-    // fine; the copy appears at `output` in one step.
-    RenameOrThrow(staging, output);
-    SyncToDisk(output.parent_path().string());
-  } catch (...) {
-    fs::remove_all(staging, ec);
-    throw;
-  }
-  result.record_path = (output / kScaleRecordFileName).string();
-  return result;
 }
 
 }  // namespace dpsfm

@@ -22,8 +22,6 @@
 #include <string>
 #include <vector>
 
-#include "dpsfm/colmap/rescale/rescale.h"
-
 namespace dpsfm {
 
 // Suffix of a staged file, next to its target.
@@ -155,61 +153,12 @@ struct RecoveryReport {
 // file nor target (the workspace was changed by hand meanwhile).
 RecoveryReport RecoverInterruptedCommit(const std::string& workspace_root);
 
-// ---- rescaling a workspace --------------------------------------------------
-
-struct RescaleWorkspaceOptions {
-  // Model folders to rescale in addition to those under the workspace (see
-  // ListArtefactsToRescale). In copy mode they must lie inside the workspace.
-  std::vector<std::string> extra_model_dirs;
-  // Apply the scale even if the record says the workspace was rescaled
-  // already; the scales then compose.
-  bool force = false;
-  // Stored in the record entry.
-  std::vector<std::string> inputs;
-  std::string tool_version;
-};
-
-struct RescaleWorkspaceResult {
-  // The files written with scaled values (not the record), in the
-  // rescaled workspace.
-  std::vector<std::string> rescaled_files;
-  // The entry added to the record.
-  ScaleRecordEntry entry;
-  std::string record_path;
-};
-
-// Before the estimation: refuses (InputError, one line) what the rescale
-// at its end would refuse, so a long run does not end in "cannot create
-// ...": a model folder holding a file of unknown treatment (see
-// ListArtefactsToRescale), and, in place (`output_path` empty), a workspace
-// folder that is not writable (a read-only mount, missing permissions); for
-// a copy, an output whose parent is not writable.
-void CheckRescaleIsPossible(const std::string& workspace_root,
-                            const std::vector<std::string>& extra_model_dirs,
-                            const std::string& output_path);
-
-// Rescales every artefact of the workspace by `scale`, in place, in one
-// CommitTransaction, together with the new record entry. Refuses
-// (InputError, nothing written) if the record says it was rescaled already
-// and !force, if a journal is present, or if any artefact is invalid (the
-// error names the file). Call RecoverInterruptedCommit() before it.
-RescaleWorkspaceResult RescaleWorkspaceInPlace(
-    const std::string& workspace_root,
-    double scale,
-    const RescaleWorkspaceOptions& options);
-
-// --output_path mode: copies the workspace to `output_path` with every
-// artefact rescaled and the record extended; the input is only read.
-// Refuses (InputError) if `output_path` exists and is not an empty folder,
-// lies inside the input, or the input holds an interrupted commit. The copy
-// is built in `<output_path>.dpsfm-staging` (a stale one from an interrupted
-// run is replaced) and renamed to `output_path` at the end, so there is
-// never a half copy at `output_path`. Symbolic links are copied as links;
-// staged files and journals of the input are not copied.
-RescaleWorkspaceResult WriteRescaledCopy(
-    const std::string& workspace_root,
-    const std::string& output_path,
-    double scale,
-    const RescaleWorkspaceOptions& options);
+// The journal of an interrupted commit under `workspace_root` (its path, or
+// "" when there is none) and the targets it lists, absolute, in commit
+// order. Reads only; InputError naming the journal if it is malformed.
+std::string JournalPath(const std::string& workspace_root);
+std::vector<std::string> ReadJournalTargets(const std::string& workspace_root);
+// A file's staged version (`<target>.dpsfm-staged`).
+std::string StagedPath(const std::string& target);
 
 }  // namespace dpsfm

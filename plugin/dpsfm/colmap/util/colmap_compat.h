@@ -17,7 +17,9 @@
 //  - SiftExtraction / SiftMatching options are FeatureExtraction /
 //    FeatureMatching;
 //  - OptionManager::Parse returns false on bad options instead of exiting;
-//  - logging: LOG_HEADING1/2 instead of PrintHeading1/2.
+//  - logging: LOG_HEADING1/2 instead of PrintHeading1/2;
+//  - model reading: 3.10 splits text lines at single spaces and does not
+//    compare tracks with the 2D points they list.
 
 #pragma once
 
@@ -54,6 +56,17 @@ namespace dpsfm {
 // Whether COLMAP's model writer writes rigs.* and frames.* beside cameras,
 // images and points3D (COLMAP 4; 3.10 writes the three alone).
 constexpr bool kWriterWritesRigsAndFrames = DPSFM_COLMAP_4;
+
+// Whether COLMAP's model reader compares each 3D point's track with the 2D
+// points it lists (COLMAP 4: Reconstruction::AddPoint3D's THROW_CHECK_EQ on
+// the 2D point's point3D_id; 3.10 stores the point without comparing).
+constexpr bool kReaderChecksTrackReferences = DPSFM_COLMAP_4;
+
+// Whether COLMAP's text model reader splits a line's fields at single
+// spaces (3.10: getline(line, item, ' '), so two spaces or a tab between
+// fields make an empty field that std::stoul / std::stold throw on) rather
+// than at any run of whitespace (4.x: operator>>).
+constexpr bool kTextReaderSplitsAtSingleSpaces = !DPSFM_COLMAP_4;
 
 // The option sections of feature extraction and matching (COLMAP 4 renamed
 // SiftExtraction / SiftMatching).

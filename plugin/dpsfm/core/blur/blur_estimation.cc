@@ -228,7 +228,7 @@ void CompareOppositeSign(const BlurTables& t,
 
 }  // namespace
 
-bool BlurEstimationOptions::Check() const {
+bool BlurEstimationOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(std::isfinite(max_radius_px) && max_radius_px >= 1,
                            max_radius_px);
   DPSFM_CHECK_OPTION_VALUE(

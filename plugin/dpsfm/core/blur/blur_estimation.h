@@ -99,7 +99,7 @@ struct BlurEstimationOptions {
   // the walk usually needs 3-5.
   int max_refinement_evaluations = 24;
 
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct PatchBlurEstimate {

@@ -182,7 +182,7 @@ Eigen::VectorXd SolveNonNegativeQuadratic(const Eigen::MatrixXd& hm,
 
 }  // namespace
 
-bool KernelEstimationOptions::Check() const {
+bool KernelEstimationOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(half_size >= 1 && half_size <= 24, half_size);
   DPSFM_CHECK_OPTION_VALUE(smoothness >= 0 && std::isfinite(smoothness),
                            smoothness);

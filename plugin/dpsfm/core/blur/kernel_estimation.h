@@ -33,7 +33,7 @@ struct KernelEstimationOptions {
   // Active-set steps of the non-negative solve (each adds one pixel to the
   // kernel's support).
   int max_iterations = 2000;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct EstimatedKernel {

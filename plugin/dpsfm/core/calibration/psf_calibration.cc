@@ -446,9 +446,9 @@ void Conclude(double residual_at_fit,
 
 }  // namespace
 
-bool SplitProfileFitOptions::Check() const {
-  if (!SplitProfileParams::CheckCentroidOffsetRange(min_centroid_offset,
-                                                    max_centroid_offset)) {
+bool SplitProfileFitOptions::Check(std::string* failure) const {
+  if (!SplitProfileParams::CheckCentroidOffsetRange(
+          min_centroid_offset, max_centroid_offset, failure)) {
     return false;
   }
   DPSFM_CHECK_OPTION_GE(consistency_tolerance, 0);

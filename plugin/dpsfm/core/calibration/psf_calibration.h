@@ -96,7 +96,7 @@ struct SplitProfileFitOptions {
   BlurEstimationOptions blur;
   int num_threads = -1;
   uint64_t seed = 42;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct SplitProfileFit {

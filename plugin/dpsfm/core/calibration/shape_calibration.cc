@@ -360,7 +360,7 @@ std::string Summary(const ShapeCalibration& out) {
 
 }  // namespace
 
-bool ShapeCalibrationOptions::Check() const {
+bool ShapeCalibrationOptions::Check(std::string* failure) const {
   DPSFM_CHECK_NESTED_OPTIONS(layout);
   DPSFM_CHECK_OPTION_VALUE(
       reference_radius_px >= 0 && std::isfinite(reference_radius_px),

@@ -57,7 +57,7 @@ struct ShapeCalibrationOptions {
   // residual is no test: on real captures noise dominates it.)
   double min_light_ratio = 0.6;
   double max_light_ratio = 1.5;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct ShapeCalibration {

@@ -305,10 +305,10 @@ std::string WhyUndetermined(double strength_side,
 
 }  // namespace
 
-bool TargetCalibrationOptions::Check() const {
+bool TargetCalibrationOptions::Check(std::string* failure) const {
   DPSFM_CHECK_NESTED_OPTIONS(blur);
-  if (!SplitProfileParams::CheckCentroidOffsetRange(min_centroid_offset,
-                                                    max_centroid_offset)) {
+  if (!SplitProfileParams::CheckCentroidOffsetRange(
+          min_centroid_offset, max_centroid_offset, failure)) {
     return false;
   }
   DPSFM_CHECK_OPTION_VALUE(node_ratio > 1.01 && node_ratio < 2, node_ratio);

@@ -76,7 +76,7 @@ struct TargetCalibrationOptions {
   int num_bootstrap = 200;
   int num_threads = -1;
   uint64_t seed = 42;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct TargetCalibration {

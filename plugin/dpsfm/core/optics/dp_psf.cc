@@ -150,7 +150,8 @@ DPKernels TranslatingDiskPsf::Kernels(double signed_radius_px) const {
 }
 
 bool SplitProfileParams::CheckCentroidOffsetRange(double min_centroid_offset,
-                                                  double max_centroid_offset) {
+                                                  double max_centroid_offset,
+                                                  std::string* failure) {
   // Inside the family's range.
   DPSFM_CHECK_OPTION_VALUE(
       min_centroid_offset >=
@@ -165,7 +166,7 @@ bool SplitProfileParams::CheckCentroidOffsetRange(double min_centroid_offset,
   return true;
 }
 
-bool SplitProfileParams::Check() const {
+bool SplitProfileParams::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(std::isfinite(split_exponent) &&
                                split_exponent >= 0.05 && split_exponent <= 8,
                            split_exponent);
@@ -193,7 +194,7 @@ SplitProfilePsf::SplitProfilePsf(const SplitProfileParams& params,
                                  int subsamples_per_pixel)
     : params_(params), subsamples_per_pixel_(subsamples_per_pixel) {
   DPSFM_CHECK(params.Check()) << "invalid split profile (" << params.ToString()
-                              << "): " << OptionCheckFailure();
+                              << "): " << OptionCheckFailure(params);
   DPSFM_CHECK_GE(subsamples_per_pixel, 1)
       << "subsamples_per_pixel must be positive";
 }
@@ -488,7 +489,7 @@ DPPsfLayout DPPsfLayout::ColumnBands(int num_bands) {
   return layout;
 }
 
-bool DPPsfLayout::Check() const {
+bool DPPsfLayout::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(rows, 1);
   DPSFM_CHECK_OPTION_GE(cols, 1);
   DPSFM_CHECK_OPTION_VALUE(std::isfinite(x0) && x0 >= 0, x0);
@@ -529,7 +530,7 @@ const DPPsfModel& DPPsfField::At(double x_fraction, double y_fraction) const {
 
 void DPPsfField::CheckValid() const {
   DPSFM_CHECK(layout.Check()) << "invalid DP PSF layout " << layout.ToString()
-                              << ": " << OptionCheckFailure();
+                              << ": " << OptionCheckFailure(layout);
   DPSFM_CHECK_EQ(static_cast<int>(cells.size()), layout.NumCells())
       << "the DP PSF layout " << layout.ToString() << " needs "
       << layout.NumCells() << " profiles, got " << cells.size();

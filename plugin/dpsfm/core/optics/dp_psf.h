@@ -121,7 +121,7 @@ struct SplitProfileParams {
 
   // Ranges in which the kernels stay meaningful: p in [0.05, 8], c in
   // [0, 0.45], e in [0, 0.5], b in [0, 4].
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
   std::string ToString() const;
 
   // Each view's centroid offset from the origin in units of R, in closed
@@ -143,9 +143,10 @@ struct SplitProfileParams {
   static double MinCentroidOffset();
   static double MaxCentroidOffset();
   // A range [min, max] of centroid offsets inside the family's (an options
-  // check, core/util/check.h: false with the failing bound recorded).
+  // check, core/util/check.h: false with the failing bound in *failure).
   static bool CheckCentroidOffsetRange(double min_centroid_offset,
-                                       double max_centroid_offset);
+                                       double max_centroid_offset,
+                                       std::string* failure = nullptr);
 };
 
 class SplitProfilePsf : public DPPsfModel {
@@ -230,7 +231,7 @@ struct DPPsfLayout {
   int NumCells() const { return rows * cols; }
   // x_fraction, y_fraction: position in the frame, 0 (left / top edge) to 1.
   int CellAt(double x_fraction, double y_fraction) const;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
   std::string ToString() const;
 };
 

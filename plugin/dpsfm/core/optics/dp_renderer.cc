@@ -11,7 +11,7 @@
 
 namespace dpsfm {
 
-bool DPRenderOptions::Check() const {
+bool DPRenderOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GT(radius_step_px, 0.0);
   return true;
 }

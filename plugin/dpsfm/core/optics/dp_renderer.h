@@ -34,7 +34,7 @@ struct DPRenderOptions {
   };
   Compositing compositing = Compositing::kAdditive;
 
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 // sharp: CV_32FC1 or CV_32FC3 all-in-focus image in [0, 1].

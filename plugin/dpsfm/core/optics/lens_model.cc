@@ -8,7 +8,7 @@
 
 namespace dpsfm {
 
-bool DPLensData::Check() const {
+bool DPLensData::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(
       std::isfinite(focal_length_mm) && focal_length_mm > 0, focal_length_mm);
   DPSFM_CHECK_OPTION_VALUE(std::isfinite(f_number) && f_number > 0, f_number);

@@ -33,7 +33,7 @@ struct DPLensData {
   // single distance.
   double recorded_focus_bracket = 0;
 
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
   double ApertureDiameterMm() const { return focal_length_mm / f_number; }
   double PixelPitchMm() const { return pixel_pitch_um * 1e-3; }
   std::string ToString() const;

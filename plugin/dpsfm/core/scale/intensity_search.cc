@@ -34,7 +34,7 @@ const char* IntensityLossName(IntensityLoss loss) {
   return "?";
 }
 
-bool IntensitySearchOptions::Check() const {
+bool IntensitySearchOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(num_candidates, 3);
   // T_s < 1 keeps every candidate scale positive.
   DPSFM_CHECK_OPTION_VALUE(relative_range > 0 && relative_range < 1,

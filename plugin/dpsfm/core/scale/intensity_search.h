@@ -77,7 +77,7 @@ struct IntensitySearchOptions {
   uint64_t seed = 42;
   // OpenMP threads; -1 = all.
   int num_threads = -1;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 // Geometry of a view as the search sees it.

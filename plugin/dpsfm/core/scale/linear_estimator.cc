@@ -51,14 +51,14 @@ double WeightedL1Fit1D(const std::vector<double>& gamma,
 
 }  // namespace
 
-bool IrlsOptions::Check() const {
+bool IrlsOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GT(max_iterations, 0);
   DPSFM_CHECK_OPTION_GT(epsilon, 0);
   DPSFM_CHECK_OPTION_GT(tolerance, 0);
   return true;
 }
 
-bool LinearEstimatorOptions::Check() const {
+bool LinearEstimatorOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(min_blur_range_px, 0);
   DPSFM_CHECK_OPTION_GT(num_selected_views, 0);
   DPSFM_CHECK_OPTION_GT(max_residual_to_range, 0);
@@ -73,28 +73,9 @@ bool LinearEstimatorOptions::Check() const {
   return true;
 }
 
-const char* ViewRejectionPhrase(ViewRejection rejection) {
-  switch (rejection) {
-    case ViewRejection::kNone:
-      return "used";
-    case ViewRejection::kTooFewPatches:
-      return "with too few reliable patches";
-    case ViewRejection::kDegenerate:
-      return "without depth variation among their patches";
-    case ViewRejection::kNonPositiveScale:
-      return "with s <= 0";
-    case ViewRejection::kNonPositiveFocus:
-      return "with focus distance <= 0 (or at infinity)";
-    case ViewRejection::kFocusBelowFocalLength:
-      return "with focus distance below the focal length";
-    case ViewRejection::kSmallBlurRange:
-      return "with blur range <= T_p (too little blur)";
-    case ViewRejection::kPoorFit:
-      return "whose blur does not follow their depth (poor single-view fit)";
-    case ViewRejection::kFarFromMedian:
-      return "farther from the median scale than the N_v kept";
-  }
-  return "?";
+bool LinearFailure::SwappedViewsLikely() const {
+  return !view_rejections.empty() &&
+         view_rejections[0].second == ViewRejection::kNonPositiveScale;
 }
 
 IrlsResult SolveL1Irls(const DPLinearSystem& system,
@@ -247,38 +228,22 @@ DPLinearSystem BuildSystem(const std::vector<LinearViewData>& views,
   return system;
 }
 
-std::string FailureFromCounts(const std::vector<LinearViewResult>& results,
-                              const LinearEstimatorOptions& options) {
+LinearFailure FailureFromCounts(const std::vector<LinearViewResult>& results,
+                                const LinearEstimatorOptions& options) {
   std::map<ViewRejection, int> counts;
   for (const auto& r : results) counts[r.rejection]++;
-  std::vector<std::pair<int, ViewRejection>> sorted;
-  for (const auto& kv : counts) sorted.emplace_back(kv.second, kv.first);
+  LinearFailure failure;
+  failure.cause = LinearFailureCause::kNoViewSelected;
+  failure.min_blur_range_px = options.min_blur_range_px;
+  for (const auto& kv : counts) {
+    failure.view_rejections.emplace_back(kv.second, kv.first);
+  }
   std::stable_sort(
-      sorted.begin(),
-      sorted.end(),
+      failure.view_rejections.begin(),
+      failure.view_rejections.end(),
       [](const std::pair<int, ViewRejection>& a,
          const std::pair<int, ViewRejection>& b) { return a.first > b.first; });
-  std::ostringstream s;
-  s << "no view passed selection:";
-  bool first = true;
-  for (const auto& item : sorted) {
-    s << (first ? " " : ", ") << item.first
-      << (first ? (item.first == 1 ? " view " : " views ") : " ");
-    if (item.second == ViewRejection::kSmallBlurRange) {
-      s << "with blur range <= " << options.min_blur_range_px
-        << " px (too little blur: depth range too shallow for the aperture, "
-           "stopped down too far, or subject far beyond the focus)";
-    } else {
-      s << ViewRejectionPhrase(item.second);
-    }
-    first = false;
-  }
-  if (!sorted.empty() && sorted[0].second == ViewRejection::kNonPositiveScale) {
-    s << ". Blur that shrinks with depth in most views usually means the "
-         "left and right DP views are swapped: run again with "
-         "--DPScaleEstimator.swap_dp_views flipped (1 if it was 0)";
-  }
-  return s.str();
+  return failure;
 }
 
 // The per-view checks before a fit: enough samples, depth variation (with
@@ -554,7 +519,7 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
   const int num_views = static_cast<int>(views.size());
   estimate.views.resize(num_views);
   if (num_views == 0) {
-    estimate.failure_reason = "no views";
+    estimate.failure.cause = LinearFailureCause::kNoViews;
     return estimate;
   }
 
@@ -580,20 +545,19 @@ LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
       single_scales, eligible, options.num_selected_views);
   MarkFarFromMedian(single_scales, eligible, selected, options, &estimate);
   if (selected.empty()) {
-    estimate.failure_reason = FailureFromCounts(estimate.views, options);
+    estimate.failure = FailureFromCounts(estimate.views, options);
     return estimate;
   }
   const IrlsResult joint = SolveJoint(views, options, &selected, &estimate);
   if (selected.empty()) {
-    estimate.failure_reason = FailureFromCounts(estimate.views, options);
+    estimate.failure = FailureFromCounts(estimate.views, options);
     return estimate;
   }
   const int n = static_cast<int>(selected.size());
   if (!joint.success || !(joint.x[n] > 0)) {
-    estimate.failure_reason =
-        !joint.success
-            ? "the joint linear system of the selected views is rank deficient"
-            : "the joint linear fit gives s <= 0";
+    estimate.failure.cause = !joint.success
+                                 ? LinearFailureCause::kRankDeficient
+                                 : LinearFailureCause::kNonPositiveScale;
     return estimate;
   }
   estimate.success = true;

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,7 +40,7 @@ struct IrlsOptions {
   double epsilon = 1e-6;
   // Stop when the column-scaled solution moves less than this (relative).
   double tolerance = 1e-9;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct IrlsResult {
@@ -110,7 +111,7 @@ struct LinearEstimatorOptions {
   // Central probability mass of the reported interval.
   double confidence_level = 0.95;
   uint64_t seed = 42;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 enum class ViewRejection {
@@ -124,8 +125,6 @@ enum class ViewRejection {
   kPoorFit,
   kFarFromMedian,
 };
-// Short phrase for counts in failure messages ("with s <= 0").
-const char* ViewRejectionPhrase(ViewRejection rejection);
 
 struct LinearViewResult {
   bool used = false;
@@ -146,9 +145,32 @@ struct LinearViewResult {
   double median_abs_residual_px = 0;  // under the joint solution
 };
 
+// Why the linear stage gave no scale.
+enum class LinearFailureCause {
+  kNone,
+  kNoViews,
+  kNoViewSelected,    // every view was rejected (view_rejections)
+  kRankDeficient,     // the joint system of the selected views
+  kNonPositiveScale,  // the joint fit gives s <= 0
+};
+
+struct LinearFailure {
+  LinearFailureCause cause = LinearFailureCause::kNone;
+  // kNoViewSelected: (views, rejection), the most frequent first (ties in
+  // the order of ViewRejection).
+  std::vector<std::pair<int, ViewRejection>> view_rejections;
+  // T_p (LinearEstimatorOptions::min_blur_range_px), the threshold of
+  // ViewRejection::kSmallBlurRange.
+  double min_blur_range_px = 0;
+
+  // Most views were rejected for s <= 0: blur that shrinks with depth,
+  // which usually means the left and right DP views are swapped.
+  bool SwappedViewsLikely() const;
+};
+
 struct LinearEstimate {
   bool success = false;
-  std::string failure_reason;
+  LinearFailure failure;
   double scale = 0;  // s* (metres per model unit)
   // The bootstrap's interval; NaN when it could not be measured
   // (num_bootstrap 0, or fewer than 10 resamples solved), and then

@@ -285,8 +285,10 @@ void DPScaleEstimator::CheckTranslatingDisk(
         f, f.translating_disk_centroid_offset, &low, &high);
   }
   result->psf_rejected = true;
-  result->psf_status = RejectedTranslatingDiskReason(
-      calibration.banded ? calibration.summary : fit.reason, low, high);
+  result->refusal.disk.fit_summary =
+      calibration.banded ? calibration.summary : fit.reason;
+  result->refusal.disk.factor_low = low;
+  result->refusal.disk.factor_high = high;
 }
 
 void DPScaleEstimator::ProfileScaleFactors(const DPPsfField& field,

@@ -99,18 +99,17 @@ ScaleCue DPScaleEstimator::RecordedFocusCue(const LinearEstimate& linear,
   return cue;
 }
 
-std::string DPScaleEstimator::RecordedFocusMissingHint(
+bool DPScaleEstimator::RecordedFocusMissing(
     const LinearEstimate& linear) const {
   for (int i : linear.selected_views) {
-    if (std::isfinite(views_[i]->lens.recorded_focus_mm)) return "";
+    if (std::isfinite(views_[i]->lens.recorded_focus_mm)) return false;
   }
-  return "; a recorded focus distance (lens.csv's focus_distance_m, or the "
-         "camera's EXIF) would give the scale without the DP profile";
+  return true;
 }
 
 bool DPScaleEstimator::AdoptCombinedCues(const LinearEstimate& linear,
                                          DPScaleResult* result,
-                                         std::ostringstream* refusal) const {
+                                         CueRefusal* refusal) const {
   const CombinedScale combined =
       CombineScaleCues(result->dp_cue, result->focus_cue);
   const double width = (combined.ci_high - combined.ci_low) / combined.scale;
@@ -119,22 +118,16 @@ bool DPScaleEstimator::AdoptCombinedCues(const LinearEstimate& linear,
   s << std::setprecision(4);
   if (!(width <= options_.max_scale_ci_relative_width) ||
       !(combined.ci_low > 0)) {
-    if (combined.agreement == CueAgreement::kDisagree) {
-      *refusal << (refusal->str().empty() ? "" : "; ")
-               << "the two cues to the scale disagree: "
-               << DisagreementAdvice(result->dp_cue,
-                                     result->focus_cue,
-                                     width,
-                                     options_.max_scale_ci_relative_width,
-                                     options_.psf_self_calibration ==
-                                         DPScaleOptions::SelfCalibration::kOff);
-    } else {
-      *refusal << "; with the recorded focus of " << result->focus_cue.num_views
-               << " view(s): " << combined.how << ", " << std::fixed
-               << std::setprecision(1) << 100 * width
-               << " % wide, also over the limit of "
-               << 100 * options_.max_scale_ci_relative_width << " %";
-    }
+    refusal->cause = combined.agreement == CueAgreement::kDisagree
+                         ? CueRefusalCause::kDisagree
+                         : CueRefusalCause::kTooWide;
+    refusal->dp = result->dp_cue;
+    refusal->focus = result->focus_cue;
+    refusal->width = width;
+    refusal->limit = options_.max_scale_ci_relative_width;
+    refusal->calibrated =
+        options_.psf_self_calibration == DPScaleOptions::SelfCalibration::kOff;
+    refusal->how = combined.how;
     return false;
   }
   result->scale_from_cues = true;
@@ -207,9 +200,8 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
     result->focus_agrees = true;
     s << "; the DP data alone leave the scale open";
   }
-  if (!result->combination.empty()) {
-    s << ". The answer: " << result->combination;
-  }
+  // How the answer was formed follows in the COLMAP layer's words
+  // (colmap/report/refusal_text: FocusCheckText).
   result->focus_check = s.str();
 }
 

@@ -34,7 +34,7 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-bool DPScaleOptions::Check() const {
+bool DPScaleOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(patch_size, 0);
   DPSFM_CHECK_OPTION_GE(stride, 0);
   DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
@@ -206,7 +206,8 @@ bool DPScaleEstimator::LinearStage(
   try {
     *linear = EstimateScaleLinear(linear_views, linear_options);
   } catch (const std::exception& e) {
-    result->failure_reason = std::string("linear stage failed: ") + e.what();
+    result->refusal.code = ScaleRefusal::kLinearStageThrew;
+    result->refusal.error = e.what();
     return false;
   }
   result->seconds_linear = SecondsSince(start);
@@ -307,16 +308,27 @@ void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
   }
 }
 
-std::string DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
-                                            const PatchAccount& account,
-                                            double statistical_width,
-                                            double statistical_ci_low,
-                                            double statistical_ci_high,
-                                            const DPScaleResult& result) const {
-  const double width =
-      (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
-  const double limit = options_.max_scale_ci_relative_width;
-  std::ostringstream s;
+OpenScale DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
+                                          double statistical_width,
+                                          double statistical_ci_low,
+                                          double statistical_ci_high,
+                                          const DPScaleResult& result) const {
+  OpenScale open;
+  open.num_rows = linear.num_rows;
+  open.min_total_patches = options_.min_total_patches;
+  open.interval_status = linear.interval_status;
+  open.scale = linear.scale;
+  open.ci_low = linear.scale_ci_low;
+  open.ci_high = linear.scale_ci_high;
+  open.width = (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
+  open.limit = options_.max_scale_ci_relative_width;
+  open.profile_relative_uncertainty = options_.profile_relative_uncertainty;
+  open.focus_recorded = result.focus_cue.valid;
+  open.fit_reason = result.psf_fit.reason;
+  open.self_calibrated = result.psf_self_calibrated;
+  open.shape_uncertainty = options_.self_calibration_shape_uncertainty;
+  const double width = open.width;
+  const double limit = open.limit;
   const bool no_interval = !std::isfinite(statistical_width);
   // The profile is what leaves the scale open: on its own, or on top of an
   // interval that would have been narrow enough.
@@ -326,42 +338,19 @@ std::string DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
       !no_interval && !(width <= limit) &&
       (!(profile_width <= limit) ||
        (statistical_ci_high - statistical_ci_low) / linear.scale <= limit);
-  if (linear.num_rows < options_.min_total_patches || no_interval ||
-      !(width <= limit)) {
-    s << account.leading_cause;
-  }
   if (linear.num_rows < options_.min_total_patches) {
-    s << "too few usable patches for a scale (" << linear.num_rows
-      << " in the joint solve, need " << options_.min_total_patches << ")";
+    open.cause = OpenScaleCause::kTooFewPatches;
   } else if (no_interval) {
-    s << "the scale's interval could not be measured ("
-      << linear.interval_status << "): a scale without one is not reported";
+    open.cause = OpenScaleCause::kNoInterval;
   } else if (profile_open && options_.psf_self_calibration ==
                                  DPScaleOptions::SelfCalibration::kOff) {
-    s << CalibratedProfileOpenReason(options_.profile_relative_uncertainty,
-                                     linear.scale,
-                                     linear.scale_ci_low,
-                                     linear.scale_ci_high,
-                                     limit,
-                                     result.focus_cue.valid);
+    open.cause = OpenScaleCause::kCalibratedProfile;
   } else if (profile_open) {
-    s << UnknownProfileReason(
-        result.psf_fit.reason +
-            (result.psf_self_calibrated
-                 ? "; a fitted profile's strength is uncertain by +-" +
-                       std::to_string(std::lround(
-                           100 * options_.self_calibration_shape_uncertainty)) +
-                       " % beyond the fit, for kernel shapes outside the "
-                       "family that fit the patches as well"
-                 : ""),
-        linear.scale,
-        linear.scale_ci_low,
-        linear.scale_ci_high);
+    open.cause = OpenScaleCause::kUnknownProfile;
   } else if (!(width <= limit)) {
-    s << UndeterminedScaleReason(
-        linear.scale, linear.scale_ci_low, linear.scale_ci_high, width, limit);
+    open.cause = OpenScaleCause::kWideInterval;
   }
-  return s.str();
+  return open;
 }
 
 bool DPScaleEstimator::JoinRecordedFocus(const LinearEstimate& linear,
@@ -373,19 +362,14 @@ bool DPScaleEstimator::JoinRecordedFocus(const LinearEstimate& linear,
   result->dp_cue.ci_low = result->scale_ci_low;
   result->dp_cue.ci_high = result->scale_ci_high;
   if (use_focus) {
-    std::ostringstream s;
-    if (!AdoptCombinedCues(linear, result, &s)) {
-      result->failure_reason = s.str();
+    if (!AdoptCombinedCues(linear, result, &result->refusal.cues)) {
+      result->refusal.code = ScaleRefusal::kCuesNotCombined;
       return false;
     }
     return true;
   }
   result->scale_source = "DP data";
-  result->combination =
-      result->focus_cue.valid
-          ? "the DP data alone (the recorded focus is evidence only: "
-            "pin_to_recorded_focus 0)"
-          : "the DP data alone (no recorded focus)";
+  result->dp_data_alone = true;
   return true;
 }
 
@@ -415,7 +399,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   const int num_views = static_cast<int>(views_.size());
   for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
   if (num_views == 0) {
-    result.failure_reason = "no DP views were given";
+    result.refusal.code = ScaleRefusal::kNoViews;
     return result;
   }
 
@@ -432,7 +416,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   }
   result.psf_model = field.Name();
   if (result.psf_rejected) {
-    result.failure_reason = result.psf_status;
+    result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
     return result;
   }
 
@@ -440,12 +424,12 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   LinearEstimate linear;
   if (!LinearStage(samples, &linear, &result)) return result;
   AddViewResults(linear, samples, &result);
-  // Where the patches went, summed over views, for refusal messages
-  // (refusal.h).
+  // Where the patches went, summed over views, for refusals (refusal.h).
   const PatchAccount account = AccountForPatches();
   if (!linear.success) {
-    result.failure_reason = account.leading_cause + linear.failure_reason +
-                            account.Summary() + account.Fixes();
+    result.refusal.code = ScaleRefusal::kLinearStageFailed;
+    result.refusal.linear_failure = linear.failure;
+    result.refusal.patches = account;
     return result;
   }
   // Intervals: the bootstrap's, widened by the systematic terms: the
@@ -481,22 +465,22 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   result.scale_initial_ci_low = linear.scale_ci_low;
   result.scale_initial_ci_high = linear.scale_ci_high;
   result.num_views_used = static_cast<int>(linear.selected_views.size());
-  std::string refusal = LinearRefusal(linear,
-                                      account,
-                                      statistical_width,
-                                      statistical_ci_low,
-                                      statistical_ci_high,
-                                      result);
-  if (!refusal.empty()) {
+  const OpenScale open = LinearRefusal(linear,
+                                       statistical_width,
+                                       statistical_ci_low,
+                                       statistical_ci_high,
+                                       result);
+  if (open.cause != OpenScaleCause::kNone) {
     // The DP data alone give no answer; with the recorded focus they may.
-    std::ostringstream s;
-    s << refusal;
-    if (!(use_focus && AdoptCombinedCues(linear, &result, &s))) {
-      if (options_.pin_to_recorded_focus && !result.focus_cue.valid) {
-        s << RecordedFocusMissingHint(linear);
-      }
-      s << account.TypicalCauses() << account.Fixes();
-      result.failure_reason = s.str();
+    CueRefusal cues;
+    if (!(use_focus && AdoptCombinedCues(linear, &result, &cues))) {
+      result.refusal.code = ScaleRefusal::kScaleOpen;
+      result.refusal.open = open;
+      result.refusal.cues = cues;
+      result.refusal.recorded_focus_missing = options_.pin_to_recorded_focus &&
+                                              !result.focus_cue.valid &&
+                                              RecordedFocusMissing(linear);
+      result.refusal.patches = account;
       return result;
     }
   }

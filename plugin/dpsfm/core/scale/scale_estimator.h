@@ -195,8 +195,8 @@ struct DPScaleOptions {
   //   again with it (each band's where the profile changes across the
   //   frame) and both stages use those patches and profiles; otherwise the
   //   given PSF is kept and the result says why.
-  // - kCheck (an explicitly chosen --DPScaleEstimator.psf_model
-  //   translating_disk): the fit only checks the given disk and never
+  // - kCheck (the translating disk, chosen explicitly by the user): the fit
+  // only checks the given disk and never
   //   replaces it. When the data determine another profile the run refuses
   //   (the paper's disk is not this sensor's: the R6 II's real scenes read
   //   2.2-2.8x off under it with narrow intervals, docs/psf-profiles.md);
@@ -237,7 +237,7 @@ struct DPScaleOptions {
   int num_threads = -1;
   uint64_t seed = 42;
 
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 // What AddView did with one view.
@@ -304,7 +304,8 @@ struct DPViewResult {
 
 struct DPScaleResult {
   bool success = false;
-  std::string failure_reason;
+  // Why not (refusal.h; colmap/report/refusal_text words it).
+  DPScaleRefusal refusal;
   double scale = 0;          // final s (metres per model unit)
   double scale_initial = 0;  // linear-stage s*
   double scale_ci_low = 0, scale_ci_high = 0;  // of `scale`
@@ -334,7 +335,8 @@ struct DPScaleResult {
   std::string psf_status;
   bool psf_self_calibrated = false;  // a fitted profile replaced the given one
   // SelfCalibration::kCheck: the data determined another profile than the
-  // given translating disk (the run refuses; psf_status says why).
+  // given translating disk (the run refuses: refusal.disk; psf_status is
+  // then "", the refusal's wording stands for it).
   bool psf_rejected = false;
   // The whole frame's fit (and, for a profile changing across the frame,
   // the bands' fits, left to right, when they were used).
@@ -365,7 +367,11 @@ struct DPScaleResult {
   CueAgreement cue_agreement = CueAgreement::kOneCue;
   bool scale_from_cues = false;  // the answer came through CombineScaleCues
   std::string scale_source;      // "DP data", "recorded focus", or both
-  std::string combination;       // how, for people
+  // How the cues formed the answer (CombinedScale::how); "" when the DP
+  // data answered alone (dp_data_alone: the COLMAP layer words it, naming
+  // the option that keeps the recorded focus out).
+  std::string combination;
+  bool dp_data_alone = false;
   bool focus_agrees = true;
   std::string focus_check;
   // The relative systematic term of the lens geometry (see
@@ -402,8 +408,8 @@ class DPScaleEstimator {
   struct ViewData;
   struct IntervalTerms;
   // The steps of Estimate, in order (scale_estimator.cc).
-  // The linear stage on the selected samples; false (failure_reason set)
-  // if it threw.
+  // The linear stage on the selected samples; false (the refusal set) if
+  // it threw.
   bool LinearStage(const std::vector<std::vector<PatchSample>>& samples,
                    LinearEstimate* linear,
                    DPScaleResult* result) const;
@@ -422,17 +428,16 @@ class DPScaleEstimator {
   // result->profile_scale_factor_low/high: what the profile leaves open.
   void SetProfileScaleFactors(const DPPsfField& field,
                               DPScaleResult* result) const;
-  // Why the DP data alone give no scale ("" when they give one): too few
-  // patches, no interval, or an interval too wide (and whether the profile
-  // or the data leave it open).
-  std::string LinearRefusal(const LinearEstimate& linear,
-                            const PatchAccount& account,
-                            double statistical_width,
-                            double statistical_ci_low,
-                            double statistical_ci_high,
-                            const DPScaleResult& result) const;
+  // Why the DP data alone give no scale (cause kNone when they give one):
+  // too few patches, no interval, or an interval too wide (and whether the
+  // profile or the data leave it open).
+  OpenScale LinearRefusal(const LinearEstimate& linear,
+                          double statistical_width,
+                          double statistical_ci_low,
+                          double statistical_ci_high,
+                          const DPScaleResult& result) const;
   // After the DP data answered on their own: their cue, and the recorded
-  // focus's joining it when use_focus; false (failure_reason set) when the
+  // focus's joining it when use_focus; false (the refusal set) when the
   // two disagree beyond what may be printed.
   bool JoinRecordedFocus(const LinearEstimate& linear,
                          bool use_focus,
@@ -490,14 +495,15 @@ class DPScaleEstimator {
   // recorded_focus_tolerance); invalid without a recorded focus.
   ScaleCue RecordedFocusCue(const LinearEstimate& linear,
                             double lens_geometry) const;
-  // "; a recorded focus ... would give the scale" when no used view has one.
-  std::string RecordedFocusMissingHint(const LinearEstimate& linear) const;
+  // No selected view recorded a focus distance (which would give the scale
+  // without the DP profile).
+  bool RecordedFocusMissing(const LinearEstimate& linear) const;
   // Forms the answer from result->dp_cue and result->focus_cue
-  // (CombineScaleCues) and returns true, or appends why not to `refusal`
-  // (too wide, or the cues disagree: which to trust).
+  // (CombineScaleCues) and returns true, or says why not in *refusal (too
+  // wide, or the cues disagree).
   bool AdoptCombinedCues(const LinearEstimate& linear,
                          DPScaleResult* result,
-                         std::ostringstream* refusal) const;
+                         CueRefusal* refusal) const;
   // See DPScaleResult::profile_scale_factor_low.
   void ProfileScaleFactors(const DPPsfField& field,
                            const DPScaleResult& result,

@@ -52,7 +52,7 @@ std::vector<int> SpreadViewOrder(const std::vector<ViewPlacement>& views) {
   return order;
 }
 
-bool ViewBudgetOptions::Check() const {
+bool ViewBudgetOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(min_views, 1);
   DPSFM_CHECK_OPTION_GE(check_every, 1);
   DPSFM_CHECK_OPTION_VALUE(settled_change > 0 && settled_change < 1,

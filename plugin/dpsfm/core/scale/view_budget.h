@@ -45,7 +45,7 @@ struct ViewBudgetOptions {
   double settled_shrink = 0.9;
   int max_views = 60;
   bool all_views = false;
-  bool Check() const;
+  bool Check(std::string* failure = nullptr) const;
 };
 
 struct Checkpoint {

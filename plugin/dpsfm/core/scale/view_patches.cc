@@ -25,7 +25,7 @@ void CheckViewInput(const DPView& view) {
       << "view '" << name << "': DP images must be CV_32FC1 or CV_32FC3";
   DPSFM_CHECK(view.lens.Check())
       << "view '" << name << "': invalid lens data (" << view.lens.ToString()
-      << "): " << OptionCheckFailure();
+      << "): " << OptionCheckFailure(view.lens);
   DPSFM_CHECK(!view.depth.empty() || !view.depth_points.empty())
       << "view '" << name << "': neither a depth map nor depth points";
   DPSFM_CHECK(view.depth.empty() || view.depth.type() == CV_32FC1)

@@ -69,13 +69,15 @@ class CheckMessage {
 #define DPSFM_CHECK_EQ(a, b) DPSFM_CHECK((a) == (b))
 
 // Option structs (COLMAP's CHECK_OPTION_* style): every struct of options
-// has `bool Check() const` made of these; the first failed check returns
-// false from Check() and records the field, the bound and the value given,
-// e.g. "min_views >= 1 (got 0)". OptionCheckFailure() returns that text for
-// the thread; DPSFM_CHECK_OPTIONS acts on a Check() by throwing
+// has `bool Check(std::string* failure = nullptr) const` made of these; the
+// first failed check returns false and, when the caller passed `failure`,
+// writes there the field, the bound and the value given, e.g. "min_views >= 1
+// (got 0)". Nothing is kept anywhere else: the failure is returned to the
+// caller that asked. The macros name the parameter `failure`.
+// DPSFM_CHECK_OPTIONS acts on a Check() by throwing
 // std::invalid_argument("invalid <Name>: <failure>").
 //
-//   bool ViewBudgetOptions::Check() const {
+//   bool ViewBudgetOptions::Check(std::string* failure) const {
 //     DPSFM_CHECK_OPTION_GE(min_views, 1);
 //     DPSFM_CHECK_OPTION_VALUE(settled_change > 0 && settled_change < 1,
 //                              settled_change);
@@ -85,21 +87,34 @@ class CheckMessage {
 //   DPSFM_CHECK_OPTIONS(options, "ViewBudgetOptions");
 namespace dpsfm {
 
-// What the last failed option check on this thread said ("" if none).
-const std::string& OptionCheckFailure();
+// What `options.Check()` finds wrong ("" if nothing).
+template <typename Options>
+std::string OptionCheckFailure(const Options& options) {
+  std::string failure;
+  options.Check(&failure);
+  return failure;
+}
 
 namespace internal {
 
-void SetOptionCheckFailure(const std::string& failure);
-void PrefixOptionCheckFailure(const char* field);
-[[noreturn]] void ThrowInvalidOptions(const char* name);
+// False, with `text` written to *failure when the caller asked for it.
+inline bool FailOptionCheck(std::string* failure, const std::string& text) {
+  if (failure != nullptr) *failure = text;
+  return false;
+}
+
+[[noreturn]] void ThrowInvalidOptions(const char* name,
+                                      const std::string& failure);
 
 template <typename T>
-bool CheckOptionValue(bool ok, const char* condition, const T& value) {
-  if (!ok) {
-    std::ostringstream failure;
-    failure << condition << " (got " << value << ")";
-    SetOptionCheckFailure(failure.str());
+bool CheckOptionValue(bool ok,
+                      const char* condition,
+                      const T& value,
+                      std::string* failure) {
+  if (!ok && failure != nullptr) {
+    std::ostringstream text;
+    text << condition << " (got " << value << ")";
+    *failure = text.str();
   }
   return ok;
 }
@@ -107,32 +122,39 @@ bool CheckOptionValue(bool ok, const char* condition, const T& value) {
 }  // namespace internal
 }  // namespace dpsfm
 
-#define DPSFM_CHECK_OPTION_VALUE(condition, value) \
-  if (!::dpsfm::internal::CheckOptionValue(        \
-          (condition), #condition, (value))) {     \
-    return false;                                  \
+#define DPSFM_CHECK_OPTION_VALUE(condition, value)      \
+  if (!::dpsfm::internal::CheckOptionValue(             \
+          (condition), #condition, (value), failure)) { \
+    return false;                                       \
   }
 // With the message a user should read instead of the condition.
-#define DPSFM_CHECK_OPTION_MESSAGE(condition, message) \
-  if (!(condition)) {                                  \
-    ::dpsfm::internal::SetOptionCheckFailure(message); \
-    return false;                                      \
+#define DPSFM_CHECK_OPTION_MESSAGE(condition, message)             \
+  if (!(condition)) {                                              \
+    return ::dpsfm::internal::FailOptionCheck(failure, (message)); \
   }
-#define DPSFM_CHECK_OPTION_OP(a, op, b)        \
-  if (!::dpsfm::internal::CheckOptionValue(    \
-          (a)op(b), #a " " #op " " #b, (a))) { \
-    return false;                              \
+#define DPSFM_CHECK_OPTION_OP(a, op, b)                 \
+  if (!::dpsfm::internal::CheckOptionValue(             \
+          (a)op(b), #a " " #op " " #b, (a), failure)) { \
+    return false;                                       \
   }
 #define DPSFM_CHECK_OPTION_GT(a, b) DPSFM_CHECK_OPTION_OP(a, >, b)
 #define DPSFM_CHECK_OPTION_GE(a, b) DPSFM_CHECK_OPTION_OP(a, >=, b)
 #define DPSFM_CHECK_OPTION_LT(a, b) DPSFM_CHECK_OPTION_OP(a, <, b)
 #define DPSFM_CHECK_OPTION_LE(a, b) DPSFM_CHECK_OPTION_OP(a, <=, b)
 // A nested options struct: its failure, prefixed with the field's name.
-#define DPSFM_CHECK_NESTED_OPTIONS(field)                \
-  if (!(field).Check()) {                                \
-    ::dpsfm::internal::PrefixOptionCheckFailure(#field); \
-    return false;                                        \
+#define DPSFM_CHECK_NESTED_OPTIONS(field)                       \
+  {                                                             \
+    std::string nested_failure;                                 \
+    if (!(field).Check(&nested_failure)) {                      \
+      return ::dpsfm::internal::FailOptionCheck(                \
+          failure, std::string(#field) + "." + nested_failure); \
+    }                                                           \
   }
 // Acting on a Check(): throws std::invalid_argument naming the struct.
-#define DPSFM_CHECK_OPTIONS(options, name) \
-  if (!(options).Check()) ::dpsfm::internal::ThrowInvalidOptions(name)
+#define DPSFM_CHECK_OPTIONS(options, name)                             \
+  {                                                                    \
+    std::string options_failure;                                       \
+    if (!(options).Check(&options_failure)) {                          \
+      ::dpsfm::internal::ThrowInvalidOptions((name), options_failure); \
+    }                                                                  \
+  }
