@@ -320,7 +320,7 @@ int main(int argc, char** argv) {
         r.scale_ci_high / scale - 1,
         r.num_views_used);
   } else {
-    std::printf("estimate failed: %s\n", r.failure_reason.c_str());
+    std::printf("estimate failed: %s\n", ScaleRefusalName(r.refusal.code));
   }
   BenchPatchBlurEstimator();
   return 0;

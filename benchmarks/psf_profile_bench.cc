@@ -267,7 +267,10 @@ Run Estimate(const std::vector<DPView>& views,
   run.ratio = result.success ? result.scale / scale : 0;
   run.holds = result.success && result.scale_ci_low <= scale &&
               scale <= result.scale_ci_high;
-  run.note = result.success ? result.psf_status : result.failure_reason;
+  // The refusal's code only: its sentence is the COLMAP layer's
+  // (colmap/report/refusal_text), which benchmarks do not link.
+  run.note = result.success ? result.psf_status
+                            : ScaleRefusalName(result.refusal.code);
   return run;
 }
 
