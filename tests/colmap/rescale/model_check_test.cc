@@ -865,10 +865,9 @@ TEST_F(ModelCheckTest, FolderWithoutAModel) {
             "cannot read the model in " + dir + ": " + dir +
                 " holds neither cameras.bin, images.bin and points3D.bin nor "
                 "cameras.txt, images.txt and points3D.txt");
-  EXPECT_EQ(Refusal(dir + "/none"),
-            "cannot read the model in " + dir +
-                "/none: there is no such "
-                "folder");
+  const std::string none = dir + "/none";
+  EXPECT_EQ(Refusal(none),
+            "cannot read the model in " + none + ": there is no such folder");
 }
 
 // ---- models written by COLMAP -----------------------------------------------
@@ -962,9 +961,13 @@ TEST_F(ModelCheckTest, ChangedPointIdsOfAColmapModelAreRefusedInWords) {
     }
     if (Load<uint64_t>(original, offset) == kNoPoint) continue;
     ++with_point;
+    WriteTextFile(path, with_id(0));
+    ExpectRefused(
+        dir,
+        "points3D.bin",
+        {"point 1 of 1 (id 1) lists 2D point ", "which refers to 3D point 0"});
     if (!kReaderChecksTrackReferences) continue;
     // What the user saw before: COLMAP's own check.
-    WriteTextFile(path, with_id(0));
     try {
       colmap::Reconstruction reconstruction;
       reconstruction.Read(dir);
