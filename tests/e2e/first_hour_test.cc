@@ -289,6 +289,112 @@ TEST_F(FirstHour, CalibratorShowsTheLayoutsItReads) {
   ExpectContains(error, "left and right columns");
 }
 
+// The walkthrough's targets.csv ("A first hour", step 1) with the f/4
+// rows' f-number and the distances replaced.
+std::string Targets(const std::string& f_number,
+                    const std::string& near,
+                    const std::string& far) {
+  return "name,target_distance_m,focus_distance_m,focal_length_mm,f_number,"
+         "pixel_pitch_um,left,right\n"
+         "near," + near + ",,49.57," + f_number +
+         ",46.875,0600/f4/l.png,0600/f4/r.png\n"
+         "far," + far + ",,49.57," + f_number +
+         ",46.875,1500/f4/l.png,1500/f4/r.png\n"
+         "near_f20," + near + ",,49.57,20,46.875,0600/f20/l.png,"
+         "0600/f20/r.png\n"
+         "far_f20," + far + ",,49.57,20,46.875,1500/f20/l.png,1500/f20/r.png\n";
+}
+
+CommandResult Calibrate(const std::string& dir,
+                        const std::string& targets,
+                        const std::string& output) {
+  WriteTextFile(dir + "/targets.csv", targets);
+  return RunCommand({kColmap,
+                     "dp_psf_calibrator",
+                     "--dp_image_path",
+                     RealCapture("flat/001"),
+                     "--targets_path",
+                     dir + "/targets.csv",
+                     "--output_path",
+                     output});
+}
+
+// targets.csv gives f/2.8 for the f/4 captures: once exit 0 with a profile
+// 36 % too weak (0.04479 against 0.07015) and the advice "capture the
+// target at more distances". The kernels measured against the f/20
+// references are the f/4 blur: the f-number is named and nothing written.
+TEST_F(FirstHour, CalibratorNamesTheFNumberTheCapturesDisagreeWith) {
+  const std::string profile = dir_ / "f28.dpsf";
+  const CommandResult run =
+      Calibrate(dir_.path(), Targets("2.8", "0.60", "1.50"), profile);
+  const std::string error = ErrorLine(run);
+  ExpectContains(error, "thin lens at f/2.8");
+  ExpectContains(error, "correct f_number");
+  EXPECT_EQ(run.err.find("more distances"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(profile));
+}
+
+// Distances in millimetres in the metres column: once "target 600 m", each
+// capture "blur radius nan px" and a generic error.
+TEST_F(FirstHour, CalibratorNamesATargetDistanceInMillimetres) {
+  const std::string error = ErrorLine(
+      Calibrate(dir_.path(), Targets("4", "600", "1500"), dir_ / "p.dpsf"));
+  ExpectContains(error, "targets.csv:2: target_distance_m 600");
+  ExpectContains(error, "millimetres (0.6 m)");
+  EXPECT_EQ(error.find("nan"), std::string::npos) << error;
+}
+
+// The profile records what it was measured under (written with units the
+// calibrator converts: 600mm, 150 cm); the estimator refuses a view at
+// another f-number before estimating, naming the image, its f-number and
+// source and the profile's, and the option that says the profile applies;
+// a focus written "1000mm" is read as 1 m.
+TEST_F(FirstHour, ProfileCarriesItsConditions) {
+  const std::string profile = dir_ / "r6m2_rf50_f4.dpsf";
+  const CommandResult calibration =
+      Calibrate(dir_.path(), Targets("4", "600mm", "150 cm"), profile);
+  ASSERT_EQ(calibration.exit_code, 0) << calibration.err;
+  ExpectContains(calibration.err, "target_distance_m read '600mm' (line 2) "
+                                  "as 0.6 m");
+  const std::string text = ReadTextFile(profile);
+  ExpectContains(text, "\nf_number 4");
+  ExpectContains(text, "\nfocal_length_mm 49.57\n");
+  ExpectContains(text, "\npixel_pitch_um 46.875");
+  ExpectContains(text, "\nframe_size ");
+  ExpectContains(text, "\nblur_range_px ");
+
+  const std::vector<std::string> calibrated = {
+      "--DPScaleEstimator.psf_model", "calibrated",
+      "--DPScaleEstimator.psf_path", profile};
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,2.8,46.875,1\n");
+  const CommandResult refused = Dense(calibrated);
+  const std::string error = ErrorLine(refused);
+  ExpectContains(error, "image box002.png: f/2.8 (lens.csv line 2)");
+  ExpectContains(error, "r6m2_rf50_f4.dpsf was measured at f/4");
+  ExpectContains(error, "--DPScaleEstimator.profile_applies 1");
+
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,1000mm\n");
+  const CommandResult run = Dense(calibrated);
+  ExpectContains(run.err, "focus_distance_m read '1000mm' (line 2) as 1 m");
+  ExpectContains(run.err, "focus 1 m (lens.csv line 2)");
+  if (run.exit_code != 0) ErrorLine(run);  // a refusal must be clean
+}
+
+// A bare focus of 100 (centimetres) in the metres column: a hint at the
+// unit, not "an interval covering both spans 1251.0 % of the scale".
+TEST_F(FirstHour, BareFocusOfAHundredAsksForItsUnit) {
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,100\n");
+  const std::string error = ErrorLine(Dense());
+  ExpectContains(error, "100 m (lens.csv line 2)");
+  ExpectContains(error, "centimetres (1 m)");
+}
+
 // Swapped DP views: the refusal names the option that fixes it.
 TEST(FirstHourGenerated, SwappedViewsNameTheOption) {
   SceneCopy scene("dslr");
@@ -317,6 +423,8 @@ TEST(FirstHourHelp, ReadsLikeAManual) {
   ExpectContains(help.out,
                  "--DPScaleEstimator.lens_check_tolerance X  (default 0.1)");
   ExpectContains(help.out, "--DPScaleEstimator.swap_dp_views 0|1  (default 0)");
+  ExpectContains(help.out,
+                 "--DPScaleEstimator.profile_applies 0|1  (default 0)");
   // The common options come before the method's parameters.
   EXPECT_LT(help.out.find("--lens_path"),
             help.out.find("--DPScaleEstimator.top_patch_fraction"));

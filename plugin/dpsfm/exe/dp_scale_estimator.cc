@@ -141,6 +141,12 @@ void AddDPProfileOptions(CommandOptions* manager,
       "folder of calibrated profiles (*.dpsf) picked by camera and lens "
       "with psf_model auto (empty: $DPSFM_PROFILE_LIBRARY or "
       "~/.local/share/dp-sfm/profiles)");
+  manager->AddDefault(
+      "DPScaleEstimator.profile_applies",
+      &options->profile_applies,
+      "use a calibrated profile for views whose f-number differs from the "
+      "one it was measured at (its strength holds for its own aperture; "
+      "without this such views are refused)");
 }
 
 void AddRefusalOptions(CommandOptions* manager,

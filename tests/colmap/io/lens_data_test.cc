@@ -113,12 +113,41 @@ TEST(LensCsv, CellsMayCarryTheirColumnsUnit) {
   EXPECT_DOUBLE_EQ(row.f_number, 2.8);
   EXPECT_DOUBLE_EQ(row.pixel_pitch_um, 5.9);
   EXPECT_DOUBLE_EQ(row.focus_distance_m, 1.2);
-  // Another unit is named, not converted.
-  WriteTextFile(dir / "mm.csv",
+  // A word that is no unit of length is named with the column's unit.
+  WriteTextFile(dir / "px.csv",
                 "name,pixel_pitch_um\n"
-                "a.JPG,0.0059mm\n");
-  ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "mm.csv"); }),
+                "a.JPG,5.9 px\n");
+  ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "px.csv"); }),
                  "pixel_pitch_um must be a positive number in um");
+}
+
+// Another unit of length is converted to the column's (once "1000mm" in a
+// metres column was refused): 1000 mm = 1 m, 100 cm = 1 m, 0.0059 mm =
+// 5.9 um, 5 cm = 50 mm.
+TEST(LensCsv, OtherUnitsOfLengthAreConverted) {
+  TempDir dir;
+  WriteTextFile(dir / "units.csv",
+                "name,focal_length_mm,pixel_pitch_um,focus_distance_m\n"
+                "a.JPG,5 cm,0.0059mm,1000mm\n"
+                "b.JPG,50,5.9,100 cm\n"
+                "c.JPG,50,5.9,1.5\n");
+  const auto rows = ReadLensCsv(dir / "units.csv");
+  EXPECT_NEAR(rows.at("a.JPG").focal_length_mm, 50, 1e-9);
+  EXPECT_NEAR(rows.at("a.JPG").pixel_pitch_um, 5.9, 1e-9);
+  EXPECT_NEAR(rows.at("a.JPG").focus_distance_m, 1.0, 1e-12);
+  EXPECT_TRUE(rows.at("a.JPG").focus_unit_written);
+  EXPECT_NEAR(rows.at("b.JPG").focus_distance_m, 1.0, 1e-12);
+  EXPECT_FALSE(rows.at("c.JPG").focus_unit_written);
+  double value = 0;
+  std::string unit;
+  ASSERT_TRUE(ParseLength("1.5 m", "mm", &value, &unit));
+  EXPECT_NEAR(value, 1500, 1e-9);
+  EXPECT_EQ(unit, "m");
+  ASSERT_TRUE(ParseLength("600", "m", &value, &unit));
+  EXPECT_EQ(value, 600);
+  EXPECT_EQ(unit, "");
+  EXPECT_FALSE(ParseLength("600 ft", "m", &value));
+  EXPECT_FALSE(ParseLength("mm", "m", &value));
 }
 
 TEST(LensCsv, RowsMatchImagesWithAnotherExtension) {
@@ -162,6 +191,27 @@ std::string CheckError(const ResolvedLens& lens, const CameraGeometry& camera) {
   return ErrorOf([&] {
     CheckLensAgainstCamera("box002.png", lens, camera, LensCheckOptions());
   });
+}
+
+// A bare focus of 100 in the metres column (meant as cm) lies beyond the
+// hyperfocal distance f^2 / (N p) + f = 49.57^2 / (4 * 0.046875) + 49.57
+// mm = 13.15 m: refused with a hint at centimetres (once it ran on to "an
+// interval covering both spans 1251.0 % of the scale"); written "100 m" it
+// is meant, and a bare 10 m (nearer than 13.15 m) passes.
+TEST(LensCheck, BareFocusBeyondTheHyperfocalDistanceAsksForItsUnit) {
+  ResolvedLens lens = Lens(49.57, 4, 46.875);
+  lens.lens.recorded_focus_mm = 100000;
+  lens.focus_source = "lens.csv line 2";
+  const std::string error = CheckError(lens, RealCamera());
+  ExpectContains(error, "image box002.png");
+  ExpectContains(error, "100 m (lens.csv line 2)");
+  ExpectContains(error, "13.15 m");
+  ExpectContains(error, "centimetres (1 m)");
+  lens.focus_unit_written = true;
+  EXPECT_EQ(CheckError(lens, RealCamera()), "");
+  lens.focus_unit_written = false;
+  lens.lens.recorded_focus_mm = 10000;
+  EXPECT_EQ(CheckError(lens, RealCamera()), "");
 }
 
 TEST(LensCheck, ConsistentDataPass) {

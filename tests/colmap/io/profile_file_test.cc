@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/workspace.h"
 #include "tests/test_utils.h"
 
@@ -178,6 +179,111 @@ TEST(PsfProfileFile, TranslatingDiskStatedForACamera) {
   EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kCheck);
   MakePsfField("auto", "").ApplyTo(&core);
   EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kFit);
+}
+
+// The conditions a profile was measured under survive the writer and the
+// reader; a profile without them (written before) still reads, unknown.
+TEST(PsfProfileFile, ConditionsRoundTrip) {
+  test::TempDir dir;
+  PsfProfileFile profile;
+  profile.params.split_exponent = 0.62;
+  profile.conditions.focal_length_mm = 49.57;
+  profile.conditions.f_number = 4;
+  profile.conditions.pixel_pitch_um = 46.875;
+  profile.conditions.frame_width = 768;
+  profile.conditions.frame_height = 512;
+  profile.conditions.min_blur_px = 2.95;
+  profile.conditions.max_blur_px = 4.93;
+  WritePsfProfile(dir / "c.dpsf", profile);
+  const ProfileConditions c = ReadPsfProfile(dir / "c.dpsf").conditions;
+  EXPECT_DOUBLE_EQ(c.focal_length_mm, 49.57);
+  EXPECT_DOUBLE_EQ(c.f_number, 4);
+  EXPECT_DOUBLE_EQ(c.pixel_pitch_um, 46.875);
+  EXPECT_EQ(c.frame_width, 768);
+  EXPECT_EQ(c.frame_height, 512);
+  EXPECT_DOUBLE_EQ(c.min_blur_px, 2.95);
+  EXPECT_DOUBLE_EQ(c.max_blur_px, 4.93);
+  {
+    std::ofstream file(dir / "old.dpsf");
+    file << "format 1\nmodel split_profile\nsplit_exponent 0.62\n";
+  }
+  EXPECT_FALSE(ReadPsfProfile(dir / "old.dpsf").conditions.Known());
+  {
+    std::ofstream file(dir / "bad.dpsf");
+    file << "format 1\nmodel split_profile\nsplit_exponent 0.62\n"
+            "f_number -4\n";
+  }
+  try {
+    ReadPsfProfile(dir / "bad.dpsf");
+    ADD_FAILURE() << "a negative f-number was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.dpsf:4"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Each view's lens data against the profile's conditions: another f-number
+// is refused naming the image, its value and source, the profile's and the
+// option; with the option, or a profile without conditions, it passes.
+// The pitch is compared at the profile's frames: 5.86 um over a 6144 px
+// camera is 46.875 um at 768 px frames (the same sensor); 4 um is not.
+TEST(PsfProfileFile, ViewsCheckedAgainstTheConditions) {
+  test::TempDir dir;
+  PsfProfileFile profile;
+  profile.params.split_exponent = 0.62;
+  profile.conditions.focal_length_mm = 49.57;
+  profile.conditions.f_number = 4;
+  profile.conditions.pixel_pitch_um = 46.875;
+  profile.conditions.frame_width = 768;
+  profile.conditions.frame_height = 512;
+  WritePsfProfile(dir / "r6m2_rf50_f4.dpsf", profile);
+  const PsfChoice choice =
+      MakePsfField("calibrated", dir / "r6m2_rf50_f4.dpsf");
+  ResolvedLens lens;
+  lens.lens.focal_length_mm = 49.57;
+  lens.lens.f_number = 2.8;
+  lens.lens.pixel_pitch_um = 46.875;
+  lens.f_number_source = "lens.csv line 2";
+  lens.focal_length_source = "EXIF";
+  lens.pixel_pitch_source = "flag";
+  const std::vector<ProfileCheckView> views = {{"box002.png", &lens, 768}};
+  std::string error;
+  try {
+    CheckViewsAgainstProfile(choice, views, false);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  for (const char* part :
+       {"image box002.png: f/2.8 (lens.csv line 2)",
+        "r6m2_rf50_f4.dpsf was measured at f/4",
+        "--DPScaleEstimator.profile_applies 1"}) {
+    EXPECT_NE(error.find(part), std::string::npos) << part << " in " << error;
+  }
+  EXPECT_EQ(CheckViewsAgainstProfile(choice, views, true).size(), 1u);
+  lens.lens.f_number = 4;
+  EXPECT_TRUE(CheckViewsAgainstProfile(choice, views, false).empty());
+  lens.lens.pixel_pitch_um = 5.859375;
+  EXPECT_TRUE(
+      CheckViewsAgainstProfile(choice, {{"box002.png", &lens, 6144}}, false)
+          .empty());
+  lens.lens.pixel_pitch_um = 4;
+  const std::vector<std::string> pitch =
+      CheckViewsAgainstProfile(choice, {{"box002.png", &lens, 6144}}, false);
+  ASSERT_EQ(pitch.size(), 1u);
+  EXPECT_NE(pitch[0].find("pixel pitch 4 um (flag)"), std::string::npos)
+      << pitch[0];
+  lens.lens.pixel_pitch_um = 46.875;
+  lens.lens.focal_length_mm = 35;
+  const std::vector<std::string> focal =
+      CheckViewsAgainstProfile(choice, views, false);
+  ASSERT_EQ(focal.size(), 1u);
+  EXPECT_NE(focal[0].find("focal length 35 mm (EXIF)"), std::string::npos)
+      << focal[0];
+  // No conditions (a profile written before): nothing checked.
+  PsfChoice old = choice;
+  old.conditions = ProfileConditions();
+  lens.lens.f_number = 2.8;
+  EXPECT_TRUE(CheckViewsAgainstProfile(old, views, false).empty());
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "dpsfm/colmap/controllers/calibration_controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
@@ -248,6 +249,35 @@ cv::Mat WorkingGrey(const cv::Mat& view, double resize_factor) {
   return grey;
 }
 
+// A target must fill the frame: at a distance that needs a plane wider than
+// a wall (10 m), the distance is in another unit (600 for 0.6 m once read
+// as "target 600 m", then "blur radius nan px" and a generic error).
+// `sensor_width_mm`: the frame's width on the sensor.
+void CheckTargetDistance(const CalibrationTarget& target,
+                         double sensor_width_mm,
+                         const CalibrationRunOptions& options) {
+  const double d_m = target.target_distance_m;
+  const double f_mm = target.lens.focal_length_mm;
+  const double plane_m = d_m * sensor_width_mm / f_mm;
+  if (!(plane_m > 10)) return;
+  std::ostringstream s;
+  s << std::setprecision(4) << options.targets_path << ":" << target.line
+    << ": target_distance_m " << d_m << " puts " << target.name
+    << "'s target " << d_m << " m away, where a plane filling the frame ("
+    << sensor_width_mm << " mm of sensor behind " << f_mm
+    << " mm) would be " << std::setprecision(3) << plane_m << " m wide: ";
+  if (d_m >= 4 * f_mm) {  // as mm
+    s << "is it in millimetres (" << d_m / 1000 << " m)? Give metres, or "
+      << "write the unit (" << d_m << "mm)";
+  } else if (10 * d_m >= 4 * f_mm) {  // as cm
+    s << "is it in centimetres (" << d_m / 100 << " m)? Give metres, or "
+      << "write the unit (" << d_m << "cm)";
+  } else {
+    s << "give the distance in metres from the focal-plane mark";
+  }
+  throw InputError(s.str());
+}
+
 // One capture's textured patches (at most max_patches_per_capture, spread
 // over the frame) with its target's distances and lens.
 CalibrationCapture MakeCapture(const CalibrationTarget& target,
@@ -264,6 +294,7 @@ CalibrationCapture MakeCapture(const CalibrationTarget& target,
   capture.target_distance_mm = 1000 * target.target_distance_m;
   capture.focus_distance_mm = 1000 * target.focus_distance_m;  // NaN stays
   capture.entrance_pupil_mm = options.entrance_pupil_mm;
+  CheckTargetDistance(target, capture.working_pitch_mm * left.cols, options);
   if (options.entrance_pupil_mm > 0 &&
       !(capture.target_distance_mm - options.entrance_pupil_mm >
         2 * target.lens.focal_length_mm)) {
@@ -339,6 +370,17 @@ void LogCaptureFits(const TargetCalibration& calibration) {
     } else {
       own << "too little blur to read a DP strength (a sharp reference, "
              "used for the kernels' shape)";
+    }
+    if (!std::isfinite(calibration.capture_radius_px[i])) {
+      // No focus made the captures agree: the thin lens gives no blur.
+      LOG(INFO) << "  " << calibration.capture_names[i]
+                << ": blur radius not known (no focus distance makes the "
+                   "captures' blur agree with their distances; see below), "
+                   "read as "
+                << std::fixed << std::setprecision(2)
+                << calibration.capture_reading_px[i]
+                << " px by the linear split";
+      continue;
     }
     LOG(INFO) << "  " << calibration.capture_names[i] << ": blur radius "
               << std::fixed << std::setprecision(2)
@@ -477,6 +519,144 @@ void AddFitInfo(const TargetCalibration& calibration,
   add("created", date);
 }
 
+// The radius of a measured kernel pair's light (left + right): sqrt(2 E[rho^2])
+// about its centroid, the radius of a uniform disk with the same second
+// moment.
+double KernelRadiusPx(const DPKernels& k) {
+  const cv::Mat sum = k.left + k.right;
+  const int c = sum.rows / 2;
+  double w = 0, x = 0, y = 0;
+  for (int i = 0; i < sum.rows; ++i) {
+    for (int j = 0; j < sum.cols; ++j) {
+      const double v = std::max(0.0f, sum.at<float>(i, j));
+      w += v;
+      x += v * (j - c);
+      y += v * (i - c);
+    }
+  }
+  if (!(w > 0)) return std::numeric_limits<double>::quiet_NaN();
+  x /= w;
+  y /= w;
+  double r2 = 0;
+  for (int i = 0; i < sum.rows; ++i) {
+    for (int j = 0; j < sum.cols; ++j) {
+      const double v = std::max(0.0f, sum.at<float>(i, j));
+      r2 += v * ((j - c - x) * (j - c - x) + (i - c - y) * (i - c - y));
+    }
+  }
+  return std::sqrt(2 * r2 / w);
+}
+
+// The captures with blur (those that read a DP strength).
+std::vector<size_t> BlurredCaptures(const TargetCalibration& calibration) {
+  std::vector<size_t> blurred;
+  for (size_t i = 0; i < calibration.capture_centroid_offset.size(); ++i) {
+    if (std::isfinite(calibration.capture_centroid_offset[i])) {
+      blurred.push_back(i);
+    }
+  }
+  return blurred;
+}
+
+// The one value of a lens number the blurred captures share (0: they
+// differ by more than 1 %, or none has blur).
+double SharedValue(const std::vector<CalibrationTarget>& targets,
+                   const std::vector<size_t>& blurred,
+                   double DPLensData::*member) {
+  double value = 0;
+  for (const size_t i : blurred) {
+    const double v = targets[i].lens.*member;
+    if (value == 0) {
+      value = v;
+    } else if (std::abs(v / value - 1) > 0.01) {
+      return 0;
+    }
+  }
+  return value;
+}
+
+// The thin lens against the measured kernels: their light spreads over the
+// blur the captures really had, whatever the DP split; the strength fit
+// cannot see a wrong f-number (blur and strength trade one for the other),
+// the kernels can. Real kernels read up to ~15 % small on this measure
+// (soft rims; R6 II at f/4: 0.87 of the thin lens), so 2/3 stop is allowed.
+// Throws InputError naming the f-number (and the other numbers the thin
+// lens uses) when the kernels are farther off.
+void CheckThinLens(const std::vector<CalibrationTarget>& targets,
+                   const TargetCalibration& calibration,
+                   const ShapeCalibration& shape,
+                   const CalibrationRunOptions& options) {
+  const std::vector<size_t> blurred = BlurredCaptures(calibration);
+  const double f_number = SharedValue(targets, blurred, &DPLensData::f_number);
+  if (!shape.determined || shape.cell_kernels.empty()) {
+    LOG(INFO) << "The f-number and focal length are not checked against the "
+                 "captures' blur: that needs the kernels' shape, measured "
+                 "against stopped-down (f/16 or more) captures of the same "
+                 "targets";
+    return;
+  }
+  std::vector<double> radii;
+  for (const DPKernels& k : shape.cell_kernels) {
+    const double r = KernelRadiusPx(k);
+    if (std::isfinite(r)) radii.push_back(r);
+  }
+  if (radii.empty() || f_number <= 0) return;
+  std::sort(radii.begin(), radii.end());
+  const double measured = radii[radii.size() / 2];
+  const double ratio = measured / shape.reference_radius_px;
+  const double implied = f_number / ratio;
+  const double tolerance = std::log(2.0) / 3;  // 2/3 stop in N
+  std::ostringstream s;
+  s << std::setprecision(3) << "The captures' blur against the thin lens: "
+    << "the measured kernels spread over " << measured << " px where f/"
+    << f_number << " predicts " << shape.reference_radius_px << " px (ratio "
+    << ratio << ", as f/" << implied << " would make it)";
+  LOG(INFO) << s.str();
+  if (std::abs(std::log(ratio)) <= tolerance) return;
+  const CalibrationTarget& t = targets[blurred.front()];
+  std::ostringstream e;
+  e << std::setprecision(4) << "the captures' blur disagrees with the thin "
+    << "lens at f/" << f_number << ": the kernels measured against the "
+    << "stopped-down references spread over " << std::setprecision(3)
+    << measured << " px where f/" << f_number << ", " << std::setprecision(4)
+    << t.lens.focal_length_mm << " mm and " << t.lens.pixel_pitch_um
+    << " um at the fitted focus predict " << std::setprecision(3)
+    << shape.reference_radius_px << " px, as f/" << std::setprecision(2)
+    << implied << " would make them (more than 2/3 stop off): correct "
+    << "f_number in " << options.targets_path
+    << " (or focal_length_mm, pixel_pitch_um); a profile fitted to them "
+       "would be "
+    << std::setprecision(0) << std::fixed << 100 * std::abs(1 - ratio)
+    << " % too " << (ratio < 1 ? "weak" : "strong");
+  throw InputError(e.str());
+}
+
+// What the profile was measured under, for the estimator's check.
+ProfileConditions MeasuredConditions(
+    const std::vector<CalibrationTarget>& targets,
+    const TargetCalibration& calibration,
+    const WorkingCaptures& working) {
+  ProfileConditions c;
+  const std::vector<size_t> blurred = BlurredCaptures(calibration);
+  c.focal_length_mm =
+      SharedValue(targets, blurred, &DPLensData::focal_length_mm);
+  c.f_number = SharedValue(targets, blurred, &DPLensData::f_number);
+  c.pixel_pitch_um = SharedValue(targets, blurred, &DPLensData::pixel_pitch_um);
+  c.frame_width = working.frame_size.width;
+  c.frame_height = working.frame_size.height;
+  const double rf = working.geometry.resize_factor;
+  for (const size_t i : blurred) {
+    const double r = std::abs(calibration.capture_radius_px[i]) / rf;
+    c.min_blur_px = c.min_blur_px == 0 ? r : std::min(c.min_blur_px, r);
+    c.max_blur_px = std::max(c.max_blur_px, r);
+  }
+  if (c.f_number == 0 && !blurred.empty()) {
+    LOG(WARNING) << "The captures with blur differ in f-number: the profile "
+                    "records none, and the estimator cannot check it";
+  }
+  return c;
+}
+
 }  // namespace
 
 RunOutcome RunPsfCalibration(const CalibrationRunOptions& options) {
@@ -509,6 +689,7 @@ RunOutcome RunPsfCalibration(const CalibrationRunOptions& options) {
           ? MeasureShapes(
                 targets, calibration, working.grey_left, working.grey_right)
           : ShapeCalibration();
+  CheckThinLens(targets, calibration, shape, options);
 
   PsfProfileFile profile;
   profile.model = "measured_kernels";
@@ -517,6 +698,7 @@ RunOutcome RunPsfCalibration(const CalibrationRunOptions& options) {
   profile.layout = calibration.layout;
   profile.camera = options.camera;
   profile.lens = options.lens;
+  profile.conditions = MeasuredConditions(targets, calibration, working);
   const double own_uncertainty =
       AddProfileKernels(calibration, shape, &profile);
   // What the scale inherits: the fit's own uncertainty and how far a

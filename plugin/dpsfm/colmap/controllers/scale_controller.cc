@@ -567,6 +567,18 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   LOG_HEADING2("Per-patch DP blur estimation");
   const ProfileChoice profile = ChooseProfile(options, sources);
   const PsfChoice psf = MakePsfField(profile.model, profile.path);
+  // Before the long work: each view's lens data against the conditions
+  // the profile was measured under.
+  std::vector<ProfileCheckView> check_views;
+  for (const ViewSource& source : sources) {
+    const colmap::Camera& camera = reader.reconstruction().Camera(
+        reader.reconstruction().Image(source.image_id).CameraId());
+    check_views.push_back({source.image_name,
+                           &source.lens,
+                           static_cast<int>(std::max(camera.width,
+                                                     camera.height))});
+  }
+  CheckViewsAgainstProfile(psf, check_views, options.profile_applies);
   psf.ApplyTo(&core_options);
   if (!core_options.Check(&failure)) {
     throw InputError("invalid DPScaleEstimator option with the DP profile " +

@@ -6,38 +6,83 @@
 #include <sstream>
 #include <vector>
 
+#include "colmap/util/logging.h"
 #include "dpsfm/colmap/io/text.h"
 #include "dpsfm/colmap/io/workspace.h"
 
 namespace dpsfm {
 namespace {
 
+// Metres per unit of length, by the names people write.
+double MetresPer(const std::string& unit) {
+  if (unit == "m") return 1;
+  if (unit == "cm") return 1e-2;
+  if (unit == "mm") return 1e-3;
+  if (unit == "um") return 1e-6;
+  return 0;
+}
+
+// The cells given in another unit than their column's, for one log line
+// per column.
+struct Conversions {
+  std::string first;  // "'100 cm' (line 2) as 1 m"
+  int count = 0;
+};
+
 // An empty cell is 0 ("not given"); anything else a positive number, which
-// may carry the column's own unit as people write it ("50mm", "5.9 um",
-// "1.2 m", "f/4"); another unit is an error that names the column's.
+// may carry a unit as people write it ("50mm", "5.9 um", "1.2 m", "100 cm",
+// "f/4"): another unit of length is converted to the column's (the
+// conversion is logged, *conversions), anything else is an error that names
+// the column's unit. *unit_written (optional): the cell carried a unit.
 double ParseCell(const CsvTable& table,
                  const CsvTable::Row& row,
-                 const char* column) {
+                 const char* column,
+                 std::map<std::string, Conversions>* conversions,
+                 bool* unit_written = nullptr) {
   std::string cell = table.Cell(row, column);
   if (cell.empty()) return 0;
   const std::string name = column;
   const std::string unit = name.substr(name.rfind('_') + 1);
-  if (name == "f_number" &&
-      (cell.rfind("f/", 0) == 0 || cell.rfind("F/", 0) == 0)) {
-    cell = Trim(cell.substr(2));
+  double value = 0;
+  bool ok = false;
+  std::string written;
+  if (name == "f_number") {
+    if (cell.rfind("f/", 0) == 0 || cell.rfind("F/", 0) == 0) {
+      cell = Trim(cell.substr(2));
+    }
+    char* end = nullptr;
+    value = std::strtod(cell.c_str(), &end);
+    ok = end != cell.c_str() && Trim(end).empty();
+  } else {
+    ok = ParseLength(cell, unit, &value, &written);
   }
-  char* end = nullptr;
-  const double value = std::strtod(cell.c_str(), &end);
-  std::string rest = Trim(end == nullptr ? "" : std::string(end));
-  if (rest == "\xC2\xB5m" || rest == "\xCE\xBCm") rest = "um";  // micro sign
-  const bool own_unit = name != "f_number" && rest == unit;
-  if (end == cell.c_str() || !(rest.empty() || own_unit) ||
-      !std::isfinite(value) || value <= 0) {
+  if (!ok || !std::isfinite(value) || value <= 0) {
     throw InputError(table.Where(row) + column + " must be a positive number" +
                      (name == "f_number" ? "" : " in " + unit) +
-                     " or empty, got '" + table.Cell(row, column) + "'");
+                     " or empty, got '" + table.Cell(row, column) + "'" +
+                     (name == "f_number" ? "" : " (m, cm, mm and um convert)"));
+  }
+  if (unit_written != nullptr) *unit_written = !written.empty();
+  if (!written.empty() && written != unit && conversions != nullptr) {
+    Conversions& c = (*conversions)[name];
+    if (c.count++ == 0) {
+      std::ostringstream s;
+      s << "'" << table.Cell(row, column) << "' (line " << row.line
+        << ") as " << value << " " << unit;
+      c.first = s.str();
+    }
   }
   return value;
+}
+
+void LogConversions(const std::string& path,
+                    const std::map<std::string, Conversions>& conversions) {
+  for (const auto& [column, c] : conversions) {
+    LOG(INFO) << path << ": " << column << " read " << c.first
+              << (c.count > 1 ? " (and " + std::to_string(c.count - 1) +
+                                    " more cells converted alike)"
+                              : std::string());
+  }
 }
 
 // A word on the unit when an unknown column looks like a known one in
@@ -56,6 +101,24 @@ std::string LensColumnHint(const std::string& column) {
 }
 
 }  // namespace
+
+bool ParseLength(const std::string& text,
+                 const std::string& column_unit,
+                 double* value,
+                 std::string* unit_written) {
+  const std::string cell = Trim(text);
+  char* end = nullptr;
+  const double number = std::strtod(cell.c_str(), &end);
+  if (cell.empty() || end == cell.c_str()) return false;
+  std::string unit = Trim(end);
+  if (unit == "\xC2\xB5m" || unit == "\xCE\xBCm") unit = "um";  // micro sign
+  if (!unit.empty() && MetresPer(unit) == 0) return false;
+  if (MetresPer(column_unit) == 0) return false;
+  *value = unit.empty() ? number
+                        : number * MetresPer(unit) / MetresPer(column_unit);
+  if (unit_written != nullptr) *unit_written = unit;
+  return true;
+}
 
 const std::vector<std::string>& LensCsvColumns() {
   static const std::vector<std::string> kColumns = {"name",
@@ -76,6 +139,7 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
                        "F1.8 STM",
                        LensColumnHint);
   std::map<std::string, LensCsvRow> rows;
+  std::map<std::string, Conversions> conversions;
   for (const CsvTable::Row& cells : table.rows()) {
     const std::string name = table.Cell(cells, "name");
     if (name.empty()) {
@@ -84,10 +148,16 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
                        "model stores it, e.g. IMG_1.JPG)");
     }
     LensCsvRow row;
-    row.focal_length_mm = ParseCell(table, cells, "focal_length_mm");
-    row.f_number = ParseCell(table, cells, "f_number");
-    row.pixel_pitch_um = ParseCell(table, cells, "pixel_pitch_um");
-    row.focus_distance_m = ParseCell(table, cells, "focus_distance_m");
+    row.focal_length_mm =
+        ParseCell(table, cells, "focal_length_mm", &conversions);
+    row.f_number = ParseCell(table, cells, "f_number", &conversions);
+    row.pixel_pitch_um =
+        ParseCell(table, cells, "pixel_pitch_um", &conversions);
+    row.focus_distance_m = ParseCell(table,
+                                     cells,
+                                     "focus_distance_m",
+                                     &conversions,
+                                     &row.focus_unit_written);
     row.camera = table.Cell(cells, "camera");
     row.lens = table.Cell(cells, "lens");
     row.line = cells.line;
@@ -96,6 +166,7 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
                        " is listed twice");
     }
   }
+  LogConversions(path, conversions);
   return rows;
 }
 
@@ -167,6 +238,7 @@ ResolvedLens ResolveLens(const std::string& image_name,
   if (csv_row && csv_row->focus_distance_m > 0) {
     resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
     resolved.focus_source = csv_source;
+    resolved.focus_unit_written = csv_row->focus_unit_written;
   } else if (exif && exif->focus_distance_mm > 0) {
     resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
     resolved.lens.recorded_focus_bracket = exif->focus_bracket;
@@ -272,6 +344,32 @@ void CheckRanges(const std::string& image_name,
                        resolved.focus_source +
                        ") looks like millimetres: focus_distance_m is in "
                        "metres (leave it empty for a focus at infinity)");
+    }
+    // A bare number beyond the hyperfocal distance (one pixel's blur
+    // circle), where focus tells the depths next to nothing: once "100"
+    // (cm) ran on to "an interval covering both spans 1251.0 % of the
+    // scale". Written with its unit ("100 m"), a far focus is meant.
+    const double hyperfocal_mm =
+        lens.focal_length_mm * lens.focal_length_mm /
+            (lens.f_number * lens.PixelPitchMm()) +
+        lens.focal_length_mm;
+    if (resolved.focus_source.rfind("lens.csv", 0) == 0 &&
+        !resolved.focus_unit_written && lens.pixel_pitch_um > 0 &&
+        focus_mm > hyperfocal_mm) {
+      const double value = focus_mm / 1000;  // as written, in "metres"
+      const bool cm = value * 10 >= 4 * lens.focal_length_mm;
+      throw InputError(
+          prefix + "recorded focus distance " + Number(value) + " m (" +
+          resolved.focus_source + ") lies beyond the hyperfocal distance (" +
+          Number(hyperfocal_mm / 1000) + " m at f/" + Number(lens.f_number) +
+          ", " + Number(lens.focal_length_mm) + " mm, " +
+          Number(lens.pixel_pitch_um) +
+          " um pixels), where the focus tells the depths next to nothing: " +
+          (cm ? "is it in centimetres (" + Number(value / 100) +
+                    " m)? Write the unit (" + Number(value) + " cm)"
+              : "is it in another unit? Write the unit") +
+          ", or " + Number(value) +
+          " m if that is meant; leave it empty for a focus at infinity");
     }
   }
 }

@@ -21,9 +21,23 @@ struct LensCsvRow {
   double f_number = 0;
   double pixel_pitch_um = 0;
   double focus_distance_m = 0;  // recorded, from the focal-plane mark
+  // The focus cell carried its unit ("1.2 m", "120 cm"): a far focus written
+  // so is meant (a bare one beyond the hyperfocal distance is refused).
+  bool focus_unit_written = false;
   std::string camera, lens;     // for the DP profile library
   int line = 0;                 // line number in the file, for messages
 };
+
+// A length as people write it in a table cell: a number, optionally
+// followed by a unit of length (m, cm, mm, um, or um with the micro sign;
+// blanks between allowed: "1000mm", "100 cm", "1.5 m"), converted to
+// `column_unit` (m, mm or um). False when the text is not that (another
+// word, no number). *unit_written (optional) gets the unit as recognised
+// ("" when bare; "um" for the micro sign).
+bool ParseLength(const std::string& text,
+                 const std::string& column_unit,
+                 double* value,
+                 std::string* unit_written = nullptr);
 
 // The columns lens.csv may have, in the order the docs list them; `name`
 // is required, every other column is optional and each appears once.
@@ -53,6 +67,8 @@ struct ResolvedLens {
   // Where DPLensData::recorded_focus_mm came from ("lens.csv line N", "EXIF
   // Canon maker note", "EXIF SubjectDistance"), empty if none.
   std::string focus_source;
+  // lens.csv wrote the focus with its unit (LensCsvRow::focus_unit_written).
+  bool focus_unit_written = false;
   // The DP profile library's keys (lens.csv > EXIF; empty if unknown).
   std::string camera, lens_model;
 };
@@ -102,7 +118,9 @@ struct LensCheckOptions {
 // Checks one image's resolved lens data against the model's camera and
 // physical bounds: f_mm / pitch against f_px (allowing for focus breathing
 // and the tolerance), the sensor size the pitch implies, the focal length,
-// the f-number and the recorded focus (nearer than 4 f cannot be in focus).
+// the f-number and the recorded focus (nearer than 4 f cannot be in focus;
+// a bare lens.csv number beyond the hyperfocal distance is asked for its
+// unit).
 // Throws InputError with one line that names the image, the numbers and
 // their sources, and the fix (wrong units included: a pitch in mm, a focal
 // length in px, the DP frames' pitch instead of the model camera's).

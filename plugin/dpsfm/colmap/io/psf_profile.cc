@@ -11,7 +11,9 @@
 #include <set>
 #include <sstream>
 
+#include "colmap/util/logging.h"
 #include "colmap/util/string.h"
+#include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/npy.h"
 #include "dpsfm/colmap/io/text.h"
 #include "dpsfm/colmap/io/workspace.h"
@@ -137,7 +139,12 @@ ProfileEntries ReadProfileEntries(const std::string& path,
                                                "camera",
                                                "lens",
                                                "uncertainty",
-                                               "light"};
+                                               "light",
+                                               "focal_length_mm",
+                                               "f_number",
+                                               "pixel_pitch_um",
+                                               "frame_size",
+                                               "blur_range_px"};
   ProfileEntries entries;
   entries.path = path;
   std::string line;
@@ -168,6 +175,43 @@ ProfileEntries ReadProfileEntries(const std::string& path,
   return entries;
 }
 
+// What the profile was measured under; each key optional, numbers
+// positive.
+void ReadConditions(const ProfileEntries& entries, ProfileConditions* c) {
+  auto positive = [&](const char* key, double* value) {
+    if (!entries.Has(key)) return;
+    *value = entries.Number(key);
+    if (!(*value > 0)) {
+      throw InputError(entries.Where(key) + ": '" + key +
+                       "' must be a positive number");
+    }
+  };
+  positive("focal_length_mm", &c->focal_length_mm);
+  positive("f_number", &c->f_number);
+  positive("pixel_pitch_um", &c->pixel_pitch_um);
+  if (entries.Has("frame_size")) {
+    const std::vector<double> v =
+        ParseNumbers(entries.Value("frame_size"), entries.Where("frame_size"));
+    if (v.size() != 2 || !(v[0] >= 1 && v[1] >= 1) ||
+        v[0] != std::floor(v[0]) || v[1] != std::floor(v[1])) {
+      throw InputError(entries.Where("frame_size") +
+                       ": 'frame_size' needs WIDTH HEIGHT in pixels");
+    }
+    c->frame_width = static_cast<int>(v[0]);
+    c->frame_height = static_cast<int>(v[1]);
+  }
+  if (entries.Has("blur_range_px")) {
+    const std::vector<double> v = ParseNumbers(entries.Value("blur_range_px"),
+                                               entries.Where("blur_range_px"));
+    if (v.size() != 2 || !(v[0] >= 0 && v[1] >= v[0])) {
+      throw InputError(entries.Where("blur_range_px") +
+                       ": 'blur_range_px' needs MIN MAX with 0 <= MIN <= MAX");
+    }
+    c->min_blur_px = v[0];
+    c->max_blur_px = v[1];
+  }
+}
+
 // format, camera, lens, light and uncertainty: every model has them.
 void ReadCommonKeys(const ProfileEntries& entries, PsfProfileFile* profile) {
   if (entries.Value("format") != "1") {
@@ -185,6 +229,7 @@ void ReadCommonKeys(const ProfileEntries& entries, PsfProfileFile* profile) {
     }
   }
   profile->lens = entries.Value("lens");
+  ReadConditions(entries, &profile->conditions);
   if (entries.Has("uncertainty")) {
     profile->uncertainty = entries.Number("uncertainty");
     if (!(profile->uncertainty >= 0 && profile->uncertainty < 1)) {
@@ -398,6 +443,25 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile) {
     file << "uncertainty " << profile.uncertainty
          << "  # relative (95 %) uncertainty of the profile's strength\n";
   }
+  const ProfileConditions& c = profile.conditions;
+  if (c.focal_length_mm > 0) {
+    file << "focal_length_mm " << c.focal_length_mm << "\n";
+  }
+  if (c.f_number > 0) {
+    file << "f_number " << c.f_number
+         << "  # the aperture the strength holds for\n";
+  }
+  if (c.pixel_pitch_um > 0) {
+    file << "pixel_pitch_um " << c.pixel_pitch_um
+         << "  # of the calibration's DP frames\n";
+  }
+  if (c.frame_width > 0) {
+    file << "frame_size " << c.frame_width << " " << c.frame_height << "\n";
+  }
+  if (c.max_blur_px > 0) {
+    file << "blur_range_px " << c.min_blur_px << " " << c.max_blur_px
+         << "  # |blur radius| of the captures, DP frame px\n";
+  }
   if (profile.model == "measured_kernels") {
     const fs::path p(path);
     const std::string stem = p.stem().string();
@@ -504,6 +568,8 @@ PsfChoice MakePsfField(const std::string& psf_model,
     choice.self_calibration = DPScaleOptions::SelfCalibration::kOff;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     CheckProfileLight(profile, psf_path);
+    choice.path = psf_path;
+    choice.conditions = profile.conditions;
     choice.profile_relative_uncertainty = profile.uncertainty;
     // The blur the profile was measured at bounds the automatic search
     // from below (a profile calibrated at 10 px on a camera whose frames
@@ -516,6 +582,81 @@ PsfChoice MakePsfField(const std::string& psf_model,
   }
   throw InputError("unknown --DPScaleEstimator.psf_model '" + psf_model +
                    "' (translating_disk, calibrated or auto)");
+}
+
+namespace {
+
+std::string Short(double value) {
+  std::ostringstream s;
+  s << std::setprecision(4) << value;
+  return s.str();
+}
+
+}  // namespace
+
+std::vector<std::string> CheckViewsAgainstProfile(
+    const PsfChoice& choice,
+    const std::vector<ProfileCheckView>& views,
+    bool profile_applies) {
+  std::vector<std::string> warnings;
+  if (choice.path.empty()) return warnings;  // no profile file
+  const ProfileConditions& c = choice.conditions;
+  const std::string name = fs::path(choice.path).filename().string();
+  if (!c.Known()) {
+    LOG(INFO) << "DP profile " << choice.path
+              << " records no conditions (written before dp_psf_calibrator "
+                 "recorded them): the views' f-number, focal length and "
+                 "pitch are not checked against it";
+    return warnings;
+  }
+  for (const ProfileCheckView& view : views) {
+    const ResolvedLens& r = *view.lens;
+    const std::string image = "image " + view.image_name + ": ";
+    // A sixth of a stop: f/4 against f/4.5 (a third) is another aperture.
+    if (c.f_number > 0 && std::abs(std::log(r.lens.f_number / c.f_number)) >
+                              std::log(2.0) / 6) {
+      const std::string line =
+          image + "f/" + Short(r.lens.f_number) + " (" + r.f_number_source +
+          ") but the DP profile " + name + " was measured at f/" +
+          Short(c.f_number) +
+          ": its strength holds for that aperture only; calibrate one at f/" +
+          Short(r.lens.f_number) + " (colmap dp_psf_calibrator), correct "
+          "the f-number, or pass --DPScaleEstimator.profile_applies 1 if "
+          "the profile applies";
+      if (!profile_applies) throw InputError(line);
+      warnings.push_back(line + " (given: used as it is)");
+    }
+    if (c.focal_length_mm > 0 &&
+        std::abs(r.lens.focal_length_mm / c.focal_length_mm - 1) > 0.05) {
+      warnings.push_back(image + "focal length " +
+                         Short(r.lens.focal_length_mm) + " mm (" +
+                         r.focal_length_source + ") but the DP profile " +
+                         name + " was measured at " +
+                         Short(c.focal_length_mm) +
+                         " mm: its kernels may not hold at this focal length");
+    }
+    // The pitch at the profile's frame size: the same sensor gives the
+    // same pitch whatever integer fraction of the camera the frames are.
+    const int profile_long = std::max(c.frame_width, c.frame_height);
+    if (c.pixel_pitch_um > 0 && profile_long > 0 &&
+        view.camera_long_side_px > 0) {
+      const double pitch_at_profile_frames =
+          r.lens.pixel_pitch_um * view.camera_long_side_px / profile_long;
+      if (std::abs(pitch_at_profile_frames / c.pixel_pitch_um - 1) > 0.1) {
+        warnings.push_back(
+            image + "pixel pitch " + Short(r.lens.pixel_pitch_um) + " um (" +
+            r.pixel_pitch_source + ") over the camera's " +
+            std::to_string(view.camera_long_side_px) + " px is " +
+            Short(pitch_at_profile_frames) + " um at the " +
+            std::to_string(profile_long) + " px frames the DP profile " +
+            name + " was measured on, where its pitch was " +
+            Short(c.pixel_pitch_um) +
+            " um: another sensor (or frame crop) than the profile's");
+      }
+    }
+  }
+  for (const std::string& warning : warnings) LOG(WARNING) << warning;
+  return warnings;
 }
 
 namespace {
@@ -590,6 +731,7 @@ std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
                      "DP view files, relative to --dp_image_path) or neither");
   }
   std::vector<CalibrationTarget> targets;
+  std::map<std::string, std::pair<std::string, int>> conversions;
   for (const CsvTable::Row& row : table.rows()) {
     const std::string where = table.Where(row);
     auto number = [&](const char* column) {
@@ -597,9 +739,26 @@ std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
       if (cell.empty()) {
         throw InputError(where + column + " is empty");
       }
-      return ParseNumber(cell, where + column);
+      const std::string name = column;
+      const std::string unit = name.substr(name.rfind('_') + 1);
+      double value = 0;
+      std::string written;
+      if (name == "f_number" || !ParseLength(cell, unit, &value, &written)) {
+        return ParseNumber(cell, where + column);
+      }
+      if (!written.empty() && written != unit) {
+        auto& c = conversions[name];
+        if (c.second++ == 0) {
+          std::ostringstream s;
+          s << "'" << cell << "' (line " << row.line << ") as " << value << " "
+            << unit;
+          c.first = s.str();
+        }
+      }
+      return value;
     };
     CalibrationTarget target;
+    target.line = row.line;
     target.name = table.Cell(row, "name");
     if (target.name.empty()) {
       throw InputError(where + "the name cell is empty");
@@ -633,10 +792,22 @@ std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path) {
                          "be at least 4 focal lengths (they are in metres)");
       }
     }
+    if (focus_known && target.focus_distance_m >= 1000) {
+      throw InputError(where + "focus_distance_m " +
+                       std::to_string(target.focus_distance_m) +
+                       " looks like millimetres: it is in metres (leave it "
+                       "empty to fit it)");
+    }
     targets.push_back(target);
   }
   if (targets.empty()) {
     throw InputError("calibration targets " + path + " list no capture");
+  }
+  for (const auto& [column, c] : conversions) {
+    LOG(INFO) << path << ": " << column << " read " << c.first
+              << (c.second > 1 ? " (and " + std::to_string(c.second - 1) +
+                                     " more cells converted alike)"
+                               : std::string());
   }
   return targets;
 }

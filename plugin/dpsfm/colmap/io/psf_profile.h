@@ -36,7 +36,10 @@
 // for the profile library, uncertainty <relative 95 % of the strength>,
 // light <linear|srgb> (what the kernels were measured in), and
 // fit_<anything> lines (how it was made; kept for people, ignored by the
-// estimator).
+// estimator), and the conditions it was measured under (ProfileConditions:
+//   focal_length_mm 49.57   f_number 4   pixel_pitch_um 46.875
+//   frame_size 512 768      blur_range_px 2.95 4.93
+// checked against each view's lens data before an estimate).
 #pragma once
 
 #include <memory>
@@ -50,6 +53,24 @@
 #include "dpsfm/core/scale/scale_estimator.h"
 
 namespace dpsfm {
+
+struct ResolvedLens;
+
+// The conditions a calibrated profile was measured under, as
+// dp_psf_calibrator writes them (0 = not recorded: profiles written before,
+// hand-written or imported ones).
+struct ProfileConditions {
+  double focal_length_mm = 0;
+  double f_number = 0;
+  double pixel_pitch_um = 0;          // of the calibration's DP frames
+  int frame_width = 0, frame_height = 0;  // the DP frames', px
+  // The |blur radius| of the captures whose blur measured the strength, in
+  // px of the DP frames.
+  double min_blur_px = 0, max_blur_px = 0;
+  bool Known() const {
+    return focal_length_mm > 0 || f_number > 0 || pixel_pitch_um > 0;
+  }
+};
 
 struct PsfProfileFile {
   // or "measured_kernels", "translating_disk"
@@ -77,6 +98,7 @@ struct PsfProfileFile {
   std::string light;
   // The fit_* lines, in file order.
   std::vector<std::pair<std::string, std::string>> fit_info;
+  ProfileConditions conditions;
 
   // The PSF of every stage. Throws InputError (naming `path`) for kernels
   // that are no PSF pair under the DP conventions.
@@ -107,10 +129,33 @@ struct PsfChoice {
   // The blur a measured-kernel profile was measured at: it bounds the
   // automatic search radius from below (0: no bound).
   double reference_radius_px = 0;
+  // A profile file's path and the conditions it records (calibrated).
+  std::string path;
+  ProfileConditions conditions;
 
   // The choice written into the estimate's options.
   void ApplyTo(DPScaleOptions* core) const;
 };
+
+// One view as CheckViewsAgainstProfile sees it.
+struct ProfileCheckView {
+  std::string image_name;
+  const ResolvedLens* lens = nullptr;  // pitch of the model camera's pixels
+  int camera_long_side_px = 0;         // the model camera's
+};
+
+// Each view's lens data against the conditions a calibrated profile was
+// measured under, before the estimate. An f-number other than the
+// profile's (by more than a sixth of a stop) throws InputError in one line
+// naming the image, its f-number and source, the profile's and
+// --DPScaleEstimator.profile_applies, unless `profile_applies`; another
+// focal length (5 %) or another sensor (the pitch at the profile's frame
+// size, 10 %) is a warning line (logged, and returned). A profile that
+// records no conditions is said so once in the log, and nothing checked.
+std::vector<std::string> CheckViewsAgainstProfile(
+    const PsfChoice& choice,
+    const std::vector<ProfileCheckView>& views,
+    bool profile_applies);
 
 // The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
 // model, checked against the data), "calibrated" (the profile in psf_path: a
@@ -146,6 +191,7 @@ struct CalibrationTarget {
   double target_distance_m = 0;
   double focus_distance_m = 0;  // NaN = unknown (an empty cell): fitted
   DPLensData lens;              // pitch: of the DP frame's pixels
+  int line = 0;                 // in targets.csv, for messages
   // The capture's DP view files, relative to the captures folder; empty:
   // left/<name> with right/<name> (or sum/<name>).
   std::string left, right;
@@ -154,7 +200,8 @@ struct CalibrationTarget {
 // A CSV whose header names its columns (text.h, CsvTable): name,
 // target_distance_m, focal_length_mm, f_number and pixel_pitch_um required;
 // focus_distance_m (empty cells: fitted) and left, right (both or neither)
-// optional.
+// optional. Lengths may carry a unit ("600mm", "60 cm"), converted to the
+// column's (logged).
 std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path);
 
 }  // namespace dpsfm

@@ -69,6 +69,9 @@ struct ScaleRunOptions {
   // default folder. With psf_model auto, a library profile whose camera and
   // lens match every view's is used as calibrated.
   std::string psf_library;
+  // Use a calibrated profile for views whose f-number differs from the
+  // one it was measured at (ProfileConditions; refused otherwise).
+  bool profile_applies = false;
   // Which views to visit and when to stop (large projects).
   ViewBudgetOptions view_budget;
   // Views read ahead of the blur search on as many worker threads (0: read
