@@ -18,9 +18,12 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "dpsfm/colmap/report/plot_axes.h"
 #include "dpsfm/colmap/report/plot_canvas.h"
+#include "dpsfm/colmap/report/plot_text.h"
+#include "dpsfm/colmap/report/report.h"
 #include "dpsfm/core/optics/lens_model.h"
 #include "tests/test_utils.h"
 
@@ -507,6 +510,155 @@ TEST(ReportPlots, LossCurveMarksLandAtTheirScales) {
         << "minimiser at " << minimum << " + " << offset << ": "
         << PixelAt(image, minimum + offset);
   }
+}
+
+// The walkthrough's answer (docs/user-guide.md, "A first hour"): the
+// intensity stage skipped, no loss curve, and the answer formed from two
+// cues that agree, neither of which it equals.
+DPScaleResult AnswerFromTwoCues() {
+  DPScaleResult result = RealisticResult(2);
+  result.candidate_scales.clear();
+  result.candidate_losses.clear();
+  result.intensity_used = false;
+  result.intensity_status = "skipped (the DP profile is calibrated)";
+  result.scale_intensity = 0;
+  result.intensity_ci_low = result.intensity_ci_high = 0;
+  result.scale_initial = 0.318;
+  result.scale_initial_ci_low = 0.287;
+  result.scale_initial_ci_high = 0.351;
+  result.dp_cue.valid = true;
+  result.dp_cue.scale = 0.318;
+  result.dp_cue.ci_low = 0.287;
+  result.dp_cue.ci_high = 0.351;
+  result.focus_cue.valid = true;
+  result.focus_cue.scale = 0.357;
+  result.focus_cue.ci_low = 0.331;
+  result.focus_cue.ci_high = 0.385;
+  result.focus_cue.num_views = 2;
+  result.cue_agreement = CueAgreement::kAgree;
+  result.scale_from_cues = true;
+  result.scale_source = "DP data and recorded focus";
+  result.combination = "the inverse-variance mean of the two cues";
+  result.scale = 0.348;
+  result.scale_ci_low = 0.329;
+  result.scale_ci_high = 0.368;
+  return result;
+}
+
+TEST(ReportPlots, LossPlotWithoutCurveNamesTheCuesAndTheAnswerAsTheReport) {
+  const DPScaleResult result = AnswerFromTwoCues();
+  const nlohmann::json report = MakeReport(result, {}, {}, RunTimings());
+  const std::string title = LossCurveTitle(result);
+  const std::string subtitle = LossCurveSubtitle(result);
+  SCOPED_TRACE(title + " / " + subtitle);
+  // Every number the report gives for the cues and the answer, as the
+  // picture formats it.
+  const nlohmann::json& dp = report.at("cues").at("dual_pixel");
+  const nlohmann::json& focus = report.at("cues").at("recorded_focus");
+  for (const double value : {dp.at("scale").get<double>(),
+                             dp.at("ci")[0].get<double>(),
+                             dp.at("ci")[1].get<double>(),
+                             focus.at("scale").get<double>(),
+                             focus.at("ci")[0].get<double>(),
+                             focus.at("ci")[1].get<double>(),
+                             report.at("scale").get<double>(),
+                             report.at("scale_ci_low").get<double>(),
+                             report.at("scale_ci_high").get<double>()}) {
+    EXPECT_NE(subtitle.find(plot::FormatValue(value)), std::string::npos)
+        << value;
+  }
+  EXPECT_NE(subtitle.find("DP data s = 0.318"), std::string::npos);
+  EXPECT_NE(subtitle.find("recorded focus s = 0.357"), std::string::npos);
+  EXPECT_NE(subtitle.find("final s = 0.348"), std::string::npos);
+  EXPECT_NE(title.find("DP data"), std::string::npos);
+  EXPECT_NE(title.find("recorded focus"), std::string::npos);
+  for (const std::string& text : {title, subtitle}) {
+    EXPECT_EQ(text.find("linear estimate kept"), std::string::npos);
+  }
+  EXPECT_TRUE(LossCurveShowsCues(result));
+
+  // With a curve too, an answer from the cues is not "the linear estimate
+  // kept"; a linear estimate that is the answer still says so.
+  DPScaleResult with_curve = RealisticResult(2);
+  with_curve.intensity_used = false;
+  with_curve.scale_from_cues = true;
+  with_curve.cue_agreement = CueAgreement::kAgree;
+  with_curve.dp_cue = result.dp_cue;
+  with_curve.focus_cue = result.focus_cue;
+  EXPECT_EQ(LossCurveSubtitle(with_curve).find("linear estimate kept"),
+            std::string::npos);
+  DPScaleResult linear = RealisticResult(2);
+  linear.intensity_used = false;
+  linear.scale = linear.scale_initial;
+  EXPECT_NE(LossCurveSubtitle(linear).find("linear estimate kept"),
+            std::string::npos);
+}
+
+TEST(ReportPlots, LossPlotWithoutCurveDrawsTheCuesAsBars) {
+  const DPScaleResult result = AnswerFromTwoCues();
+  DPScaleResult no_cues = result;  // the empty frame of before
+  no_cues.dp_cue.valid = false;
+  no_cues.focus_cue.valid = false;
+  const cv::Mat image = RenderLossCurvePlot(result);
+  const cv::Mat empty = RenderLossCurvePlot(no_cues);
+  MaybeDump(image, "cues_loss.png");
+  MaybeDump(empty, "no_cues_loss.png");
+  const plot::Axes axes = LossCurveAxes(result);
+  ASSERT_GT(axes.area.area(), 0);
+
+  // The plotting area differs from the empty frame's.
+  cv::Mat difference;
+  cv::absdiff(image(axes.area), empty(axes.area), difference);
+  cv::Mat grey;
+  cv::cvtColor(difference, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(grey > 40), 2000);
+
+  // Each cue's bar: its colour in the area, spanning its interval. The bar
+  // of the recorded focus (green) runs from ci_low to ci_high on the axis.
+  const cv::Vec3d focus_colour(44, 160, 44), dp_colour(189, 103, 148);
+  for (const auto& [colour, cue] :
+       {std::make_pair(focus_colour, &result.focus_cue),
+        std::make_pair(dp_colour, &result.dp_cue)}) {
+    int count = 0, x_min = 1 << 30, x_max = -1;
+    for (int y = axes.area.y; y < axes.area.br().y; ++y) {
+      for (int x = axes.area.x; x < axes.area.br().x; ++x) {
+        if (ColourDistance(PixelAt(image, {double(x), double(y)}), colour) <
+            20) {
+          ++count;
+          x_min = std::min(x_min, x);
+          x_max = std::max(x_max, x);
+        }
+      }
+    }
+    EXPECT_GT(count, 100) << colour;
+    EXPECT_NEAR(x_min, axes.ToPixel(cue->ci_low, 0).x, 3) << colour;
+    EXPECT_NEAR(x_max, axes.ToPixel(cue->ci_high, 0).x, 3) << colour;
+  }
+}
+
+TEST(ReportPlots, BlurFitTitleResidualIsTheReports) {
+  // A residual unlike the points' scatter about y = x (DP-frame pixels,
+  // final scale), so that a title recomputing it would show another number.
+  DPScaleResult result = RealisticResult(3, 2.0);
+  result.linear_median_abs_residual_px = 0.106;
+  const nlohmann::json report = MakeReport(result, {}, {}, RunTimings());
+  const double reported =
+      report.at("linear_median_abs_residual_px").get<double>();
+  const std::string title = BlurFitTitle(result);
+  SCOPED_TRACE(title);
+  const size_t at = title.find("= ");
+  ASSERT_NE(at, std::string::npos);
+  const double shown = std::strtod(title.c_str() + at + 2, nullptr);
+  EXPECT_NEAR(shown, reported, 5e-4 * reported);
+  EXPECT_NE(title.find("px"), std::string::npos);
+  EXPECT_NE(title.find("s* = " + plot::FormatValue(result.scale_initial)),
+            std::string::npos);
+
+  // No linear fit (a refusal before it): no number.
+  DPScaleResult refused = result;
+  refused.success = false;
+  refused.linear_median_abs_residual_px = 0;
+  EXPECT_EQ(BlurFitTitle(refused).find("="), std::string::npos);
 }
 
 TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {

@@ -15,7 +15,6 @@
 #include "dpsfm/colmap/report/plot_result.h"
 #include "dpsfm/colmap/report/plot_text.h"
 #include "dpsfm/core/optics/lens_model.h"
-#include "dpsfm/core/util/statistics.h"
 
 namespace dpsfm {
 namespace {
@@ -69,7 +68,6 @@ struct BlurFitData {
   std::map<int, cv::Scalar> colour;
   int num_points = 0, num_other_views = 0, num_other_points = 0;
   bool have_left = false, have_right = false;
-  double median_residual = kNaN;
   std::map<int, ModelLine> lines;
   // Points outside a panel's ranges.
   int off_scale = 0;
@@ -142,7 +140,6 @@ void SetDataRanges(BlurFitData* data) {
   }
   data->have_left = !inv_depths.empty();
   data->have_right = !residuals.empty();
-  data->median_residual = FiniteMedian(residuals);
   data->left.x = plot::RobustRange(inv_depths);
   data->left.y = plot::RobustRange(measured_left);
   data->right.x = plot::RobustRange(both_right);
@@ -270,11 +267,20 @@ BlurFitData PrepareBlurFit(const DPScaleResult& result) {
   return data;
 }
 
-std::string BlurFitTitle(const BlurFitData& data) {
+// The title's residual is the report's linear_median_abs_residual_px: the
+// median |measured - fitted| blur over the rows of the linear stage's joint
+// fit, in working-frame pixels, under s* (scale_initial) and the fitted focus
+// distances. (The points drawn are in DP-frame pixels under the final scale;
+// their scatter about y = x is a different number and not in the report.)
+std::string TitleOf(const DPScaleResult& result) {
   std::string title = "Measured blur vs thin-lens model";
-  if (data.have_right) {
-    title += ": median |measured - predicted| = " +
-             plot::Format("%.3g", data.median_residual) + " px";
+  const double residual = result.linear_median_abs_residual_px;
+  if (Finite(residual) && residual > 0 && Finite(result.scale_initial) &&
+      result.scale_initial > 0) {
+    title += ": linear fit's median |measured - fitted| = " +
+             plot::Format("%.3g", residual) +
+             " px (working-frame pixels, under s* = " +
+             plot::FormatValue(result.scale_initial) + ")";
   }
   return title;
 }
@@ -460,7 +466,7 @@ cv::Mat RenderBlurFitPlot(const DPScaleResult& result) {
   const BlurFitData data = PrepareBlurFit(result);
   plot::DrawHeader(canvas,
                    plot::FailureAlert(result),
-                   BlurFitTitle(data),
+                   TitleOf(result),
                    BlurFitSubtitle(result, data),
                    data.left.area.y - 28);
   DrawPanelAxes(canvas, data);
@@ -477,6 +483,10 @@ bool WriteBlurFitPlot(const DPScaleResult& result,
                       std::string* error) {
   return plot::RenderPng(
       [&result] { return RenderBlurFitPlot(result); }, path, error);
+}
+
+std::string BlurFitTitle(const DPScaleResult& result) {
+  return TitleOf(result);
 }
 
 BlurFitPanels BlurFitAxes(const DPScaleResult& result) {

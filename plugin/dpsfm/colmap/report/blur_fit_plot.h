@@ -16,9 +16,11 @@ namespace dpsfm {
 // in DP-frame pixels. Left panel: against inverse model depth 1/z', with the
 // view's thin-lens prediction under the final scale as a line (the model is
 // affine in 1/z'). Right panel: against the predicted radius, with y = x.
-// The title gives the median |measured - predicted|. Without used views (a
-// failed estimate) the selected patches are shown instead. About 1000x700.
-// No data makes it throw; it throws only what OpenCV or an allocation does.
+// The title gives the report's linear_median_abs_residual_px (the linear
+// stage's median |measured - fitted| in working-frame pixels under s*). Without
+// used views (a failed estimate) the selected patches are shown instead. About
+// 1000x700. No data makes it throw; it throws only what OpenCV or an allocation
+// does.
 cv::Mat RenderBlurFitPlot(const DPScaleResult& result);
 // Writes RenderBlurFitPlot as PNG; false if it could not, with the reason in
 // *error (if given). Never throws.
@@ -35,5 +37,9 @@ struct BlurFitPanels {
   plot::Axes right;
 };
 BlurFitPanels BlurFitAxes(const DPScaleResult& result);
+
+// The picture's title, with the report's linear_median_abs_residual_px when
+// there is one.
+std::string BlurFitTitle(const DPScaleResult& result);
 
 }  // namespace dpsfm

@@ -13,6 +13,7 @@
 #include "dpsfm/colmap/report/plot_legend.h"
 #include "dpsfm/colmap/report/plot_result.h"
 #include "dpsfm/colmap/report/plot_text.h"
+#include "dpsfm/colmap/report/refusal_text.h"
 
 namespace dpsfm {
 namespace {
@@ -32,6 +33,9 @@ const cv::Scalar kCurveColour(60, 60, 60);
 const cv::Scalar kFinalColour(170, 90, 20);
 const cv::Scalar kLinearColour(20, 130, 250);
 const cv::Scalar kMinimumColour(50, 40, 215);
+// The cues' bars (no curve: the cues decided).
+const cv::Scalar kDpCueColour(189, 103, 148);
+const cv::Scalar kFocusCueColour(44, 160, 44);
 
 // (scale, loss) points of the curve.
 using Curve = std::vector<std::pair<double, double>>;
@@ -46,6 +50,8 @@ struct LossCurveData {
   bool have_minimum = false;       // the curve's minimiser
   bool have_intensity_ci = false;  // and its interval
   bool have_x = false;             // any scale at all
+  // No curve, and a cue to show: the cues that decided, as bars.
+  bool show_cues = false;
   // The curve's height at the minimiser.
   double minimum_loss = kNaN;
   Axes axes;
@@ -68,6 +74,64 @@ Curve SortedCurve(const DPScaleResult& result) {
   return curve;
 }
 
+// A cue the picture can draw: valid (as the report's cues) with finite
+// numbers.
+bool CueShown(const ScaleCue& cue) {
+  return cue.valid && Finite(cue.scale) && Finite(cue.ci_low) &&
+         Finite(cue.ci_high) && cue.ci_high >= cue.ci_low;
+}
+
+// One bar of the cue panel: a cue, or the answer formed from them.
+struct CueBar {
+  std::string label;
+  double scale, ci_low, ci_high;
+  cv::Scalar colour;
+};
+
+// The bars, top to bottom: the DP data's cue, the recorded focus's, and the
+// answer with its interval (a successful estimate only). Numbers as the
+// report's cues, scale and scale_ci_low/high.
+std::vector<CueBar> CueBars(const DPScaleResult& result) {
+  std::vector<CueBar> bars;
+  auto interval = [](double low, double high) {
+    return ", 95 % interval [" + FormatValue(low) + ", " + FormatValue(high) +
+           "]";
+  };
+  if (CueShown(result.dp_cue)) {
+    const ScaleCue& c = result.dp_cue;
+    bars.push_back(
+        {"DP data: s = " + FormatValue(c.scale) + interval(c.ci_low, c.ci_high),
+         c.scale,
+         c.ci_low,
+         c.ci_high,
+         kDpCueColour});
+  }
+  if (CueShown(result.focus_cue)) {
+    const ScaleCue& c = result.focus_cue;
+    std::string label = "recorded focus: s = " + FormatValue(c.scale) +
+                        interval(c.ci_low, c.ci_high);
+    if (c.num_views > 0) {
+      label += " (" + std::to_string(c.num_views) + " view" +
+               (c.num_views == 1 ? ")" : "s)");
+    }
+    bars.push_back({label, c.scale, c.ci_low, c.ci_high, kFocusCueColour});
+  }
+  if (result.success && Finite(result.scale) && Finite(result.scale_ci_low) &&
+      Finite(result.scale_ci_high)) {
+    std::string label = "answer: s = " + FormatValue(result.scale) +
+                        interval(result.scale_ci_low, result.scale_ci_high);
+    if (!result.scale_source.empty()) {
+      label += " (from " + result.scale_source + ")";
+    }
+    bars.push_back({label,
+                    result.scale,
+                    result.scale_ci_low,
+                    result.scale_ci_high,
+                    kFinalColour});
+  }
+  return bars;
+}
+
 void SetFlags(const DPScaleResult& result, LossCurveData* data) {
   data->have_curve = !data->curve.empty();
   data->have_final = result.success && Finite(result.scale);
@@ -81,6 +145,8 @@ void SetFlags(const DPScaleResult& result, LossCurveData* data) {
                             Finite(result.intensity_ci_low) &&
                             Finite(result.intensity_ci_high) &&
                             result.intensity_ci_high >= result.intensity_ci_low;
+  data->show_cues = !data->have_curve &&
+                    (CueShown(result.dp_cue) || CueShown(result.focus_cue));
 }
 
 // Scales and losses to show, padded; sets have_x.
@@ -98,10 +164,17 @@ void SetRanges(const DPScaleResult& result, LossCurveData* data) {
     x_range.Add(result.scale_ci_high);
   }
   if (data->have_minimum) x_range.Add(result.scale_intensity);
+  if (data->show_cues) {
+    for (const CueBar& bar : CueBars(result)) {
+      x_range.Add(bar.ci_low);
+      x_range.Add(bar.ci_high);
+    }
+  }
   data->have_x = x_range.Valid();
   // Without a curve only a few vertical lines are left: wider margins keep
   // them from filling the panel.
-  plot::PadRange(&x_range, data->have_curve ? 0.03 : 0.5);
+  plot::PadRange(&x_range,
+                 data->have_curve ? 0.03 : (data->show_cues ? 0.08 : 0.5));
   plot::PadRange(&y_range, 0.08);
   // Headroom above the curve for the legend (its ends rise highest).
   if (data->have_curve) {
@@ -139,7 +212,23 @@ LossCurveData PrepareLossCurve(const DPScaleResult& result) {
   return data;
 }
 
-std::string LossCurveTitle(const DPScaleResult& result) {
+// The cues' names in words ("the DP data and the recorded focus").
+std::string CueNames(const DPScaleResult& result) {
+  const bool dp = CueShown(result.dp_cue), focus = CueShown(result.focus_cue);
+  if (dp && focus) return "the DP data and the recorded focus";
+  return dp ? "the DP data" : (focus ? "the recorded focus" : "");
+}
+
+std::string TitleOf(const DPScaleResult& result, const LossCurveData& data) {
+  if (data.show_cues) {
+    const bool both = CueShown(result.dp_cue) && CueShown(result.focus_cue);
+    std::string title = result.success
+                            ? (both ? "The answer from two cues: "
+                                    : "The answer from one cue: ")
+                            : (both ? "The two cues, which gave no answer: "
+                                    : "The one cue, which gave no answer: ");
+    return title + CueNames(result) + " (no intensity loss curve)";
+  }
   std::string title = "Intensity loss over candidate scales";
   if (!result.intensity_loss.empty()) {
     title += " (loss: " + result.intensity_loss + ")";
@@ -147,22 +236,97 @@ std::string LossCurveTitle(const DPScaleResult& result) {
   return title;
 }
 
-std::string LossCurveSubtitle(const DPScaleResult& result,
-                              const LossCurveData& data) {
+// Where the final scale came from, in brackets ("" when unknown): the cues
+// first, because the answer they form replaces what the stages gave.
+std::string AnswerSource(const DPScaleResult& result,
+                         const LossCurveData& data) {
+  if (result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue) {
+    return result.cue_agreement == CueAgreement::kAgree
+               ? " (DP data and recorded focus combined; they agree)"
+               : " (DP data and recorded focus combined; they disagree)";
+  }
+  if (result.scale_from_recorded_focus) return " (from the recorded focus)";
+  if (result.intensity_used) return " (intensity stage adopted)";
+  if (data.have_linear && result.scale == result.scale_initial) {
+    return " (linear estimate kept)";
+  }
+  if (!result.scale_source.empty())
+    return " (from " + result.scale_source + ")";
+  return "";
+}
+
+std::string SubtitleOf(const DPScaleResult& result, const LossCurveData& data) {
   std::ostringstream subtitle;
+  if (data.show_cues) {
+    // Each cue with its interval, then what they gave.
+    std::vector<std::string> cues;
+    for (const auto& [name, cue] :
+         {std::make_pair("DP data", &result.dp_cue),
+          std::make_pair("recorded focus", &result.focus_cue)}) {
+      if (!CueShown(*cue)) continue;
+      cues.push_back(std::string(name) + " s = " + FormatValue(cue->scale) +
+                     " [" + FormatValue(cue->ci_low) + ", " +
+                     FormatValue(cue->ci_high) + "]");
+    }
+    subtitle << cues[0];
+    if (cues.size() > 1) subtitle << " and " << cues[1];
+    if (data.have_final) {
+      subtitle << (cues.size() > 1 ? " give" : " gives")
+               << " final s = " << plot::ScaleText(result.scale);
+      if (data.have_ci) {
+        subtitle << ", interval [" << FormatValue(result.scale_ci_low) << ", "
+                 << FormatValue(result.scale_ci_high) << "]";
+      }
+      subtitle << AnswerSource(result, data);
+    } else {
+      if (cues.size() > 1 && result.cue_agreement == CueAgreement::kDisagree) {
+        subtitle << " (they disagree)";
+      }
+      subtitle << "; no scale reported";
+    }
+    return subtitle.str();
+  }
   if (data.have_final) {
     subtitle << "final s = " << plot::ScaleText(result.scale);
     if (data.have_ci) {
       subtitle << ", interval [" << FormatValue(result.scale_ci_low) << ", "
                << FormatValue(result.scale_ci_high) << "]";
     }
-    subtitle << (result.intensity_used ? " (intensity stage adopted)"
-                                       : " (linear estimate kept)");
+    subtitle << AnswerSource(result, data);
   } else if (data.have_linear) {
     subtitle << "linear estimate s* = "
              << plot::ScaleText(result.scale_initial);
   }
   return subtitle.str();
+}
+
+// The cues as horizontal interval bars (end caps, a dot at the estimate),
+// one row each, labelled above the bar.
+void DrawCueBars(cv::Mat& canvas,
+                 const DPScaleResult& result,
+                 const LossCurveData& data) {
+  const std::vector<CueBar> bars = CueBars(result);
+  const Axes& axes = data.axes;
+  cv::Mat roi = axes.Roi(canvas);
+  const double row = axes.area.height / (bars.size() + 1.0);
+  for (size_t i = 0; i < bars.size(); ++i) {
+    const CueBar& bar = bars[i];
+    const double y = row * (i + 1) + 12;
+    const double a = axes.ToLocal(bar.ci_low, 0).x;
+    const double b = axes.ToLocal(bar.ci_high, 0).x;
+    const double m = axes.ToLocal(bar.scale, 0).x;
+    DrawSegment(roi, {a, y}, {b, y}, bar.colour, 6);
+    DrawSegment(roi, {a, y - 11}, {a, y + 11}, bar.colour, 2);
+    DrawSegment(roi, {b, y - 11}, {b, y + 11}, bar.colour, 2);
+    plot::DrawDot(roi, {m, y}, 8, bar.colour);
+    plot::DrawDot(roi, {m, y}, 8, cv::Scalar(0, 0, 0), 1);
+    plot::PutText(canvas,
+                  plot::Ellipsize(bar.label, 0.5, 1, axes.area.width - 20),
+                  {axes.area.x + 10, axes.area.y + static_cast<int>(y) - 20},
+                  0.5,
+                  plot::kTextColour,
+                  1);
+  }
 }
 
 // The final interval as a band, drawn first so that grid and curve are drawn
@@ -191,13 +355,14 @@ void DrawIntervalEdges(cv::Mat& canvas,
   }
 }
 
-// The final scale (solid) and the linear estimate (dashed) across the area.
+// The final scale (solid; the cues' panel has it as a bar) and the linear
+// estimate (dashed) across the area.
 void DrawScaleLines(cv::Mat& canvas,
                     const DPScaleResult& result,
                     const LossCurveData& data) {
   cv::Mat roi = data.axes.Roi(canvas);
   const double h = data.axes.area.height;
-  if (data.have_final) {
+  if (data.have_final && !data.show_cues) {
     const double x = data.axes.ToLocal(result.scale, 0).x;
     DrawSegment(roi, {x, 0.0}, {x, h}, kFinalColour, 2);
   }
@@ -283,7 +448,7 @@ std::vector<LegendEntry> LossCurveLegendEntries(const DPScaleResult& result,
          kLinearColour,
          Glyph::kDashedLine});
   }
-  if (data.have_final) {
+  if (data.have_final && !data.show_cues) {
     entries.push_back(
         {"final s = " + FormatValue(result.scale), kFinalColour, Glyph::kLine});
   }
@@ -349,6 +514,11 @@ void DrawStatus(cv::Mat& canvas,
               plot::Format("%.0f", 100 * result.intensity_bootstrap_support) +
               " %)";
   }
+  if (data.show_cues) {
+    const std::string how = CombinationText(result);
+    status += ". No intensity loss curve";
+    if (!how.empty()) status += "; the answer: " + how;
+  }
   plot::PutWrapped(canvas,
                    status,
                    30,
@@ -368,8 +538,8 @@ cv::Mat RenderLossCurvePlot(const DPScaleResult& result) {
   const LossCurveData data = PrepareLossCurve(result);
   plot::DrawHeader(canvas,
                    plot::FailureAlert(result),
-                   LossCurveTitle(result),
-                   LossCurveSubtitle(result, data),
+                   TitleOf(result, data),
+                   SubtitleOf(result, data),
                    data.axes.area.y - 12);
   if (data.have_ci) DrawIntervalBand(canvas, result, data.axes);
   plot::DrawAxes(canvas,
@@ -383,7 +553,11 @@ cv::Mat RenderLossCurvePlot(const DPScaleResult& result) {
   DrawCurve(canvas, data);
   if (data.have_minimum) DrawMinimum(canvas, result, data);
   cv::rectangle(canvas, data.axes.area, plot::kAxisColour, 1);
-  if (!data.have_curve) DrawNoCurve(canvas, result, data);
+  if (data.show_cues) {
+    DrawCueBars(canvas, result, data);
+  } else if (!data.have_curve) {
+    DrawNoCurve(canvas, result, data);
+  }
   DrawLossCurveLegend(canvas, result, data);
   DrawStatus(canvas, result, data);
   return canvas;
@@ -398,6 +572,18 @@ bool WriteLossCurvePlot(const DPScaleResult& result,
 
 plot::Axes LossCurveAxes(const DPScaleResult& result) {
   return PrepareLossCurve(result).axes;
+}
+
+std::string LossCurveTitle(const DPScaleResult& result) {
+  return TitleOf(result, PrepareLossCurve(result));
+}
+
+std::string LossCurveSubtitle(const DPScaleResult& result) {
+  return SubtitleOf(result, PrepareLossCurve(result));
+}
+
+bool LossCurveShowsCues(const DPScaleResult& result) {
+  return PrepareLossCurve(result).show_cues;
 }
 
 }  // namespace dpsfm
