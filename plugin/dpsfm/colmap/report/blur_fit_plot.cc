@@ -272,15 +272,18 @@ BlurFitData PrepareBlurFit(const DPScaleResult& result) {
 // fit, in working-frame pixels, under s* (scale_initial) and the fitted focus
 // distances. (The points drawn are in DP-frame pixels under the final scale;
 // their scatter about y = x is a different number and not in the report.)
+// The subtitle says what it is measured in (the title has no room).
+bool HaveLinearResidual(const DPScaleResult& result) {
+  const double residual = result.linear_median_abs_residual_px;
+  return Finite(residual) && residual > 0 && Finite(result.scale_initial) &&
+         result.scale_initial > 0;
+}
+
 std::string TitleOf(const DPScaleResult& result) {
   std::string title = "Measured blur vs thin-lens model";
-  const double residual = result.linear_median_abs_residual_px;
-  if (Finite(residual) && residual > 0 && Finite(result.scale_initial) &&
-      result.scale_initial > 0) {
-    title += ": linear fit's median |measured - fitted| = " +
-             plot::Format("%.3g", residual) +
-             " px (working-frame pixels, under s* = " +
-             plot::FormatValue(result.scale_initial) + ")";
+  if (HaveLinearResidual(result)) {
+    title += ": linear fit's median |residual| = " +
+             plot::Format("%.3g", result.linear_median_abs_residual_px) + " px";
   }
   return title;
 }
@@ -289,6 +292,10 @@ std::string BlurFitSubtitle(const DPScaleResult& result,
                             const BlurFitData& data) {
   const size_t num_views = data.by_view.size();
   std::ostringstream subtitle;
+  if (HaveLinearResidual(result)) {
+    subtitle << "residual in working-frame px under s* = "
+             << plot::FormatValue(result.scale_initial) << "; ";
+  }
   subtitle << data.num_points << (data.any_used ? " used" : " selected")
            << " patches in " << num_views << " view"
            << (num_views == 1 ? "" : "s");
@@ -296,10 +303,9 @@ std::string BlurFitSubtitle(const DPScaleResult& result,
   if (data.off_scale > 0) {
     subtitle << ", " << data.off_scale << " off the axes";
   }
-  subtitle << "; radii signed (+ = farther than the focus) in DP-frame "
-              "pixels";
+  subtitle << "; radii signed (+ = farther than the focus), DP-frame px";
   if (Finite(result.scale) && result.scale > 0) {
-    subtitle << "; model under the final s = " << plot::ScaleText(result.scale);
+    subtitle << "; model under final s = " << plot::ScaleText(result.scale);
   }
   return subtitle.str();
 }
