@@ -5,6 +5,7 @@
 // not 0; --help reads like a manual. Workspaces come from a real capture
 // (../shared/realdp box/002, dpsfm_make_realdp_workspace) and from the
 // generated scenes.
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -220,6 +221,103 @@ TEST_F(FirstHour, RefusedRunsReportTellsTheTruth) {
   EXPECT_NE(r.at("reason").get<std::string>().find("interval"),
             std::string::npos)
       << r.at("reason");
+}
+
+// A refusal's error line leads with the reason that decided, with its
+// numbers and at most two fixes, within 300 characters (once 1,511 with
+// six remedies and "Typical causes: ..., textureless surfaces" where the
+// DP data and the recorded focus disagreed); the log before it and the
+// report's reason_detail hold the full account.
+TEST_F(FirstHour, RefusalLeadsWithItsCause) {
+  // The walkthrough's f/4 profile ("A first hour", step 1).
+  WriteTextFile(dir_ / "targets.csv",
+                "name,target_distance_m,focus_distance_m,focal_length_mm,"
+                "f_number,pixel_pitch_um,left,right\n"
+                "near,0.60,,49.57,4,46.875,0600/f4/l.png,0600/f4/r.png\n"
+                "far,1.50,,49.57,4,46.875,1500/f4/l.png,1500/f4/r.png\n"
+                "near_f20,0.60,,49.57,20,46.875,0600/f20/l.png,"
+                "0600/f20/r.png\n"
+                "far_f20,1.50,,49.57,20,46.875,1500/f20/l.png,"
+                "1500/f20/r.png\n");
+  const std::string profile = dir_ / "r6m2_rf50_f4.dpsf";
+  const CommandResult calibration = RunCommand({kColmap,
+                                                "dp_psf_calibrator",
+                                                "--dp_image_path",
+                                                RealCapture("flat/001"),
+                                                "--targets_path",
+                                                dir_ / "targets.csv",
+                                                "--output_path",
+                                                profile});
+  ASSERT_EQ(calibration.exit_code, 0) << calibration.err;
+  // A recorded focus of 2.5 m where the camera focused near 1 m: the
+  // recorded-focus cue (about 2.5 x the truth of 0.37) and the DP data
+  // cannot both hold.
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,2.5\n");
+  const std::string report = dir_ / "report.json";
+  const CommandResult run = Dense({"--DPScaleEstimator.psf_model",
+                                   "calibrated",
+                                   "--DPScaleEstimator.psf_path",
+                                   profile,
+                                   "--report_path",
+                                   report});
+  const std::string error = ErrorLine(run);
+  EXPECT_LE(error.size(), 300u) << error;
+  const std::string lead =
+      "ERROR: dp_scale_estimator: no scale: the DP data and the recorded "
+      "focus disagree: ";
+  ASSERT_EQ(error.rfind(lead, 0), 0u) << error;
+  // Two numbers: the DP cue's scale against the recorded focus's.
+  double dp = 0, focus = 0;
+  ASSERT_EQ(std::sscanf(error.c_str() + lead.size(), "%lf against %lf", &dp,
+                        &focus),
+            2)
+      << error;
+  EXPECT_GT(focus, 1.5 * dp) << error;
+  int options = 0;
+  for (size_t at = error.find("--"); at != std::string::npos;
+       at = error.find("--", at + 2)) {
+    ++options;
+  }
+  EXPECT_LE(options, 2) << error;
+  for (const char* buried : {"Typical causes", "patches over all views",
+                             "max_scale_ci_relative_width"}) {
+    EXPECT_EQ(error.find(buried), std::string::npos) << error;
+  }
+  // The full account comes first, in the log: both cues' intervals, the
+  // DP data alone, the patches.
+  const size_t account = run.err.find("the refusal in full:");
+  ASSERT_NE(account, std::string::npos) << run.err;
+  EXPECT_LT(account, run.err.find("ERROR: "));
+  for (const char* part : {"the DP data give ", "without the recorded focus: ",
+                           "patches over all views: "}) {
+    EXPECT_NE(run.err.find(part, account), std::string::npos) << part;
+  }
+  // The report: reason is the error line's, reason_detail the account.
+  const nlohmann::json r = ReadJson(report);
+  const std::string reason = r.at("reason").get<std::string>();
+  EXPECT_EQ(error, "ERROR: dp_scale_estimator: no scale: " + reason +
+                       "; nothing was changed");
+  const nlohmann::json& detail = r.at("reason_detail");
+  ASSERT_TRUE(detail.is_array());
+  ASSERT_GE(detail.size(), 3u);
+  EXPECT_EQ(detail[0].get<std::string>().find(
+                "the DP data and the recorded focus disagree: the DP data "
+                "give "),
+            0u)
+      << detail;
+
+  // A limit no real capture meets, with the profile fitted to the data
+  // (the default): another cause leads, as short.
+  WriteLens(
+      "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+      "box002.png,49.57,4,46.875,1\n");
+  const std::string wide = ErrorLine(
+      Dense({"--DPScaleEstimator.max_scale_ci_relative_width", "0.0001"}));
+  EXPECT_LE(wide.size(), 300u) << wide;
+  EXPECT_EQ(wide.find("Typical causes"), std::string::npos) << wide;
+  ExpectContains(wide, "limit 0.01 %");
 }
 
 // The answer's last line: the scale, its interval and where it came from;

@@ -129,12 +129,19 @@ TEST(MakeReport, ARefusedRunClaimsNoScale) {
   result.refusal.patches.usable = 4;
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(r["success"], false);
-  // The refusal worded by colmap/report/refusal_text.
+  // The refusal worded by colmap/report/refusal_text: the error line's
+  // cause and fix, and the account in full.
   EXPECT_EQ(r["reason"],
             "too few usable patches for a scale (4 in the joint solve, need "
-            "10); patches over all views: 20 tried, 4 usable. Typical causes: "
-            "sensor noise too strong for the texture, too little defocus blur "
-            "(small aperture, distant subjects), textureless surfaces");
+            "10). Add views with more depth range and texture");
+  EXPECT_EQ(r["reason_detail"],
+            nlohmann::json::array(
+                {"too few usable patches for a scale (4 in the joint solve, "
+                 "need 10)",
+                 "patches over all views: 20 tried, 4 usable. Typical causes: "
+                 "sensor noise too strong for the texture, too little defocus "
+                 "blur (small aperture, distant subjects), textureless "
+                 "surfaces"}));
   // No scale and no interval of it (null, never 0 or a stale value); what
   // the stages computed stays under scale_initial.
   EXPECT_TRUE(r["scale"].is_null());
@@ -153,14 +160,18 @@ TEST(MakeReport, ARejectedTranslatingDiskIsTheReasonAndThePsfStatus) {
   result.refusal.disk = {"p 2.2 determined", 0.5, 0.75};
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   const std::string reason = r["reason"];
-  EXPECT_EQ(reason.find("the DP data reject the translating disk "
-                        "(--DPScaleEstimator.psf_model translating_disk"),
+  EXPECT_EQ(reason.find("the DP data reject the translating disk: the "
+                        "profiles they allow put the scale at 0.5 to 0.75 "
+                        "times the disk's"),
             0u)
       << reason;
-  EXPECT_NE(reason.find("put the scale at 0.5 to 0.75 times the disk's"),
-            std::string::npos)
-      << reason;
-  EXPECT_EQ(r["psf"]["status"], reason);
+  // The status is the refusal's account in full.
+  const std::string detail = r["reason_detail"][0];
+  EXPECT_EQ(detail.find("the DP data reject the translating disk "
+                        "(--DPScaleEstimator.psf_model translating_disk"),
+            0u)
+      << detail;
+  EXPECT_EQ(r["psf"]["status"], detail);
 }
 
 TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {

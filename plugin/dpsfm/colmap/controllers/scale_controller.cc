@@ -142,7 +142,7 @@ ScaleRun DPScaleController::Run() {
                   << Seconds(check_timer.ElapsedSeconds()) << ")";
       } else {
         LOG(INFO) << "  after " << k + 1 << " views: no scale yet ("
-                  << RefusalText(provisional.refusal).substr(0, 120) << "; "
+                  << RefusalLine(provisional.refusal) << "; "
                   << Seconds(check_timer.ElapsedSeconds()) << ")";
       }
       if (stop) {
@@ -611,7 +611,12 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
     LOG(INFO) << "Report: " << options.report_path;
   }
   if (!result.success) {
-    return RunOutcome::Failure("no scale: " + RefusalText(result.refusal) +
+    // The full account before the one line that says what decided.
+    LOG(INFO) << "No scale; the refusal in full:";
+    for (const std::string& line : RefusalAccount(result.refusal)) {
+      LOG(INFO) << "  " << line;
+    }
+    return RunOutcome::Failure("no scale: " + RefusalLine(result.refusal) +
                                "; nothing was changed");
   }
   LOG(INFO) << "Linear estimate s* = " << result.scale_initial

@@ -41,7 +41,7 @@ std::string ScaleText(double scale) { return FormatValue(scale) + " m/unit"; }
 
 std::string FailureAlert(const DPScaleResult& result) {
   if (result.success) return "";
-  const std::string reason = RefusalText(result.refusal);
+  const std::string reason = RefusalLine(result.refusal);
   return "Estimate failed: " +
          (reason.empty() ? std::string("no reason given") : reason);
 }

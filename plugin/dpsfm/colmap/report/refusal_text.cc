@@ -1,11 +1,72 @@
 #include "dpsfm/colmap/report/refusal_text.h"
 
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 namespace dpsfm {
 namespace {
+
+// A scale or a factor to 3 significant digits ("0.318").
+std::string Num(double x) {
+  std::ostringstream s;
+  s << std::setprecision(3) << x;
+  return s.str();
+}
+
+// A fraction as a percentage to 0.1, without a trailing ".0" ("71.4 %",
+// "30 %"); under 1 %, to 2 significant digits ("0.01 %").
+std::string Percent(double fraction) {
+  std::ostringstream s;
+  const double tenths = std::round(1000 * fraction);
+  if (std::abs(100 * fraction) < 1) {
+    s << std::setprecision(2) << 100 * fraction << " %";
+  } else {
+    s << std::fixed << std::setprecision(std::fmod(tenths, 10) == 0 ? 0 : 1)
+      << tenths / 10 << " %";
+  }
+  return s.str();
+}
+
+// `text` cut at a space to at most `max` characters, "..." marking the cut.
+std::string Shorten(const std::string& text, std::size_t max) {
+  if (text.size() <= max) return text;
+  if (max < 4) return text.substr(0, max);
+  std::size_t cut = text.rfind(' ', max - 3);
+  if (cut == std::string::npos || cut < max / 2) cut = max - 3;
+  return text.substr(0, cut) + "...";
+}
+
+// A refusal's line: the cause, then the first two of the fixes ("" are
+// skipped) that fit within kRefusalLineMaxChars ("<cause>. <Fix>; <fix>").
+// `aside` (a secondary finding, "; ...") follows the cause only where it
+// leaves room for the first fix.
+std::string Line(const std::string& cause,
+                 const std::vector<std::string>& fixes,
+                 const std::string& aside = "") {
+  std::string line = Shorten(cause, kRefusalLineMaxChars);
+  std::vector<std::string> parts;
+  for (const std::string& fix : fixes) {
+    if (!fix.empty()) parts.push_back(fix);
+  }
+  if (!aside.empty() &&
+      (parts.empty() || line.size() + aside.size() + 2 + parts[0].size() <=
+                            kRefusalLineMaxChars)) {
+    line = Shorten(line + aside, kRefusalLineMaxChars);
+  }
+  int added = 0;
+  for (const std::string& fix : parts) {
+    if (added == 2) break;
+    std::string part = (added == 0 ? ". " : "; ") + fix;
+    if (added == 0) part[2] = static_cast<char>(std::toupper(part[2]));
+    if (line.size() + part.size() > kRefusalLineMaxChars) continue;
+    line += part;
+    ++added;
+  }
+  return line;
+}
 
 // Short phrase for counts of rejected views ("with s <= 0").
 const char* ViewRejectionPhrase(ViewRejection rejection) {
@@ -226,7 +287,8 @@ std::string TranslatingDiskRejectionText(const TranslatingDiskRejection& disk) {
   return s.str();
 }
 
-std::string DisagreementAdviceText(const CueRefusal& cues) {
+std::string DisagreementAdviceText(const CueRefusal& cues,
+                                   bool dp_data_answer) {
   std::ostringstream s;
   s << std::setprecision(4) << "the DP data give " << cues.dp.scale << " in ["
     << cues.dp.ci_low << ", " << cues.dp.ci_high << "], the recorded focus "
@@ -235,8 +297,12 @@ std::string DisagreementAdviceText(const CueRefusal& cues) {
     << std::setprecision(1) << 100 * cues.width << " % of the scale (limit "
     << 100 * cues.limit << " %). Trust the recorded focus if it was measured "
     << "(a tape to the focal-plane mark): set "
-       "--DPScaleEstimator.recorded_focus_tolerance to its accuracy. Trust "
-       "the DP data if ";
+       "--DPScaleEstimator.recorded_focus_tolerance to its accuracy.";
+  if (!dp_data_answer) {
+    s << " The DP data alone do not answer either (see below)";
+    return s.str();
+  }
+  s << " Trust the DP data if ";
   if (cues.calibrated) {
     s << "the profile was calibrated for this camera, lens and aperture and "
          "the recorded focus is the camera's own (a bracket, not a "
@@ -250,34 +316,324 @@ std::string DisagreementAdviceText(const CueRefusal& cues) {
   return s.str();
 }
 
-std::string RefusalText(const DPScaleRefusal& refusal) {
+std::string DisagreementCauseText(const CueRefusal& cues) {
+  return "the DP data and the recorded focus disagree: " + Num(cues.dp.scale) +
+         " against " + Num(cues.focus.scale) + " (together " +
+         Percent(cues.width) + " wide, limit " + Percent(cues.limit) + ")";
+}
+
+namespace {
+
+// The fixes a refusal's line may name, each for one cause.
+const char kCheckLensDataFix[] = "check the f-number and focus in lens.csv/EXIF";
+const char kMeasuredFocusFix[] =
+    "a measured focus: --DPScaleEstimator.recorded_focus_tolerance "
+    "ACCURACY";
+const char kTrustDPDataFix[] =
+    "trust the DP data: --DPScaleEstimator.pin_to_recorded_focus 0";
+const char kRecordFocusFix[] =
+    "record the focus distance (lens.csv focus_distance_m, or EXIF)";
+const char kWiderLimitFix[] =
+    "a wider limit: --DPScaleEstimator.max_scale_ci_relative_width";
+
+// A larger blur-search bound, when the patches hit it.
+std::string SearchBoundFix(const PatchAccount& patches) {
+  if (!patches.SearchBoundLimits()) return "";
+  std::ostringstream s;
+  s << "search farther: --DPScaleEstimator.max_radius_px "
+    << patches.LargerSearchBound() << " (" << patches.at_search_bound << " of "
+    << patches.tried << " patches at the " << Num(patches.max_radius_px)
+    << " px bound)";
+  return s.str();
+}
+
+// "W of T patches have texture too weak for the noise; " when the weak
+// texture leads (what follows it follows from it), else "".
+std::string TextureLead(const PatchAccount& patches) {
+  if (!patches.TextureLeads()) return "";
+  return std::to_string(patches.texture_too_weak) + " of " +
+         std::to_string(patches.tried) +
+         " patches have texture too weak for the noise; ";
+}
+
+const char kTextureFix[] = "views of more textured surfaces, or 16-bit DP "
+                           "frames";
+
+// LinearFailureText in short: at most two kinds of rejected views.
+std::string LinearFailureCause(const LinearFailure& failure) {
+  if (failure.cause != LinearFailureCause::kNoViewSelected) {
+    return LinearFailureText(failure);
+  }
+  std::ostringstream s;
+  s << "no view passed selection:";
+  const auto& rejections = failure.view_rejections;
+  for (std::size_t i = 0; i < rejections.size() && i < 2; ++i) {
+    const int n = rejections[i].first;
+    s << (i == 0 ? " " : ", ") << n
+      << (i == 0 ? (n == 1 ? " view " : " views ") : " ");
+    if (rejections[i].second == ViewRejection::kSmallBlurRange) {
+      s << "with blur range <= " << failure.min_blur_range_px
+        << " px (too little blur)";
+    } else {
+      s << ViewRejectionPhrase(rejections[i].second);
+    }
+  }
+  if (rejections.size() > 2) {
+    int more = 0;
+    for (std::size_t i = 2; i < rejections.size(); ++i) {
+      more += rejections[i].first;
+    }
+    s << ", " << more << " for other reasons";
+  }
+  return s.str();
+}
+
+// OpenScaleText in short.
+std::string OpenScaleCauseText(const OpenScale& open) {
+  switch (open.cause) {
+    case OpenScaleCause::kNone:
+      return "the DP data leave the scale open";
+    case OpenScaleCause::kTooFewPatches:
+      return OpenScaleText(open);
+    case OpenScaleCause::kNoInterval:
+      return "the scale's interval could not be measured (" +
+             Shorten(open.interval_status, 80) + ")";
+    case OpenScaleCause::kCalibratedProfile: {
+      std::ostringstream s;
+      s << "the DP profile's uncertainty (+-"
+        << Percent(open.profile_relative_uncertainty)
+        << ") leaves the scale in [" << Num(open.ci_low) << ", "
+        << Num(open.ci_high) << "], " << Percent(open.width)
+        << " wide (limit " << Percent(open.limit) << ")";
+      return s.str();
+    }
+    case OpenScaleCause::kUnknownProfile:
+      return "the DP profile is unknown: with the profiles the data allow, "
+             "the interval is [" +
+             Num(open.ci_low) + ", " + Num(open.ci_high) + "] (" +
+             Percent(open.width) + " wide, limit " + Percent(open.limit) +
+             ")";
+    case OpenScaleCause::kWideInterval:
+      return "the data do not determine the scale: its interval [" +
+             Num(open.ci_low) + ", " + Num(open.ci_high) + "] spans " +
+             Percent(open.width) + " of the estimate " + Num(open.scale) +
+             " (limit " + Percent(open.limit) + ")";
+  }
+  return "";
+}
+
+std::string ScaleOpenLine(const DPScaleRefusal& refusal) {
+  const OpenScale& open = refusal.open;
+  const CueRefusal& cues = refusal.cues;
   const PatchAccount& patches = refusal.patches;
+  // The recorded focus would have answered but for the disagreement: that
+  // decided (the DP data alone stay open; which cue to trust, or the lens
+  // data both rest on, is the fix).
+  if (cues.cause == CueRefusalCause::kDisagree) {
+    return Line(DisagreementCauseText(cues),
+                {kCheckLensDataFix, kMeasuredFocusFix});
+  }
+  const std::string cause = TextureLead(patches) + OpenScaleCauseText(open);
+  const char* texture_fix = patches.TextureLeads() ? kTextureFix : "";
+  const std::string aside =
+      cues.cause == CueRefusalCause::kTooWide
+          ? "; with the recorded focus still " + Percent(cues.width) + " wide"
+          : "";
+  std::vector<std::string> fixes;
+  switch (open.cause) {
+    case OpenScaleCause::kCalibratedProfile:
+      fixes = {texture_fix,
+               open.focus_recorded ? kMeasuredFocusFix : kRecordFocusFix,
+               kWiderLimitFix};
+      break;
+    case OpenScaleCause::kUnknownProfile:
+      fixes = {texture_fix,
+               "calibrate it (colmap dp_psf_calibrator), then "
+               "--DPScaleEstimator.psf_model calibrated "
+               "--DPScaleEstimator.psf_path FILE",
+               refusal.recorded_focus_missing ? kRecordFocusFix : ""};
+      break;
+    case OpenScaleCause::kNone:
+    case OpenScaleCause::kTooFewPatches:
+    case OpenScaleCause::kNoInterval:
+    case OpenScaleCause::kWideInterval:
+      fixes = {SearchBoundFix(patches),
+               texture_fix,
+               refusal.recorded_focus_missing ? kRecordFocusFix : "",
+               cues.cause == CueRefusalCause::kTooWide ? kMeasuredFocusFix
+                                                       : "",
+               "add views with more depth range and texture"};
+      break;
+  }
+  return Line(cause, fixes, aside);
+}
+
+std::string LinearStageFailedLine(const DPScaleRefusal& refusal) {
+  const LinearFailure& failure = refusal.linear_failure;
+  const PatchAccount& patches = refusal.patches;
+  std::vector<std::string> fixes;
+  if (failure.SwappedViewsLikely()) {
+    fixes.push_back(
+        "blur shrinking with depth means swapped DP views: flip "
+        "--DPScaleEstimator.swap_dp_views");
+  }
+  fixes.push_back(SearchBoundFix(patches));
+  if (patches.TextureLeads()) fixes.push_back(kTextureFix);
+  if (!failure.view_rejections.empty() &&
+      failure.view_rejections.front().second ==
+          ViewRejection::kSmallBlurRange) {
+    fixes.push_back("more blur: a wider aperture, or views with more depth "
+                    "range");
+  }
+  // Views swapped explain their s <= 0 better than the texture does.
+  return Line((failure.SwappedViewsLikely() ? "" : TextureLead(patches)) +
+                  LinearFailureCause(failure),
+              fixes);
+}
+
+std::string CuesNotCombinedLine(const CueRefusal& cues) {
+  if (cues.cause == CueRefusalCause::kDisagree) {
+    return Line(DisagreementCauseText(cues),
+                {kMeasuredFocusFix, kTrustDPDataFix});
+  }
+  return Line("with the recorded focus of " + std::to_string(cues.focus.num_views) +
+                  " view(s) the interval is " + Percent(cues.width) +
+                  " wide, over the limit of " + Percent(cues.limit),
+              {kMeasuredFocusFix,
+               "the DP data alone answer with "
+               "--DPScaleEstimator.pin_to_recorded_focus 0"});
+}
+
+// "patches over all views: T tried, U usable (<rejections>)".
+std::string PatchCountsText(const PatchAccount& patches) {
+  std::string s = "patches over all views: " + std::to_string(patches.tried) +
+                  " tried, " + std::to_string(patches.usable) + " usable";
+  if (!patches.rejections.empty()) {
+    s += " (" + CountsToString(patches.rejections) + ")";
+  }
+  return s;
+}
+
+// The text without a leading "; " (the parts written to follow a reason).
+std::string Unprefixed(const std::string& text) {
+  return text.compare(0, 2, "; ") == 0 ? text.substr(2) : text;
+}
+
+// The account's lines on the patches: the leading cause, the counts, and a
+// larger search bound (typical causes when the patches decided).
+void AddPatchLines(const PatchAccount& patches,
+                   bool typical_causes,
+                   std::vector<std::string>* lines) {
+  if (patches.tried == 0) return;
+  const std::string leading = LeadingCauseText(patches);
+  if (!leading.empty()) lines->push_back(leading.substr(0, leading.size() - 2));
+  lines->push_back(typical_causes ? Unprefixed(TypicalCausesText(patches))
+                                  : PatchCountsText(patches));
+  const std::string bound = PatchFixesText(patches);
+  if (!bound.empty()) lines->push_back(Unprefixed(bound));
+}
+
+const char kCheckLensDataAdvice[] =
+    "Both cues rest on the views' lens data: check their f-number, focal "
+    "length and focus distance (lens.csv, EXIF) against the capture, and "
+    "that the DP profile was made for this lens at this aperture";
+
+}  // namespace
+
+std::string RefusalLine(const DPScaleRefusal& refusal) {
   switch (refusal.code) {
     case ScaleRefusal::kNone:
       return "";
     case ScaleRefusal::kNoViews:
       return "no DP views were given";
     case ScaleRefusal::kLinearStageThrew:
-      return "linear stage failed: " + refusal.error;
-    case ScaleRefusal::kTranslatingDiskRejected:
-      return TranslatingDiskRejectionText(refusal.disk);
+      return Line("linear stage failed: " + refusal.error, {});
+    case ScaleRefusal::kTranslatingDiskRejected: {
+      const TranslatingDiskRejection& disk = refusal.disk;
+      std::string cause = "the DP data reject the translating disk";
+      if (disk.factor_low <= disk.factor_high) {
+        cause += ": the profiles they allow put the scale at " +
+                 Num(disk.factor_low) + " to " + Num(disk.factor_high) +
+                 " times the disk's";
+      } else {
+        cause += " (self-calibration fits " + Shorten(disk.fit_summary, 80) +
+                 ")";
+      }
+      return Line(cause,
+                  {"run with --DPScaleEstimator.psf_model auto or calibrated "
+                   "(colmap dp_psf_calibrator)"});
+    }
     case ScaleRefusal::kLinearStageFailed:
-      return LeadingCauseText(patches) +
-             LinearFailureText(refusal.linear_failure) +
-             PatchSummaryText(patches) + PatchFixesText(patches);
+      return LinearStageFailedLine(refusal);
     case ScaleRefusal::kScaleOpen:
-      return LeadingCauseText(patches) + OpenScaleText(refusal.open) +
-             CueRefusalText(refusal.cues, /*preceded=*/true) +
-             (refusal.recorded_focus_missing
-                  ? "; a recorded focus distance (lens.csv's "
-                    "focus_distance_m, or the camera's EXIF) would give the "
-                    "scale without the DP profile"
-                  : "") +
-             TypicalCausesText(patches) + PatchFixesText(patches);
+      return ScaleOpenLine(refusal);
     case ScaleRefusal::kCuesNotCombined:
-      return CueRefusalText(refusal.cues, /*preceded=*/false);
+      return CuesNotCombinedLine(refusal.cues);
   }
   return "";
+}
+
+std::vector<std::string> RefusalAccount(const DPScaleRefusal& refusal) {
+  const PatchAccount& patches = refusal.patches;
+  const CueRefusal& cues = refusal.cues;
+  std::vector<std::string> lines;
+  switch (refusal.code) {
+    case ScaleRefusal::kNone:
+      return lines;
+    case ScaleRefusal::kNoViews:
+      lines.push_back("no DP views were given");
+      break;
+    case ScaleRefusal::kLinearStageThrew:
+      lines.push_back("linear stage failed: " + refusal.error);
+      break;
+    case ScaleRefusal::kTranslatingDiskRejected:
+      lines.push_back(TranslatingDiskRejectionText(refusal.disk));
+      AddPatchLines(patches, false, &lines);
+      break;
+    case ScaleRefusal::kLinearStageFailed:
+      lines.push_back(LinearFailureText(refusal.linear_failure));
+      AddPatchLines(patches, true, &lines);
+      break;
+    case ScaleRefusal::kScaleOpen: {
+      const OpenScale& open = refusal.open;
+      const bool disagree = cues.cause == CueRefusalCause::kDisagree;
+      if (disagree) {
+        lines.push_back("the DP data and the recorded focus disagree: " +
+                        DisagreementAdviceText(cues, /*dp_alone=*/false));
+        lines.push_back(kCheckLensDataAdvice);
+        lines.push_back("without the recorded focus: " + OpenScaleText(open));
+      } else {
+        lines.push_back(OpenScaleText(open));
+        if (cues.cause == CueRefusalCause::kTooWide) {
+          lines.push_back(Unprefixed(CueRefusalText(cues, true)));
+        }
+      }
+      if (refusal.recorded_focus_missing) {
+        lines.push_back(
+            "a recorded focus distance (lens.csv's focus_distance_m, or the "
+            "camera's EXIF) would give the scale without the DP profile");
+      }
+      AddPatchLines(patches,
+                    !disagree && (open.cause == OpenScaleCause::kTooFewPatches ||
+                                  open.cause == OpenScaleCause::kNoInterval ||
+                                  open.cause == OpenScaleCause::kWideInterval),
+                    &lines);
+      break;
+    }
+    case ScaleRefusal::kCuesNotCombined:
+      if (cues.cause == CueRefusalCause::kDisagree) {
+        lines.push_back("the DP data and the recorded focus disagree: " +
+                        DisagreementAdviceText(cues));
+        lines.push_back(kCheckLensDataAdvice);
+      } else {
+        lines.push_back(Unprefixed(CueRefusalText(cues, true)) +
+                        "; the DP data alone answer with "
+                        "--DPScaleEstimator.pin_to_recorded_focus 0");
+      }
+      AddPatchLines(patches, false, &lines);
+      break;
+  }
+  return lines;
 }
 
 std::string CombinationText(const DPScaleResult& result) {

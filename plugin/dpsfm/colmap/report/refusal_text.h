@@ -1,23 +1,40 @@
 // The words of a refusal: the core says why no scale is reported as codes
 // and numbers (core/scale/refusal.h); this is the one place that words
 // them for users, naming the options (--DPScaleEstimator.*) that may turn a
-// refusal into an answer. The run's "no scale: ..." line, its checkpoint
-// log, the report's reason and psf.status, and the plots read it from here.
+// refusal into an answer. A refusal has two forms: its line (the reason that
+// decided, with its numbers, and at most two fixes that address it: the
+// run's "no scale: ..." error line, its checkpoint log, the report's reason
+// and the plots) and its account (everything else: the other causes, patch
+// counts and rejections, every remedy: the log before the error line and
+// the report's reason_detail).
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 #include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 
 namespace dpsfm {
 
-// The refusal in one sentence ("" for ScaleRefusal::kNone).
-std::string RefusalText(const DPScaleRefusal& refusal);
+// The longest RefusalLine: the command's error line adds "ERROR:
+// dp_scale_estimator: no scale: " and "; nothing was changed" (58
+// characters) and stays within 300.
+constexpr std::size_t kRefusalLineMaxChars = 242;
+
+// The refusal's first line ("" for ScaleRefusal::kNone): the reason that
+// decided, with its numbers, then at most two fixes that address that
+// reason (fewer when they would not fit); at most kRefusalLineMaxChars.
+std::string RefusalLine(const DPScaleRefusal& refusal);
+
+// The refusal in full, one sentence a line, the deciding reason first: the
+// other causes, where the patches went, and every remedy.
+std::vector<std::string> RefusalAccount(const DPScaleRefusal& refusal);
 
 // What happened to the DP PSF (the log's "DP PSF:" line, the report's
 // psf.status): the core's psf_status, or, for a translating disk the data
-// reject, the refusal's sentence.
+// reject, TranslatingDiskRejectionText (the account's first line).
 std::string PsfStatusText(const DPScaleResult& result);
 
 // How the answer was formed from the cues (the report's cues.how):
@@ -51,7 +68,12 @@ std::string OpenScaleText(const OpenScale& open);
 // An explicitly chosen translating disk that the data reject.
 std::string TranslatingDiskRejectionText(const TranslatingDiskRejection& disk);
 // The DP data and the recorded focus disagree: both cues, and which to
-// trust when.
-std::string DisagreementAdviceText(const CueRefusal& cues);
+// trust when; `dp_data_answer` false: the DP data alone leave the scale
+// open (ScaleRefusal::kScaleOpen), so trusting them is no remedy.
+std::string DisagreementAdviceText(const CueRefusal& cues,
+                                   bool dp_data_answer = true);
+// "the DP data and the recorded focus disagree: 0.318 against 0.583, an
+// interval covering both 103.2 % wide (limit 30 %)".
+std::string DisagreementCauseText(const CueRefusal& cues);
 
 }  // namespace dpsfm

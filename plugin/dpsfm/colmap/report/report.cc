@@ -272,7 +272,9 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   report["tool"] = "dp-sfm " + DPSFMVersion();
   report["success"] = result.success;
   if (!result.success) {
-    report["reason"] = RefusalText(result.refusal);
+    // The error line's reason, and the refusal in full.
+    report["reason"] = RefusalLine(result.refusal);
+    report["reason_detail"] = RefusalAccount(result.refusal);
   }
   report["scale"] = result.success ? Number(result.scale) : nullptr;
   report["scale_initial"] =
