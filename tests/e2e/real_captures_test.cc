@@ -137,13 +137,13 @@ TEST_F(RealCaptures, CalibrateFromFlatPlanesThenEstimate) {
   const std::string text = ReadTextFile(profile);
   EXPECT_NE(text.find("model measured_kernels"), std::string::npos) << text;
   EXPECT_NE(text.find("\nlight linear"), std::string::npos) << text;
-  // The stated uncertainty: the planes' own ~4 % and the 22 % transfer term
+  // The stated uncertainty: the planes' own ~4 % and the 24 % transfer term
   // in quadrature.
   const size_t u = text.find("\nuncertainty ");
   ASSERT_NE(u, std::string::npos) << text;
   const double uncertainty = std::stod(text.substr(u + 13));
-  EXPECT_GT(uncertainty, 0.22);
-  EXPECT_LT(uncertainty, 0.25);
+  EXPECT_GT(uncertainty, 0.24);
+  EXPECT_LT(uncertainty, 0.27);
   EXPECT_NE(text.find("fit_uncertainty_terms "), std::string::npos) << text;
   EXPECT_TRUE(fs::exists(dir_ / "library/r6m2_left.npy"));
   // The fitted focus (from the focal-plane mark) and the strength.

@@ -68,6 +68,8 @@ TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
                   "HOME=" + home,
                   "PATH=" + bin + ":" + (path ? path : "/usr/bin:/bin"),
                   "DPSFM_REALDP_DIR=" + real,
+                  // A colour terminal's TERM, with the log in a pipe.
+                  "TERM=xterm-256color",
                   "bash",
                   script});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
@@ -89,6 +91,31 @@ TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
   const double high = report.at("scale_ci_high").get<double>();
   EXPECT_LE(low, 0.37) << report.at("scale");
   EXPECT_GE(high, 0.37) << report.at("scale");
+  // The log is not a terminal: no colour codes in it.
+  EXPECT_EQ(run.err.find("\x1b["), std::string::npos) << run.err;
+  // The search bound is the view's own, and shown: once 4.93 px (the
+  // profile's kernels) with a third of the patches at it, silently.
+  const nlohmann::json& bound = report.at("search_bound");
+  EXPECT_GT(bound.at("px").get<double>(),
+            bound.at("initial_px").get<double>())
+      << bound;
+  EXPECT_NE(run.err.find("Blur-search bound grown from 4.93"),
+            std::string::npos)
+      << run.err;
+  const bool warned =
+      run.err.find("sit at the blur-search bound") != std::string::npos;
+  EXPECT_EQ(warned, bound.at("limits_answer").get<bool>()) << bound;
+  if (warned) {
+    EXPECT_NE(run.err.find("--DPScaleEstimator.max_radius_px"),
+              std::string::npos);
+  }
+  // Stages that did not run are null, never 0.
+  const nlohmann::json& intensity = report.at("intensity");
+  if (!intensity.at("ran").get<bool>()) {
+    EXPECT_TRUE(intensity.at("scale").is_null()) << intensity;
+    EXPECT_TRUE(intensity.at("ci").is_null()) << intensity;
+  }
+  EXPECT_TRUE(report.at("psf").at("fit").is_null()) << report.at("psf");
   EXPECT_TRUE(fs::exists(work + "/box002/dense/dp_scale_record.json"));
   EXPECT_TRUE(fs::exists(work + "/r6m2_rf50_f4_left.npy"));
 }

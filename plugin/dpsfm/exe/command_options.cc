@@ -1,8 +1,13 @@
 #include "dpsfm/exe/command_options.h"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ostream>
+
+#include <glog/logging.h>
 
 #include "dpsfm/colmap/util/colmap_compat.h"
 
@@ -96,6 +101,10 @@ bool CommandOptions::Parse(int argc,
     *exit_code = EXIT_FAILURE;
     return false;
   }
+  // glog colours by the TERM variable alone, so a log redirected to a file
+  // from a colour terminal would carry escape codes: colour only a
+  // terminal.
+  if (!isatty(fileno(stderr))) FLAGS_colorlogtostderr = false;
   return true;
 }
 

@@ -74,7 +74,7 @@ int RunDPPsfCalibrator(int argc, char** argv) {
       "DPPsfCalibrator.transfer_uncertainty",
       &options.transfer_uncertainty,
       "how far a calibration on planes transfers to scenes, as a relative "
-      "95 % uncertainty added to the fit's own (0.22: measured on real "
+      "95 % uncertainty added to the fit's own (0.24: measured on real "
       "Canon R6 II scenes; 0 for simulated cameras)");
   manager.AddDefault("DPPsfCalibrator.patch_size",
                      &options.patch_size,

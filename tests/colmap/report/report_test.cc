@@ -195,5 +195,76 @@ TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
   EXPECT_DOUBLE_EQ(r["pinned_profile_strength"].get<double>(), 1.1);
 }
 
+// The walkthrough's answer came from the two cues: the intensity stage was
+// skipped and no profile was fitted (a calibrated one was given). Neither
+// may read as a stage that found 0.
+TEST(MakeReport, StagesThatDidNotRunAreNullWithTheirStatus) {
+  DPScaleResult result = HandMadeResult();
+  result.intensity_used = false;
+  result.intensity_status =
+      "skipped: the DP data alone leave the scale open; it comes from the "
+      "recorded focus";
+  result.scale_intensity = 0;
+  result.intensity_ci_low = 0;
+  result.intensity_ci_high = 0;
+  result.candidate_scales.clear();
+  result.candidate_losses.clear();
+  result.psf_status = "calibrated profile r6.dpsf";
+  const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
+  EXPECT_EQ(r["intensity"]["ran"], false);
+  EXPECT_TRUE(r["intensity"]["scale"].is_null()) << r["intensity"];
+  EXPECT_TRUE(r["intensity"]["ci"].is_null()) << r["intensity"];
+  EXPECT_EQ(r["intensity"]["status"], result.intensity_status);
+  EXPECT_TRUE(r["psf"]["fit"].is_null()) << r["psf"];
+  EXPECT_EQ(r["psf"]["fit_status"].get<std::string>().find("not run"), 0u);
+
+  result.psf_fit_ran = true;
+  result.psf_fit.centroid_offset = 0.2;
+  const nlohmann::json fitted = MakeReport(result, {}, {}, RunTimings());
+  EXPECT_EQ(fitted["psf"]["fit_status"], "ran");
+  EXPECT_DOUBLE_EQ(
+      fitted["psf"]["fit"]["centroid_offset_per_radius"].get<double>(), 0.2);
+}
+
+// The search bound as the views ended with it, and a measured profile's
+// extrapolation, as the core counted them.
+TEST(MakeReport, SearchBoundSection) {
+  DPScaleResult result = HandMadeResult();
+  SearchBoundAccount& b = result.search_bound;
+  b.initial_max_radius_px = 4.93;
+  b.max_radius_px = 13;
+  b.views_grown = 1;
+  b.patches_searched = 240;
+  b.patches_at_bound = 3;
+  b.profile_covered_radius_px = 4.93;
+  b.samples = 17;
+  b.samples_beyond_coverage = 5;
+  b.extrapolation_uncertainty = 0.053;
+  DPViewSummary summary;
+  summary.name = "a.jpg";
+  summary.initial_max_radius_px = 4.93;
+  summary.max_radius_px = 13;
+  summary.search_bound_growths = 2;
+  summary.patches_at_bound = 3;
+  summary.patches_searched = 240;
+  const nlohmann::json r = MakeReport(result, {}, {summary}, RunTimings());
+  const nlohmann::json& s = r["search_bound"];
+  EXPECT_DOUBLE_EQ(s["initial_px"].get<double>(), 4.93);
+  EXPECT_DOUBLE_EQ(s["px"].get<double>(), 13);
+  EXPECT_EQ(s["views_grown"], 1);
+  EXPECT_EQ(s["patches_at_bound"], 3);
+  EXPECT_EQ(s["limits_answer"], false);
+  EXPECT_EQ(s["patches_beyond_coverage"], 5);
+  EXPECT_DOUBLE_EQ(s["extrapolation_uncertainty"].get<double>(), 0.053);
+  const nlohmann::json& v = r["views"]["a.jpg"]["search_bound"];
+  EXPECT_EQ(v["growths"], 2);
+  EXPECT_DOUBLE_EQ(v["initial_px"].get<double>(), 4.93);
+
+  result.search_bound.profile_covered_radius_px = 0;  // a model profile
+  EXPECT_TRUE(MakeReport(result, {}, {}, RunTimings())["search_bound"]
+                                                      ["profile_covered_px"]
+                                                          .is_null());
+}
+
 }  // namespace
 }  // namespace dpsfm

@@ -2,6 +2,7 @@
 // decide (the leading cause, a larger search bound and its size), and the
 // linear stage's view rejections. Their words are tested with
 // colmap/report/refusal_text (tests/colmap/report/refusal_text_test.cc).
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -9,8 +10,10 @@
 #include <gtest/gtest.h>
 
 #include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/blur/patch_grid.h"
 #include "dpsfm/core/blur/patch_selection.h"
 #include "dpsfm/core/scale/refusal.h"
+#include "dpsfm/core/scale/view_patches.h"
 
 namespace dpsfm {
 namespace test {
@@ -123,6 +126,80 @@ TEST(ScaleRefusalName, EveryCodeHasOne) {
     EXPECT_EQ(std::string(ScaleRefusalName(code)).find("--"),
               std::string::npos);
   }
+}
+
+// Hand-computed: 1.6 x 3 = 4.8 < 3 + 2 = 5 -> 5; 1.6 x 5 = 8 -> 8;
+// 1.6 x 4.93 = 7.888 -> 8 (up to a half pixel); 1.6 x 8 = 12.8 -> 13.
+TEST(LargerSearchBound, SixtyPercentOrTwoPixelsUpToAHalfPixel) {
+  EXPECT_DOUBLE_EQ(LargerSearchBound(3), 5);
+  EXPECT_DOUBLE_EQ(LargerSearchBound(5), 8);
+  EXPECT_DOUBLE_EQ(LargerSearchBound(4.93), 8);
+  EXPECT_DOUBLE_EQ(LargerSearchBound(8), 13);
+  EXPECT_DOUBLE_EQ(LargerSearchBound(10.2), 16.5);  // 16.32 -> 16.5
+}
+
+TEST(SearchBoundReached, OnlyAnAutomaticBoundTheBlurReachesWhileGrowthsLast) {
+  DPScaleOptions options;  // share 0.05, two growths
+  EXPECT_TRUE(SearchBoundReached(100, 5, 0, options));   // exactly 5 %
+  EXPECT_FALSE(SearchBoundReached(100, 4, 0, options));  // below
+  EXPECT_FALSE(SearchBoundReached(0, 0, 0, options));    // nothing searched
+  EXPECT_FALSE(SearchBoundReached(100, 50, 2, options));  // growths spent
+  DPScaleOptions explicit_bound = options;
+  explicit_bound.max_radius_px = 5;  // the user's bound stands
+  EXPECT_FALSE(SearchBoundReached(100, 50, 0, explicit_bound));
+}
+
+// Patches on the thin lens's line r = 2 - 6 / z' (focus at z' = 3), one
+// far off it; the grid's patch depths run 1.0, 1.1, ..., 3.0 (5 % and
+// 95 %: 1.1 and 2.9 by linear interpolation). By hand: |2 - 6 / 1.1| =
+// 3.4545, |2 - 6 / 2.9| = 0.0690, so 3.4545 px.
+TEST(ExpectedMaxBlur, TheLineThroughInverseDepthOverTheDepthRange) {
+  std::vector<PatchCandidate> candidates;
+  for (int i = 0; i <= 20; ++i) {
+    PatchCandidate c;
+    c.depth.ok = true;
+    c.depth.median = 1.0 + 0.1 * i;
+    candidates.push_back(c);
+  }
+  PatchCandidate no_depth;  // not counted
+  no_depth.reject = "without depth";
+  no_depth.depth.median = 0.1;
+  candidates.push_back(no_depth);
+  std::vector<PatchSample> usable;
+  for (double z : {1.5, 1.7, 2.0, 2.2, 2.5, 2.8, 3.0}) {
+    PatchSample s;
+    s.depth = z;
+    s.radius_px = 2 - 6 / z;
+    usable.push_back(s);
+  }
+  PatchSample outlier;
+  outlier.depth = 2.0;
+  outlier.radius_px = 9;
+  usable.push_back(outlier);
+  EXPECT_NEAR(ExpectedMaxBlur(candidates, usable), 6 / 1.1 - 2, 1e-9);
+  usable.resize(5);  // fewer than 6: undetermined
+  EXPECT_EQ(ExpectedMaxBlur(candidates, usable), 0);
+}
+
+TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
+  const DPPsfField field =
+      DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  BlurEstimationOptions blur;
+  DPScaleOptions options;
+  const PatchGeometry g = PatchGeometryForRadius(5, 1);
+  const cv::Size frame(768, 512);
+  // 1.2 x 6.5 = 7.8 -> 8 (a half pixel up).
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 6.5, frame, field, blur, options), 8);
+  // No expected blur: LargerSearchBound(5) = 8.
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 0, frame, field, blur, options), 8);
+  // 1.2 x 4 = 4.8 < 5: the patches at the bound are not the depth range's
+  // blur; the bound stays.
+  EXPECT_EQ(GrownSearchBound(g, 4, frame, field, blur, options), 0);
+  // The 5 px geometry's patch is 2 x 5 + 21 = 31 px, and at 8 px the
+  // disk's kernels need a border of about 9 px: crops of ~49 px do not fit
+  // twice into 90 px.
+  EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur, options),
+            0);
 }
 
 }  // namespace

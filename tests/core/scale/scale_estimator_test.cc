@@ -712,5 +712,79 @@ TEST(DPScaleEstimator, MalformedInputThrowsNamingTheView) {
   EXPECT_NE(r.refusal.code, ScaleRefusal::kNone);
 }
 
+// The automatic search bound is the view's own: frames whose blur reaches
+// 7-9.4 px searched from a 3 px bound (e.g. a profile's reference radius on
+// frames whose size rule gives less) sit at it in large numbers; the view
+// is searched again up to the blur its depth range implies (the rendered
+// depth maps give the truth it must reach), and the scale
+// that rests on all its patches holds the rendered truth. An explicit
+// bound is never grown.
+TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
+  const double scale = 0.0731;
+  std::vector<CaptureSpec> specs =
+      SixPositions(Lens(50, 4), Lens(50, 4), /*seed=*/40);
+  specs.resize(4);
+  const std::vector<DPView> views = RenderAll(specs, scale);
+  DPScaleOptions options;
+  options.resize_factor = 1;
+  options.min_auto_radius_px = 3;
+  options.linear.num_bootstrap = 100;
+  options.intensity_refinement = false;
+
+  DPScaleOptions fixed = options;
+  fixed.max_search_bound_growths = 0;
+  const RunOutput clipped = RunPipeline(views, fixed);
+  for (const DPViewSummary& s : clipped.summaries) {
+    EXPECT_DOUBLE_EQ(s.max_radius_px, 3) << s.name;
+    EXPECT_EQ(s.search_bound_growths, 0) << s.name;
+    // The premise: the blur lies beyond 3 px for many patches.
+    EXPECT_GE(s.patches_at_bound, 0.05 * s.patches_searched) << s.name;
+  }
+  EXPECT_TRUE(clipped.result.search_bound.limits);
+
+  const RunOutput grown = RunPipeline(views, options);
+  for (size_t i = 0; i < views.size(); ++i) {
+    const DPViewSummary& s = grown.summaries[i];
+    // The rendered blur: the largest |r| over the view's depth map (metric
+    // depth = model depth x scale), as the renderer made it.
+    double true_max = 0;
+    const cv::Mat& depth = views[i].depth;
+    for (int y = 0; y < depth.rows; ++y) {
+      for (int x = 0; x < depth.cols; ++x) {
+        true_max = std::max(
+            true_max,
+            std::abs(PredictBlurRadiusPx(specs[i].lens,
+                                         specs[i].lens.PixelPitchMm(),
+                                         1.0,
+                                         specs[i].focus_m,
+                                         scale * depth.at<float>(y, x))));
+      }
+    }
+    EXPECT_DOUBLE_EQ(s.initial_max_radius_px, 3) << s.name;
+    EXPECT_GE(s.search_bound_growths, 1) << s.name;
+    // Searched that far, not much farther: the line through the usable
+    // patches, over the depth range, with its 1.2 margin.
+    EXPECT_GE(s.max_radius_px, 0.9 * true_max) << s.name;
+    EXPECT_LE(s.max_radius_px, 1.5 * true_max + 0.5) << s.name;
+    EXPECT_LT(s.patches_at_bound, 0.05 * s.patches_searched)
+        << s.name << ": bound " << s.max_radius_px << ", true " << true_max;
+  }
+  const DPScaleResult& r = grown.result;
+  ASSERT_TRUE(r.success) << Why(r);
+  EXPECT_EQ(r.search_bound.views_grown, 4);
+  EXPECT_FALSE(r.search_bound.limits);
+  EXPECT_NEAR(r.scale / scale, 1, 0.03);
+  EXPECT_LE(r.scale_ci_low, scale);
+  EXPECT_GE(r.scale_ci_high, scale);
+
+  DPScaleOptions explicit_bound = options;
+  explicit_bound.max_radius_px = 3;
+  DPScaleEstimator estimator(explicit_bound,
+                             std::make_shared<TranslatingDiskPsf>());
+  const DPViewSummary s = estimator.AddView(views[0]);
+  EXPECT_DOUBLE_EQ(s.max_radius_px, 3);
+  EXPECT_EQ(s.search_bound_growths, 0);
+}
+
 }  // namespace
 }  // namespace dpsfm

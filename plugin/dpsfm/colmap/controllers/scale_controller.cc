@@ -397,8 +397,50 @@ std::vector<std::string> FrameWarnings(const DPScaleResult& result) {
   return warnings;
 }
 
+// The search bound as the views ended with it (DPScaleResult::
+// search_bound), for the log and the report: a successful run whose blur
+// still reaches the bound, and a measured profile extended beyond the blur
+// it was calibrated over, are warnings.
+std::vector<std::string> SearchBoundWarnings(const DPScaleResult& result) {
+  const SearchBoundAccount& b = result.search_bound;
+  std::vector<std::string> warnings;
+  std::ostringstream s;
+  if (result.success && b.limits) {
+    s << b.patches_at_bound << " of " << b.patches_searched
+      << " searched patches sit at the blur-search bound ("
+      << std::setprecision(3) << b.max_radius_px << " px"
+      << (b.views_grown > 0 ? ", grown from " : "");
+    if (b.views_grown > 0) s << b.initial_max_radius_px << " px";
+    s << "): their blur lies beyond it and the answer rests on the patches "
+         "nearer the focus; --DPScaleEstimator.max_radius_px "
+      << b.larger_radius_px
+      << " searches farther";
+    warnings.push_back(s.str());
+    s.str("");
+  }
+  if (b.samples_beyond_coverage > 0) {
+    s << b.samples_beyond_coverage << " of " << b.samples
+      << " selected patches have more blur than the DP profile's "
+         "calibration covered ("
+      << std::setprecision(3) << b.profile_covered_radius_px
+      << " px); there its measured kernels are magnified copies, and the "
+         "interval carries +-"
+      << std::fixed << std::setprecision(1)
+      << 100 * b.extrapolation_uncertainty << " % for it";
+    warnings.push_back(s.str());
+  }
+  return warnings;
+}
+
 // Step 6: what the estimate found, per view and overall.
 void LogResult(const DPScaleResult& result) {
+  const SearchBoundAccount& bound = result.search_bound;
+  if (bound.views_grown > 0) {
+    LOG(INFO) << "Blur-search bound grown from " << bound.initial_max_radius_px
+              << " to " << bound.max_radius_px << " px in "
+              << bound.views_grown
+              << " view(s) whose blur reached it";
+  }
   const std::string psf_status = PsfStatusText(result);
   if (!psf_status.empty()) {
     LOG(INFO) << "DP PSF: " << psf_status << " ("
@@ -421,6 +463,9 @@ void LogResult(const DPScaleResult& result) {
               << view.frames.encoding_reason << ")";
   }
   for (const std::string& warning : FrameWarnings(result)) {
+    LOG(WARNING) << warning;
+  }
+  for (const std::string& warning : SearchBoundWarnings(result)) {
     LOG(WARNING) << warning;
   }
 }
@@ -498,6 +543,9 @@ nlohmann::json RunReport(const ScaleRun& run,
     warnings.push_back("a rescale in place would be refused: " + plan.refusal);
   }
   for (const std::string& warning : FrameWarnings(run.result)) {
+    warnings.push_back(warning);
+  }
+  for (const std::string& warning : SearchBoundWarnings(run.result)) {
     warnings.push_back(warning);
   }
   report["warnings"] = warnings;

@@ -538,6 +538,7 @@ void PsfChoice::ApplyTo(DPScaleOptions* core) const {
   }
   core->min_auto_radius_px =
       std::max(core->min_auto_radius_px, reference_radius_px);
+  core->profile_covered_radius_px = covered_radius_px;
 }
 
 PsfChoice MakePsfField(const std::string& psf_model,
@@ -576,6 +577,13 @@ PsfChoice MakePsfField(const std::string& psf_model,
     // the frame-size rule gives 3.5 px).
     if (profile.model == "measured_kernels") {
       choice.reference_radius_px = profile.reference_radius_px;
+      // Beyond the blur the calibration's captures covered (older
+      // profiles: the blur the kernels were measured at), they are
+      // magnified copies (MeasuredKernelPsf): the estimate counts the
+      // patches there and widens the interval for them.
+      choice.covered_radius_px = profile.conditions.max_blur_px > 0
+                                     ? profile.conditions.max_blur_px
+                                     : profile.reference_radius_px;
     }
     choice.field = profile.MakeField(psf_path);
     return choice;

@@ -129,6 +129,10 @@ struct PsfChoice {
   // The blur a measured-kernel profile was measured at: it bounds the
   // automatic search radius from below (0: no bound).
   double reference_radius_px = 0;
+  // The largest blur a measured-kernel profile's calibration covered:
+  // beyond it the kernels are magnified copies (0: a model profile).
+  double covered_radius_px = 0;
+
   // A profile file's path and the conditions it records (calibrated).
   std::string path;
   ProfileConditions conditions;

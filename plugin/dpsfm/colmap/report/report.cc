@@ -38,8 +38,15 @@ nlohmann::json IntensitySection(const DPScaleResult& result) {
   nlohmann::json intensity;
   intensity["used"] = result.intensity_used;
   intensity["status"] = result.intensity_status;
-  intensity["scale"] = Number(result.scale_intensity);
-  intensity["ci"] = Interval(result.intensity_ci_low, result.intensity_ci_high);
+  // A stage that did not run has no scale and no interval (null, never 0):
+  // its status says why.
+  const bool ran = result.scale_intensity > 0;
+  intensity["ran"] = ran;
+  intensity["scale"] = ran ? Number(result.scale_intensity) : nullptr;
+  intensity["ci"] =
+      ran && result.intensity_ci_high > 0
+          ? Interval(result.intensity_ci_low, result.intensity_ci_high)
+          : nullptr;
   intensity["loss"] = result.intensity_loss;
   intensity["failed_evaluations"] = result.intensity_failed_evaluations;
   nlohmann::json curve = nlohmann::json::array();
@@ -91,7 +98,14 @@ nlohmann::json PsfSection(const DPScaleResult& result) {
   psf["self_calibrated"] = result.psf_self_calibrated;
   const std::string status = PsfStatusText(result);
   psf["status"] = status;
-  if (!status.empty()) {
+  // Self-calibration's fit, or null with why when none ran (a given
+  // profile is used as it is).
+  psf["fit"] = nullptr;
+  psf["fit_status"] = result.psf_fit_ran
+                          ? "ran"
+                          : "not run: the profile was given "
+                            "(--DPScaleEstimator.psf_model calibrated)";
+  if (!status.empty() && result.psf_fit_ran) {
     psf["fit"] = ProfileFit(result.psf_fit);
     // A profile that changes across the frame: each column band's fit.
     nlohmann::json bands = nlohmann::json::array();
@@ -181,6 +195,11 @@ void AddViewSummary(const DPViewSummary& s, nlohmann::json* entry) {
   e["working_size"] = {s.working_size.width, s.working_size.height};
   e["patch_size"] = s.patch_size;
   e["max_radius_px"] = s.max_radius_px;
+  e["search_bound"] = {{"initial_px", s.initial_max_radius_px},
+                       {"px", s.max_radius_px},
+                       {"growths", s.search_bound_growths},
+                       {"patches_at_bound", s.patches_at_bound},
+                       {"patches_searched", s.patches_searched}};
   nlohmann::json rejections = nlohmann::json::object();
   for (const auto& rejection : s.rejections) {
     rejections[rejection.first] = rejection.second;
@@ -264,6 +283,24 @@ nlohmann::json PatchesSection(const DPScaleResult& result) {
 
 }  // namespace
 
+// The search bound over all views, and a measured profile's extrapolation
+// (DPScaleResult::search_bound).
+nlohmann::json SearchBoundSection(const DPScaleResult& result) {
+  const SearchBoundAccount& b = result.search_bound;
+  nlohmann::json section = {{"initial_px", b.initial_max_radius_px},
+                            {"px", b.max_radius_px},
+                            {"views_grown", b.views_grown},
+                            {"patches_searched", b.patches_searched},
+                            {"patches_at_bound", b.patches_at_bound},
+                            {"limits_answer", b.limits}};
+  section["profile_covered_px"] = b.profile_covered_radius_px > 0
+                                      ? Number(b.profile_covered_radius_px)
+                                      : nullptr;
+  section["patches_beyond_coverage"] = b.samples_beyond_coverage;
+  section["extrapolation_uncertainty"] = b.extrapolation_uncertainty;
+  return section;
+}
+
 nlohmann::json MakeReport(const DPScaleResult& result,
                           const std::vector<ViewSource>& sources,
                           const std::vector<DPViewSummary>& summaries,
@@ -293,6 +330,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
   report["intensity"] = IntensitySection(result);
   AddScaleSources(result, &report);
   report["psf"] = PsfSection(result);
+  report["search_bound"] = SearchBoundSection(result);
   report["views"] = ViewsSection(result, sources, summaries);
   report["num_patches"] = result.num_patches;
   report["num_views_used"] = result.num_views_used;

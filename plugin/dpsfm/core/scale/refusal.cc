@@ -7,6 +7,7 @@
 
 #include "dpsfm/core/blur/blur_estimation.h"
 #include "dpsfm/core/blur/patch_selection.h"
+#include "dpsfm/core/scale/view_patches.h"
 
 namespace dpsfm {
 
@@ -52,8 +53,7 @@ bool PatchAccount::SearchBoundLimits() const {
 }
 
 int PatchAccount::LargerSearchBound() const {
-  return static_cast<int>(
-      std::ceil(std::max(1.6 * max_radius_px, max_radius_px + 2)));
+  return static_cast<int>(std::ceil(dpsfm::LargerSearchBound(max_radius_px)));
 }
 
 const char* ScaleRefusalName(ScaleRefusal code) {

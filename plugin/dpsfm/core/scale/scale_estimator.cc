@@ -39,6 +39,10 @@ bool DPScaleOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(stride, 0);
   DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
   DPSFM_CHECK_OPTION_GE(min_auto_radius_px, 0);
+  DPSFM_CHECK_OPTION_VALUE(search_bound_share > 0 && search_bound_share <= 1,
+                           search_bound_share);
+  DPSFM_CHECK_OPTION_GE(max_search_bound_growths, 0);
+  DPSFM_CHECK_OPTION_GE(profile_covered_radius_px, 0);
   // 0 is automatic.
   DPSFM_CHECK_OPTION_VALUE(resize_factor >= 0 && resize_factor <= 1,
                            resize_factor);
@@ -120,48 +124,78 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   summary.frame_size = view.left.size();
   data->lens = view.lens;
 
-  const PatchGeometry geometry = ViewPatchGeometry(view.left.size(), options_);
+  PatchGeometry geometry = ViewPatchGeometry(view.left.size(), options_);
   const double rf = geometry.resize_factor;
   summary.resize_factor = rf;
-  summary.patch_size = geometry.patch_size;
-  summary.stride = geometry.stride;
-  summary.max_radius_px = geometry.max_radius_px;
+  summary.initial_max_radius_px = geometry.max_radius_px;
   data->working_pitch_mm = view.lens.PixelPitchMm() / rf;
   const WorkingView working = MakeWorkingView(view, rf);
   summary.working_size = working.left.size();
   BlurEstimationOptions blur = options_.blur;
-  blur.max_radius_px = geometry.max_radius_px;
-  const int border = BlurSearchBorder(field_, blur, geometry.max_radius_px);
-
-  // 1. The patch grid and each patch's depth (patch_grid.h).
-  const std::vector<PatchCandidate> candidates =
-      PatchesWithDepth(view, working, geometry, border, options_);
-  summary.patches_tried = static_cast<int>(candidates.size());
-  for (const PatchCandidate& c : candidates) {
-    summary.patches_with_depth += c.reject.empty();
-  }
-  // 2 and 3. Screening, the blur-search share and the blur search.
-  const ViewBlurSearch search = SearchViewBlur(working,
-                                               candidates,
-                                               field_,
-                                               blur,
-                                               border,
-                                               geometry.patch_size,
-                                               summary.patches_with_depth > 0,
-                                               options_);
-  summary.patches_searched = search.num_searched;
-  // 4. Usable patches become samples; the others are counted by reason.
+  int border = 0;
+  std::vector<PatchCandidate> candidates;
+  ViewBlurSearch search;
   std::map<std::string, int> rejections;
   std::vector<int> sample_candidate;  // grid index of each sample
-  data->samples = ViewSamples(candidates,
-                              search,
-                              working,
-                              field_,
-                              geometry,
-                              summary.index,
-                              options_,
-                              &rejections,
-                              &sample_candidate);
+  // 1 to 4, for each search bound: the patch grid with each patch's depth
+  // (patch_grid.h), the screening, the blur-search share, the blur search,
+  // and the usable patches as samples (the others counted by reason). An
+  // automatic bound that the view's blur reaches is grown to the blur its
+  // depth range implies and the view searched again (SearchBoundReached,
+  // ExpectedMaxBlur, GrownSearchBound).
+  for (;;) {
+    blur.max_radius_px = geometry.max_radius_px;
+    border = BlurSearchBorder(field_, blur, geometry.max_radius_px);
+    candidates = PatchesWithDepth(view, working, geometry, border, options_);
+    int with_depth = 0;
+    for (const PatchCandidate& c : candidates) with_depth += c.reject.empty();
+    search = SearchViewBlur(working,
+                            candidates,
+                            field_,
+                            blur,
+                            border,
+                            geometry.patch_size,
+                            with_depth > 0,
+                            options_);
+    rejections.clear();
+    sample_candidate.clear();
+    data->samples = ViewSamples(candidates,
+                                search,
+                                working,
+                                field_,
+                                geometry,
+                                summary.index,
+                                options_,
+                                &rejections,
+                                &sample_candidate);
+    summary.patches_with_depth = with_depth;
+    summary.patches_at_bound = PatchesAtSearchBound(search);
+    if (!SearchBoundReached(search.num_searched,
+                            summary.patches_at_bound,
+                            summary.search_bound_growths,
+                            options_)) {
+      break;
+    }
+    summary.expected_max_radius_px =
+        ExpectedMaxBlur(candidates, data->samples);
+    const double grown = GrownSearchBound(geometry,
+                                          summary.expected_max_radius_px,
+                                          working.left.size(),
+                                          field_,
+                                          blur,
+                                          options_);
+    if (!(grown > 0)) break;
+    // The patches stay as they were (an explicit max_radius_px keeps them
+    // too): larger ones straddle more depth edges and leave fewer patches
+    // (on box/002, 13 px patches gave 57 searched and a DP cue 26 % low).
+    geometry.max_radius_px = grown;
+    ++summary.search_bound_growths;
+  }
+  summary.patch_size = geometry.patch_size;
+  summary.stride = geometry.stride;
+  summary.max_radius_px = geometry.max_radius_px;
+  summary.patches_tried = static_cast<int>(candidates.size());
+  summary.patches_searched = search.num_searched;
   summary.patches_valid = static_cast<int>(data->samples.size());
   for (const auto& r : rejections) summary.rejections.emplace_back(r);
   // 5. Top-T_c selection.
@@ -286,6 +320,51 @@ double DPScaleEstimator::LensGeometryTerm(
   return options_.lens_geometry_uncertainty * Percentile(ratios, 0.5);
 }
 
+SearchBoundAccount DPScaleEstimator::AccountForSearchBound() const {
+  SearchBoundAccount b;
+  for (const auto& v : views_) {
+    b.initial_max_radius_px =
+        std::max(b.initial_max_radius_px, v->summary.initial_max_radius_px);
+    b.max_radius_px = std::max(b.max_radius_px, v->summary.max_radius_px);
+    b.views_grown += v->summary.search_bound_growths > 0;
+    b.patches_searched += v->summary.patches_searched;
+    b.patches_at_bound += v->summary.patches_at_bound;
+  }
+  b.limits = b.patches_searched > 0 &&
+             !(b.patches_at_bound <
+               options_.search_bound_share * b.patches_searched);
+  b.larger_radius_px = std::ceil(LargerSearchBound(b.max_radius_px));
+  b.profile_covered_radius_px = options_.profile_covered_radius_px;
+  return b;
+}
+
+void DPScaleEstimator::AccountForExtrapolation(
+    const LinearEstimate& linear,
+    const std::vector<std::vector<PatchSample>>& samples,
+    SearchBoundAccount* bound) const {
+  SearchBoundAccount& b = *bound;
+  if (!(b.profile_covered_radius_px > 0) ||
+      options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
+    return;
+  }
+  std::vector<double> beyond;  // ln(|r| / covered) of those beyond
+  for (int i : linear.selected_views) {
+    for (const PatchSample& p : samples[i]) {
+      if (!p.selected) continue;
+      ++b.samples;
+      const double r = std::abs(p.radius_px);
+      if (r > b.profile_covered_radius_px) {
+        beyond.push_back(std::log(r / b.profile_covered_radius_px));
+      }
+    }
+  }
+  b.samples_beyond_coverage = static_cast<int>(beyond.size());
+  if (beyond.empty()) return;
+  b.extrapolation_uncertainty = options_.profile_relative_uncertainty *
+                                beyond.size() / b.samples *
+                                Percentile(beyond, 0.5);
+}
+
 void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
                                               DPScaleResult* result) const {
   if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
@@ -301,10 +380,13 @@ void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
       result->profile_scale_factor_high *= 1 + u;
     }
   } else {
-    result->profile_scale_factor_low =
-        1 - options_.profile_relative_uncertainty;
-    result->profile_scale_factor_high =
-        1 + options_.profile_relative_uncertainty;
+    // A measured profile extended beyond the blur it covered
+    // (AccountForSearchBound) is less certain there.
+    const double u =
+        std::hypot(options_.profile_relative_uncertainty,
+                   result->search_bound.extrapolation_uncertainty);
+    result->profile_scale_factor_low = 1 - u;
+    result->profile_scale_factor_high = 1 + u;
   }
 }
 
@@ -398,6 +480,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   DPScaleResult result;
   const int num_views = static_cast<int>(views_.size());
   for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
+  result.search_bound = AccountForSearchBound();
   if (num_views == 0) {
     result.refusal.code = ScaleRefusal::kNoViews;
     return result;
@@ -412,6 +495,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
       field_.cells.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
     CalibrateProfile(&samples, &field, &result);
+    result.psf_fit_ran = true;
     result.seconds_psf_fit = SecondsSince(fit_start);
   }
   result.psf_model = field.Name();
@@ -441,6 +525,7 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   // offsets the data allow move it by their ratio).
   const double lens_geometry = LensGeometryTerm(linear, samples);
   result.lens_geometry_uncertainty = lens_geometry;
+  AccountForExtrapolation(linear, samples, &result.search_bound);
   SetProfileScaleFactors(field, &result);
   IntervalTerms terms;
   terms.systematic = options_.scale_systematic_uncertainty;

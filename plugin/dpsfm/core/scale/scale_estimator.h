@@ -70,6 +70,23 @@ struct DPScaleOptions {
   // downsampled full-frame sensor whose scenes blur up to ~8 px), with the
   // patch and stride that go with it. 0 = the frame-size rule alone.
   double min_auto_radius_px = 0;
+  // With max_radius_px automatic, the bound is the view's own: when at
+  // least this share of a view's searched patches sit at the bound (their
+  // blur lies beyond it, and dropping them would keep only the patches
+  // nearer the focus: on the R6 II's box/002, 114 of 289 at 4.93 px moved
+  // the answer by 7 %), the view is searched again with 1.2 times the
+  // largest blur its depth range implies through the thin lens
+  // (ExpectedMaxBlur), up to max_search_bound_growths times. A result that
+  // still has this share at the bound says so (DPScaleResult::
+  // search_bound).
+  double search_bound_share = 0.05;
+  int max_search_bound_growths = 2;
+  // The largest blur (px) a measured-kernel profile's calibration covered
+  // (0: not known, or a model profile, which extends by its formula).
+  // Beyond it the kernels are magnified copies of the measured ones, and
+  // the intervals carry an extrapolation term (DPScaleResult::
+  // search_bound.extrapolation_uncertainty).
+  double profile_covered_radius_px = 0;
 
   // Per-patch blur search (max_radius_px is taken from the geometry).
   BlurEstimationOptions blur;
@@ -254,6 +271,15 @@ struct DPViewSummary {
   int patches_tried = 0;  // grid positions
   int patches_with_depth = 0;
   int patches_searched = 0;  // blur search run (see blur_search_factor)
+  // The search bound the geometry gave, how often it grew
+  // (DPScaleOptions::search_bound_share) and the searched patches at the
+  // final bound (max_radius_px).
+  double initial_max_radius_px = 0;
+  int search_bound_growths = 0;
+  int patches_at_bound = 0;
+  // The largest blur the view's depth range implies (ExpectedMaxBlur, at
+  // the last growth; 0 if it never grew or the line was undetermined).
+  double expected_max_radius_px = 0;
   int patches_valid = 0;     // usable blur estimates
   int patches_kept = 0;      // top-T_c
   double seconds = 0;
@@ -302,6 +328,32 @@ struct DPViewResult {
   DPLensData lens;
 };
 
+// The blur-search bound as the views ended with it
+// (DPScaleOptions::search_bound_share), and how far a measured profile was
+// extended beyond the blur its calibration covered.
+struct SearchBoundAccount {
+  double initial_max_radius_px = 0;  // the largest bound the geometry gave
+  double max_radius_px = 0;          // the largest bound searched
+  int views_grown = 0;               // views searched again with a larger one
+  int patches_searched = 0;          // at the final bounds, all views
+  int patches_at_bound = 0;
+  // At least search_bound_share of the searched patches still sit at the
+  // bound (their blur lies beyond it): the answer rests on the patches
+  // nearer the focus, and a larger bound may move it.
+  bool limits = false;
+  // The bound that would search farther (LargerSearchBound, whole px).
+  double larger_radius_px = 0;
+  // DPScaleOptions::profile_covered_radius_px, the selected patches of the
+  // used views beyond it, of all of them, and the relative (95 %) term the
+  // extrapolation adds to the profile's uncertainty (in quadrature): the
+  // profile's uncertainty times the share beyond times the median
+  // ln(|r| / covered) of those beyond (0 when none are).
+  double profile_covered_radius_px = 0;
+  int samples_beyond_coverage = 0;
+  int samples = 0;
+  double extrapolation_uncertainty = 0;
+};
+
 struct DPScaleResult {
   bool success = false;
   // Why not (refusal.h; colmap/report/refusal_text words it).
@@ -343,6 +395,8 @@ struct DPScaleResult {
   SplitProfileFit psf_fit;
   std::vector<SplitProfileFit> psf_band_fits;
   double seconds_psf_fit = 0;
+  // Whether self-calibration fitted a profile (psf_fit holds its fit).
+  bool psf_fit_ran = false;
   // The factors by which the profiles the data allow move the scale
   // against the one used (self-calibration: the fits' consistent centroid
   // offsets over the one used; 1 when the profile was given). The reported
@@ -377,6 +431,7 @@ struct DPScaleResult {
   // The relative systematic term of the lens geometry (see
   // DPScaleOptions::lens_geometry_uncertainty).
   double lens_geometry_uncertainty = 0;
+  SearchBoundAccount search_bound;
 };
 
 class DPScaleEstimator {
@@ -425,6 +480,15 @@ class DPScaleEstimator {
   double LensGeometryTerm(
       const LinearEstimate& linear,
       const std::vector<std::vector<PatchSample>>& samples) const;
+  // The views' final search bounds (DPScaleResult::search_bound).
+  SearchBoundAccount AccountForSearchBound() const;
+  // The selected patches beyond the blur a measured profile covered, and
+  // the term that carries the extrapolation (before SetProfileScaleFactors,
+  // which adds it to the profile's uncertainty).
+  void AccountForExtrapolation(
+      const LinearEstimate& linear,
+      const std::vector<std::vector<PatchSample>>& samples,
+      SearchBoundAccount* bound) const;
   // result->profile_scale_factor_low/high: what the profile leaves open.
   void SetProfileScaleFactors(const DPPsfField& field,
                               DPScaleResult* result) const;

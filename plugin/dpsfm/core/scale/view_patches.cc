@@ -10,6 +10,7 @@
 
 #include "dpsfm/core/optics/kernel_grid.h"
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
@@ -167,6 +168,72 @@ ViewBlurSearch SearchViewBlur(const WorkingView& working,
     }
   }
   return out;
+}
+
+int PatchesAtSearchBound(const ViewBlurSearch& search) {
+  int count = 0;
+  for (const PatchBlurEstimate& e : search.estimates) count += e.at_bound;
+  return count;
+}
+
+double LargerSearchBound(double bound_px) {
+  return std::ceil(2 * std::max(1.6 * bound_px, bound_px + 2) - 1e-9) / 2;
+}
+
+bool SearchBoundReached(int num_searched,
+                        int num_at_bound,
+                        int growths,
+                        const DPScaleOptions& options) {
+  return options.max_radius_px <= 0 &&
+         growths < options.max_search_bound_growths && num_searched > 0 &&
+         !(num_at_bound < options.search_bound_share * num_searched);
+}
+
+double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
+                       const std::vector<PatchSample>& usable) {
+  std::vector<double> depths;
+  for (const PatchCandidate& c : candidates) {
+    if (c.reject.empty() && c.depth.ok) depths.push_back(c.depth.median);
+  }
+  if (usable.size() < 6 || depths.empty()) return 0;
+  // Theil-Sen by hand: OpenCV's fitLine has no median-of-slopes estimator,
+  // and the line must ignore the few patches a wrong blur sends far off.
+  std::vector<double> slopes;
+  for (size_t i = 0; i < usable.size(); ++i) {
+    for (size_t j = i + 1; j < usable.size(); ++j) {
+      const double dx = 1 / usable[j].depth - 1 / usable[i].depth;
+      if (std::abs(dx) > 1e-9 * std::abs(1 / usable[i].depth)) {
+        slopes.push_back((usable[j].radius_px - usable[i].radius_px) / dx);
+      }
+    }
+  }
+  if (slopes.empty()) return 0;
+  const double slope = Median(slopes);
+  std::vector<double> intercepts;
+  for (const PatchSample& s : usable) {
+    intercepts.push_back(s.radius_px - slope / s.depth);
+  }
+  const double intercept = Median(intercepts);
+  const double near = Percentile(depths, 0.05), far = Percentile(depths, 0.95);
+  return std::max(std::abs(intercept + slope / near),
+                  std::abs(intercept + slope / far));
+}
+
+double GrownSearchBound(const PatchGeometry& geometry,
+                        double expected_max_blur_px,
+                        const cv::Size& working_size,
+                        const DPPsfField& field,
+                        const BlurEstimationOptions& blur,
+                        const DPScaleOptions& options) {
+  const double grown =
+      expected_max_blur_px > 0
+          ? std::ceil(2 * 1.2 * expected_max_blur_px - 1e-9) / 2
+          : LargerSearchBound(geometry.max_radius_px);
+  if (!(grown > geometry.max_radius_px)) return 0;
+  const int crop =
+      geometry.patch_size + 2 * BlurSearchBorder(field, blur, grown);
+  if (2 * crop > std::min(working_size.width, working_size.height)) return 0;
+  return grown;
 }
 
 std::vector<PatchSample> ViewSamples(

@@ -78,6 +78,46 @@ ViewBlurSearch SearchViewBlur(const WorkingView& working,
                               bool any_depth,
                               const DPScaleOptions& options);
 
+// Searched patches whose blur sits at the search bound (their estimate is
+// the bound, not the blur).
+int PatchesAtSearchBound(const ViewBlurSearch& search);
+
+// The next search bound after `bound_px`: 1.6 times it (at least 2 px
+// more), rounded up to a half pixel (the blur grid's step). A bound 1.6
+// times larger reaches the blur of points about that much farther from the
+// focal plane in inverse depth.
+double LargerSearchBound(double bound_px);
+
+// Whether a view's search bound is to grow: only an automatic bound
+// (DPScaleOptions::max_radius_px 0), when at least
+// DPScaleOptions::search_bound_share of the searched patches sit at it, at
+// most DPScaleOptions::max_search_bound_growths times.
+bool SearchBoundReached(int num_searched,
+                        int num_at_bound,
+                        int growths,
+                        const DPScaleOptions& options);
+
+// The largest blur the view's depth range implies. The thin lens makes a
+// patch's blur linear in its inverse depth (eq. solution01: r = k (1/g' -
+// 1/z'), k from the scale, the lens and the profile), so a robust line
+// (Theil-Sen) through the usable patches' (1/z', r), extended over the
+// 5-95 % range of the grid's patch depths, gives the largest |r| to
+// expect. 0 when fewer than 6 usable patches, or all at one depth.
+double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
+                       const std::vector<PatchSample>& usable);
+
+// The bound to search the view again with, or 0 to keep its search: 1.2
+// times the expected blur (ExpectedMaxBlur; LargerSearchBound when there is
+// none), up to a half pixel, if it exceeds the bound and the crops (the
+// same patch, the larger bound's kernel border) fit twice into the working
+// frame's short side.
+double GrownSearchBound(const PatchGeometry& geometry,
+                        double expected_max_blur_px,
+                        const cv::Size& working_size,
+                        const DPPsfField& field,
+                        const BlurEstimationOptions& blur,
+                        const DPScaleOptions& options);
+
 // Step 4: usable patches become samples (of view `view_index`); the others
 // are counted by reason in *rejections. *sample_candidate receives each
 // sample's grid index.
