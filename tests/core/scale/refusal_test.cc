@@ -139,11 +139,11 @@ TEST(LargerSearchBound, SixtyPercentOrTwoPixelsUpToAHalfPixel) {
 }
 
 TEST(SearchBoundReached, OnlyAnAutomaticBoundTheBlurReachesWhileGrowthsLast) {
-  DPScaleOptions options;  // share 0.05, two growths
+  DPScaleOptions options;  // share 0.05, one growth
   EXPECT_TRUE(SearchBoundReached(100, 5, 0, options));   // exactly 5 %
   EXPECT_FALSE(SearchBoundReached(100, 4, 0, options));  // below
   EXPECT_FALSE(SearchBoundReached(0, 0, 0, options));    // nothing searched
-  EXPECT_FALSE(SearchBoundReached(100, 50, 2, options));  // growths spent
+  EXPECT_FALSE(SearchBoundReached(100, 50, 1, options));  // growth spent
   DPScaleOptions explicit_bound = options;
   explicit_bound.max_radius_px = 5;  // the user's bound stands
   EXPECT_FALSE(SearchBoundReached(100, 50, 0, explicit_bound));
@@ -190,6 +190,8 @@ TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
   const cv::Size frame(768, 512);
   // 1.2 x 6.5 = 7.8 -> 8 (a half pixel up).
   EXPECT_DOUBLE_EQ(GrownSearchBound(g, 6.5, frame, field, blur, options), 8);
+  // At most twice the bound: 1.2 x 20 = 24 -> 10.
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 20, frame, field, blur, options), 10);
   // No expected blur: LargerSearchBound(5) = 8.
   EXPECT_DOUBLE_EQ(GrownSearchBound(g, 0, frame, field, blur, options), 8);
   // 1.2 x 4 = 4.8 < 5: the patches at the bound are not the depth range's

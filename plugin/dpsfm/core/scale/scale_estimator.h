@@ -76,11 +76,12 @@ struct DPScaleOptions {
   // nearer the focus: on the R6 II's box/002, 114 of 289 at 4.93 px moved
   // the answer by 7 %), the view is searched again with 1.2 times the
   // largest blur its depth range implies through the thin lens
-  // (ExpectedMaxBlur), up to max_search_bound_growths times. A result that
+  // (ExpectedMaxBlur), at most twice the bound, up to
+  // max_search_bound_growths times. A result that
   // still has this share at the bound says so (DPScaleResult::
   // search_bound).
   double search_bound_share = 0.05;
-  int max_search_bound_growths = 2;
+  int max_search_bound_growths = 1;
   // The largest blur (px) a measured-kernel profile's calibration covered
   // (0: not known, or a model profile, which extends by its formula).
   // Beyond it the kernels are magnified copies of the measured ones, and

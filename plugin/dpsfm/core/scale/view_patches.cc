@@ -225,10 +225,15 @@ double GrownSearchBound(const PatchGeometry& geometry,
                         const DPPsfField& field,
                         const BlurEstimationOptions& blur,
                         const DPScaleOptions& options) {
-  const double grown =
+  // At most twice the bound: the search's cost grows with the bound (its
+  // kernel grid and crops), and uncapped growth to 20-36 px on the
+  // generated tabletops cost 3-4x the blur stage; patches beyond stay at
+  // the bound, and the run says so.
+  const double grown = std::min(
       expected_max_blur_px > 0
           ? std::ceil(2 * 1.2 * expected_max_blur_px - 1e-9) / 2
-          : LargerSearchBound(geometry.max_radius_px);
+          : LargerSearchBound(geometry.max_radius_px),
+      std::ceil(2 * 2 * geometry.max_radius_px - 1e-9) / 2);
   if (!(grown > geometry.max_radius_px)) return 0;
   const int crop =
       geometry.patch_size + 2 * BlurSearchBorder(field, blur, grown);

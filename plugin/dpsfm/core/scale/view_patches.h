@@ -108,7 +108,8 @@ double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
 
 // The bound to search the view again with, or 0 to keep its search: 1.2
 // times the expected blur (ExpectedMaxBlur; LargerSearchBound when there is
-// none), up to a half pixel, if it exceeds the bound and the crops (the
+// none), at most twice the bound, up to a half pixel, if it exceeds the
+// bound and the crops (the
 // same patch, the larger bound's kernel border) fit twice into the working
 // frame's short side.
 double GrownSearchBound(const PatchGeometry& geometry,
