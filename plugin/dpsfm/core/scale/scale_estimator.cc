@@ -176,10 +176,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                             options_)) {
       break;
     }
-    summary.expected_max_radius_px =
-        ExpectedMaxBlur(candidates, data->samples);
     const double grown = GrownSearchBound(geometry,
-                                          summary.expected_max_radius_px,
+                                          ExpectedMaxBlur(candidates,
+                                                          data->samples),
                                           working.left.size(),
                                           field_,
                                           blur,

@@ -278,9 +278,6 @@ struct DPViewSummary {
   double initial_max_radius_px = 0;
   int search_bound_growths = 0;
   int patches_at_bound = 0;
-  // The largest blur the view's depth range implies (ExpectedMaxBlur, at
-  // the last growth; 0 if it never grew or the line was undetermined).
-  double expected_max_radius_px = 0;
   int patches_valid = 0;     // usable blur estimates
   int patches_kept = 0;      // top-T_c
   double seconds = 0;
