@@ -1,6 +1,6 @@
 # The two commands of the README, plus the pieces they are made of.
 .PHONY: example test build bench accuracy profiles real large clean-cache \
-        test-3.10 check-colmap-main
+        test-3.10 test-installed check-colmap-main
 
 example:
 	bash scripts/run_example.sh
@@ -15,6 +15,12 @@ build:
 # DPSFM_COLMAP_VERSION=3.10 works with every target).
 test-3.10:
 	DPSFM_COLMAP_VERSION=3.10 bash scripts/run_tests.sh
+
+# dp-sfm built against an installed COLMAP 4.1.1 (find_package, the `dpsfm`
+# executable; the prefix is installed from make test's cached build) and its
+# end-to-end tests run through `dpsfm`.
+test-installed:
+	bash scripts/run_installed_tests.sh
 
 # dp-sfm's sources compiled against COLMAP's main branch (4.2.0.dev0) from
 # ../shared/sources: a compile check, nothing is linked or run.

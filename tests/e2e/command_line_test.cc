@@ -12,10 +12,11 @@ namespace dpsfm {
 namespace test {
 namespace {
 
-const std::string kColmap = DPSFM_COLMAP_EXE;
+// The binary with the dp-sfm commands: the patched colmap or dpsfm.
+const std::string kDpsfm = DPSFM_DP_EXE;
 
 CommandResult RunEstimator(const std::vector<std::string>& args) {
-  std::vector<std::string> command = {kColmap, "dp_scale_estimator"};
+  std::vector<std::string> command = {kDpsfm, "dp_scale_estimator"};
   command.insert(command.end(), args.begin(), args.end());
   return RunCommand(command);
 }
@@ -64,9 +65,17 @@ struct WorkspaceFixture {
 };
 
 TEST(CommandLine, RegisteredInColmapHelp) {
-  const CommandResult result = RunCommand({kColmap, "help"});
+  const CommandResult result = RunCommand({kDpsfm, "help"});
   EXPECT_EQ(result.exit_code, 0);
   EXPECT_NE(result.out.find("  dp_scale_estimator\n"), std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("  dp_psf_calibrator\n"), std::string::npos)
+      << result.out;
+  // The help names the COLMAP the commands were built against.
+  EXPECT_NE(result.out.find("COLMAP " +
+                            std::to_string(DPSFM_COLMAP_VERSION_MAJOR) + "." +
+                            std::to_string(DPSFM_COLMAP_VERSION_MINOR)),
+            std::string::npos)
       << result.out;
 }
 

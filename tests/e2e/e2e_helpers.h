@@ -21,6 +21,10 @@
 namespace dpsfm {
 namespace test {
 
+// The binary with the dp-sfm commands: the patched `colmap` (checkout
+// route) or `dpsfm` (installed route).
+const std::string kDpsfm = DPSFM_DP_EXE;
+// COLMAP's own commands (feature_extractor, mapper, image_deleter).
 const std::string kColmap = DPSFM_COLMAP_EXE;
 const std::string kScenes = DPSFM_E2E_SCENES_DIR;
 
@@ -151,7 +155,7 @@ inline CommandResult RunEstimator(const std::vector<std::string>& args,
     command.push_back("env");
     command.insert(command.end(), env.begin(), env.end());
   }
-  command.push_back(kColmap);
+  command.push_back(kDpsfm);
   command.push_back("dp_scale_estimator");
   command.insert(command.end(), args.begin(), args.end());
   return RunCommand(command);

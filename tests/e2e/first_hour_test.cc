@@ -240,7 +240,7 @@ TEST_F(FirstHour, RefusalLeadsWithItsCause) {
                 "far_f20,1.50,,49.57,20,46.875,1500/f20/l.png,"
                 "1500/f20/r.png\n");
   const std::string profile = dir_ / "r6m2_rf50_f4.dpsf";
-  const CommandResult calibration = RunCommand({kColmap,
+  const CommandResult calibration = RunCommand({kDpsfm,
                                                 "dp_psf_calibrator",
                                                 "--dp_image_path",
                                                 RealCapture("flat/001"),
@@ -375,7 +375,7 @@ TEST_F(FirstHour, CalibratorShowsTheLayoutsItReads) {
                 "name,target_distance_m,focal_length_mm,f_number,"
                 "pixel_pitch_um\n"
                 "near,0.6,49.57,4,46.875\n");
-  const std::string error = ErrorLine(RunCommand({kColmap,
+  const std::string error = ErrorLine(RunCommand({kDpsfm,
                                                   "dp_psf_calibrator",
                                                   "--dp_image_path",
                                                   RealCapture("flat/001"),
@@ -407,7 +407,7 @@ CommandResult Calibrate(const std::string& dir,
                         const std::string& targets,
                         const std::string& output) {
   WriteTextFile(dir + "/targets.csv", targets);
-  return RunCommand({kColmap,
+  return RunCommand({kDpsfm,
                      "dp_psf_calibrator",
                      "--dp_image_path",
                      RealCapture("flat/001"),
@@ -504,10 +504,13 @@ TEST(FirstHourGenerated, SwappedViewsNameTheOption) {
 
 TEST(FirstHourHelp, ReadsLikeAManual) {
   for (const char* command : {"dp_scale_estimator", "dp_psf_calibrator"}) {
-    const CommandResult help = RunCommand({kColmap, command, "--help"});
+    const CommandResult help = RunCommand({kDpsfm, command, "--help"});
     EXPECT_EQ(help.exit_code, 0) << help.err;
     EXPECT_EQ(help.err, "") << command;  // no glog lines
-    EXPECT_EQ(help.out.rfind(std::string("colmap ") + command + "\n", 0), 0u)
+    // Named as the user called it: `colmap` or `dpsfm`.
+    const std::string program =
+        std::filesystem::path(kDpsfm).filename().string();
+    EXPECT_EQ(help.out.rfind(program + " " + command + "\n", 0), 0u)
         << help.out.substr(0, 200);
     ExpectContains(help.out, "Usage:");
     ExpectContains(help.out, "(required)");
@@ -516,7 +519,7 @@ TEST(FirstHourHelp, ReadsLikeAManual) {
     }
   }
   const CommandResult help =
-      RunCommand({kColmap, "dp_scale_estimator", "--help"});
+      RunCommand({kDpsfm, "dp_scale_estimator", "--help"});
   ExpectContains(help.out, "--dp_image_path PATH  (required)");
   ExpectContains(help.out,
                  "--DPScaleEstimator.lens_check_tolerance X  (default 0.1)");

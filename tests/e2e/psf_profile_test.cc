@@ -23,7 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kColmap = DPSFM_COLMAP_EXE;
+// The binary with the dp-sfm commands: the patched colmap or dpsfm.
+const std::string kDpsfm = DPSFM_DP_EXE;
 const std::string kScenes = DPSFM_E2E_SCENES_DIR;
 
 int CountErrorLines(const std::string& err, const std::string& expected) {
@@ -82,7 +83,7 @@ void WriteCalibrationCaptures(const DPPsfModel& psf,
 
 CommandResult RunCalibrator(const std::string& root,
                             const std::string& output) {
-  return RunCommand({kColmap,
+  return RunCommand({kDpsfm,
                      "dp_psf_calibrator",
                      "--dp_image_path",
                      root + "/dp",
@@ -150,7 +151,7 @@ TEST(DPPsfCalibrator, RefusesInvalidOptions) {
            {"num_bootstrap", "5"},
            {"min_texture_snr", "-1"},
            {"num_threads", "0"}}) {
-    const CommandResult result = RunCommand({kColmap,
+    const CommandResult result = RunCommand({kDpsfm,
                                              "dp_psf_calibrator",
                                              "--dp_image_path",
                                              dir / "missing",
@@ -173,7 +174,7 @@ TEST(DPPsfCalibrator, RefusesInvalidOptions) {
 std::vector<std::string> DryRun(const std::string& report,
                                 const std::vector<std::string>& more) {
   const std::string scene = kScenes + "/dslr";
-  std::vector<std::string> args = {kColmap,
+  std::vector<std::string> args = {kDpsfm,
                                    "dp_scale_estimator",
                                    "--workspace_path",
                                    scene + "/dense",

@@ -69,7 +69,7 @@ class RealCaptures : public ::testing::Test {
   CommandResult Calibrate(const std::string& dir,
                           const std::string& out,
                           const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> args = {kColmap,
+    std::vector<std::string> args = {kDpsfm,
                                      "dp_psf_calibrator",
                                      "--dp_image_path",
                                      dir + "/dp",

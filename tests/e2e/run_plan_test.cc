@@ -240,7 +240,7 @@ TEST(RunPlan, KillTrialsLeaveEveryWorkspaceConsistent) {
                                           "-s",
                                           "KILL",
                                           std::to_string(seconds),
-                                          kColmap,
+                                          kDpsfm,
                                           "dp_scale_estimator"};
       const std::vector<std::string> args = DenseArgs(scene);
       command.insert(command.end(), args.begin(), args.end());

@@ -45,19 +45,14 @@ std::string WalkthroughBlock() {
   return "";
 }
 
-TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
-  const std::string block = WalkthroughBlock();
-  ASSERT_FALSE(block.empty())
-      << "no ```sh block after " << kMarker << " in docs/user-guide.md";
-  const std::string real = RealDpDir();
-  ASSERT_FALSE(real.empty()) << "the real DP captures are missing";
-
-  TempDir dir;
+// Runs `block` with the programs in `bin` first on PATH and checks what the
+// guide promises of it. `dir` holds bin/ and home/.
+void RunWalkthrough(const std::string& block,
+                    const TempDir& dir,
+                    const std::string& real) {
   const std::string home = dir / "home";
   const std::string bin = dir / "bin";
   fs::create_directories(home);
-  fs::create_directories(bin);
-  fs::create_symlink(kColmap, bin + "/colmap");
   fs::create_symlink(DPSFM_MAKE_REALDP_EXE,
                      bin + "/dpsfm_make_realdp_workspace");
   const std::string script = dir / "walkthrough.sh";
@@ -118,6 +113,48 @@ TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
   EXPECT_TRUE(report.at("psf").at("fit").is_null()) << report.at("psf");
   EXPECT_TRUE(fs::exists(work + "/box002/dense/dp_scale_record.json"));
   EXPECT_TRUE(fs::exists(work + "/r6m2_rf50_f4_left.npy"));
+}
+
+TEST(Walkthrough, RunsAsWrittenInTheUserGuide) {
+  const std::string block = WalkthroughBlock();
+  ASSERT_FALSE(block.empty())
+      << "no ```sh block after " << kMarker << " in docs/user-guide.md";
+  if (fs::path(kDpsfm).filename() != "colmap") {
+    GTEST_SKIP() << "the installed route has no colmap with the dp-sfm "
+                    "commands: Walkthrough.RunsWithDpsfm runs the guide";
+  }
+  const std::string real = RealDpDir();
+  ASSERT_FALSE(real.empty()) << "the real DP captures are missing";
+  TempDir dir;
+  fs::create_directories(dir / "bin");
+  fs::create_symlink(kDpsfm, dir / "bin/colmap");
+  RunWalkthrough(block, dir, real);
+}
+
+// The same walkthrough on the installed route, as the guide says to run it
+// there: `dpsfm` for `colmap` in the dp-sfm commands, beside a `colmap` that
+// refuses them (so none of them can reach COLMAP's binary unnoticed).
+TEST(Walkthrough, RunsWithDpsfm) {
+  std::string block = WalkthroughBlock();
+  ASSERT_FALSE(block.empty());
+  int replaced = 0;
+  for (size_t at = block.find("colmap dp_"); at != std::string::npos;
+       at = block.find("colmap dp_", at)) {
+    block.replace(at, 6, "dpsfm");
+    ++replaced;
+  }
+  ASSERT_EQ(replaced, 2) << block;
+  const std::string real = RealDpDir();
+  ASSERT_FALSE(real.empty()) << "the real DP captures are missing";
+  TempDir dir;
+  const std::string bin = dir / "bin";
+  fs::create_directories(bin);
+  fs::create_symlink(DPSFM_THIN_EXE, bin + "/dpsfm");
+  WriteTextFile(bin + "/colmap",
+                "#!/bin/sh\ncase \"$1\" in dp_*) echo \"$1 reached colmap\" "
+                ">&2; exit 97 ;; esac\nexec \"" + kColmap + "\" \"$@\"\n");
+  fs::permissions(bin + "/colmap", fs::perms::owner_all);
+  RunWalkthrough(block, dir, real);
 }
 
 }  // namespace

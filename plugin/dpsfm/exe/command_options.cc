@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <ostream>
 
 #include <glog/logging.h>
@@ -60,10 +61,11 @@ void CommandOptions::Record(const std::string& name,
 std::string CommandOptions::Manual() const {
   constexpr int kWidth = 79;
   std::ostringstream text;
-  text << "colmap " << command_ << "\n\n" << Wrap(summary_, 2, kWidth) << "\n";
+  text << program_ << " " << command_ << "\n\n"
+       << Wrap(summary_, 2, kWidth) << "\n";
   text << "Usage:\n";
   for (const std::string& line : usage_) {
-    text << "  colmap " << command_ << " " << line << "\n";
+    text << "  " << program_ << " " << command_ << " " << line << "\n";
   }
   std::string group = "\x01";  // no group yet
   for (const Entry& entry : entries_) {
@@ -89,6 +91,12 @@ bool CommandOptions::Parse(int argc,
                            char** argv,
                            std::ostream& out,
                            int* exit_code) {
+  // `colmap` (the checkout route) or `dpsfm` (the installed route), as the
+  // user called it.
+  if (argc > 0 && argv[0] != nullptr) {
+    const std::string program = std::filesystem::path(argv[0]).filename();
+    if (!program.empty()) program_ = program;
+  }
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "-h") == 0 ||
         std::strcmp(argv[i], "--help") == 0) {

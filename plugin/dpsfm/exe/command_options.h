@@ -59,6 +59,7 @@ class CommandOptions {
               const std::string& help,
               bool required);
 
+  std::string program_ = "colmap";
   std::string command_;
   std::string summary_;
   std::vector<std::string> usage_;

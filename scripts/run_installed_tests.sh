@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# `make test-installed`: dp-sfm on the installed route, proved here.
+#  1. COLMAP's libraries, headers and CMake package are installed from the
+#     cached checkout build (make test's) into a prefix in the cache, without
+#     its `colmap` executable (the patch series changes only that one), and
+#     nothing in the prefix may know the dp-sfm commands.
+#  2. dp-sfm is configured against that prefix and PoseLib's alone
+#     (find_package(COLMAP), no COLMAP_SOURCE_DIR) with COLMAP's source and
+#     build trees hidden (a private mount namespace), and built: `dpsfm`.
+#  3. `dpsfm` is installed into a prefix of its own and its end-to-end tests
+#     run: the dp-sfm commands through `dpsfm`, COLMAP's own through the
+#     cached build's `colmap` behind a wrapper that refuses the dp-sfm ones.
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+[ -n "$POSELIB_REVISION" ] || die "the installed route needs COLMAP 4 (not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION)"
+total_start=$SECONDS
+checkout_build="$(build_tree)"
+poselib_prefix="$("$DPSFM_ROOT/scripts/build_poselib.sh")"
+colmap_source="$(sed -n 's/^COLMAP_SOURCE_DIR:[A-Z]*=//p' "$checkout_build/CMakeCache.txt")"
+[ -d "$colmap_source" ] || die "no COLMAP source tree named in $checkout_build/CMakeCache.txt"
+colmap_source="$(readlink -f "$colmap_source")"
+
+# 1. The installed COLMAP, keyed by the checkout build it comes from.
+prefix="$DPSFM_CACHE_DIR/installed/$(basename "$checkout_build")"
+install_colmap() {
+  rm -rf "$prefix.part"
+  cmake --install "$checkout_build/colmap" --prefix "$prefix.part" >"$prefix.install.log" \
+    || die "installing COLMAP from $checkout_build failed (log: $prefix.install.log)"
+  # The executable is the patched one: leave it out.
+  rm -f "$prefix.part/bin/colmap"
+  rmdir "$prefix.part/bin" 2>/dev/null || true
+  local knows
+  knows="$(grep -rl -e dp_scale_estimator -e dp_psf_calibrator "$prefix.part" || true)"
+  [ -z "$knows" ] || die "the installed COLMAP knows the dp-sfm commands: $knows"
+  rm -rf "$prefix"
+  mv "$prefix.part" "$prefix"
+}
+mkdir -p "$DPSFM_CACHE_DIR/installed"
+exec 8>"$prefix.lock"
+flock 8
+stage "install COLMAP $COLMAP_VERSION into $prefix" install_colmap
+log "the installed COLMAP: $(grep -o 'COLMAP_VERSION [0-9.]*' "$prefix/share/colmap/colmap-config.cmake"), $(find "$prefix/lib" -name '*.a' | wc -l) libraries, no executable; nothing in it knows dp_scale_estimator"
+
+# 2. dp-sfm against it. The build tree reaches the clone through a symlink,
+# as the checkout build does, so another clone reuses it.
+build_dir="$DPSFM_CACHE_DIR/build/installed-$(basename "$checkout_build")"
+mkdir -p "$build_dir"
+exec 9>"$build_dir.lock"
+flock 9
+ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
+
+# COLMAP's source and build trees out of reach: empty folders mounted over
+# them for the configure and the build (root and unshare; else the check
+# below alone).
+hidden() {
+  if [ "$(id -u)" -eq 0 ] && command -v unshare >/dev/null; then
+    local empty="$DPSFM_CACHE_DIR/installed/.empty"
+    mkdir -p "$empty"
+    unshare --mount --propagation private bash -c '
+      set -e; empty="$1"; shift
+      mount --bind "$empty" "$1"; mount --bind "$empty" "$2"; shift 2
+      exec "$@"' _ "$empty" "$colmap_source" "$checkout_build/colmap" "$@"
+  else
+    "$@"
+  fi
+}
+configure() {
+  hidden cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
+    -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" \
+    -DCMAKE_PREFIX_PATH="$prefix;$poselib_prefix" \
+    -DDPSFM_TEST_COLMAP="$checkout_build/bin/colmap" \
+    >"$build_dir/configure.log" 2>&1 \
+    || { tail -n 30 "$build_dir/configure.log" >&2; die "configuring dp-sfm against $prefix failed (log: $build_dir/configure.log)"; }
+}
+stage "configure dp-sfm against the installed COLMAP" configure
+grep -o 'dp-sfm: building against .*' "$build_dir/configure.log" | sed 's/^/[dp-sfm] /' >&2
+start=$SECONDS
+stage "build dpsfm" hidden cmake --build "$build_dir" --target dpsfm -j "$(jobs_count)"
+log "warm cache to a built dpsfm: $((SECONDS - start)) s of build after the configure"
+stage "build the rest (tests, examples)" hidden cmake --build "$build_dir" -j "$(jobs_count)"
+# Nothing built may point into COLMAP's source or build tree.
+if grep -q -e "$colmap_source" -e "$checkout_build/colmap/" "$build_dir/build.ninja"; then
+  die "the installed-route build refers to COLMAP's source or build tree ($build_dir/build.ninja)"
+fi
+
+# 3. Installed, then tested.
+rm -rf "$build_dir/install"
+cmake --install "$build_dir" --prefix "$build_dir/install" >/dev/null
+"$build_dir/install/bin/dpsfm" version | sed 's/^/[dp-sfm] installed: /' >&2
+status=0
+stage "test (end to end, through dpsfm)" ctest --test-dir "$build_dir" -L e2e \
+  -j "$(jobs_count)" --output-on-failure --timeout 900 "$@" || status=$?
+log "total $((SECONDS - total_start)) s"
+exit $status
