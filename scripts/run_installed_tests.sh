@@ -69,6 +69,7 @@ configure() {
     -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" \
     -DCMAKE_PREFIX_PATH="$prefix;$poselib_prefix" \
     -DDPSFM_TEST_COLMAP="$checkout_build/bin/colmap" \
+    -DDPSFM_BENCHMARKS_ENABLED=OFF \
     >"$build_dir/configure.log" 2>&1 \
     || { tail -n 30 "$build_dir/configure.log" >&2; die "configuring dp-sfm against $prefix failed (log: $build_dir/configure.log)"; }
 }
@@ -77,7 +78,7 @@ grep -o 'dp-sfm: building against .*' "$build_dir/configure.log" | sed 's/^/[dp-
 start=$SECONDS
 stage "build dpsfm" hidden cmake --build "$build_dir" --target dpsfm -j "$(jobs_count)"
 log "warm cache to a built dpsfm: $((SECONDS - start)) s of build after the configure"
-stage "build the rest (tests, examples)" hidden cmake --build "$build_dir" -j "$(jobs_count)"
+stage "build the end-to-end tests" hidden cmake --build "$build_dir" --target e2e_tests -j "$(jobs_count)"
 # Nothing built may point into COLMAP's source or build tree.
 if grep -q -e "$colmap_source" -e "$checkout_build/colmap/" "$build_dir/build.ninja"; then
   die "the installed-route build refers to COLMAP's source or build tree ($build_dir/build.ninja)"
