@@ -12,9 +12,7 @@
 namespace dpsfm {
 namespace {
 
-void AddRequiredOptions(CommandOptions* manager,
-                        ScaleRunOptions* options,
-                        DPScaleOptions* core) {
+void AddRequiredOptions(CommandOptions* manager, ScaleRunOptions* options) {
   manager->Group(
       "Required (and exactly one of --workspace_path, --input_path)");
   manager->AddRequired(
@@ -33,9 +31,7 @@ void AddRequiredOptions(CommandOptions* manager,
                       "depths from its triangulated points, no CUDA needed)");
 }
 
-void AddLensOptions(CommandOptions* manager,
-                    ScaleRunOptions* options,
-                    DPScaleOptions* core) {
+void AddLensOptions(CommandOptions* manager, ScaleRunOptions* options) {
   manager->Group("Lens data (per image: lens.csv, else the flags, else EXIF)");
   manager->AddDefault(
       "lens_path",
@@ -67,9 +63,7 @@ void AddLensOptions(CommandOptions* manager,
       "breathing, before the run stops");
 }
 
-void AddOutputOptions(CommandOptions* manager,
-                      ScaleRunOptions* options,
-                      DPScaleOptions* core) {
+void AddOutputOptions(CommandOptions* manager, ScaleRunOptions* options) {
   manager->Group("Output");
   manager->AddDefault("report_path",
                       &options->report_path,
@@ -90,9 +84,7 @@ void AddOutputOptions(CommandOptions* manager,
                       "scales compose)");
 }
 
-void AddOtherInputOptions(CommandOptions* manager,
-                          ScaleRunOptions* options,
-                          DPScaleOptions* core) {
+void AddOtherInputOptions(CommandOptions* manager, ScaleRunOptions* options) {
   manager->Group("Other inputs");
   manager->AddDefault("database_path",
                       &options->database_path,
@@ -110,9 +102,7 @@ void AddOtherInputOptions(CommandOptions* manager,
                       "photometric) or photometric");
 }
 
-void AddDPProfileOptions(CommandOptions* manager,
-                         ScaleRunOptions* options,
-                         DPScaleOptions* core) {
+void AddDPProfileOptions(CommandOptions* manager, ScaleRunOptions* options) {
   manager->Group("DP frames and the DP profile");
   manager->AddDefault(
       "DPScaleEstimator.swap_dp_views",
@@ -149,9 +139,7 @@ void AddDPProfileOptions(CommandOptions* manager,
       "without this such views are refused)");
 }
 
-void AddRefusalOptions(CommandOptions* manager,
-                       ScaleRunOptions* options,
-                       DPScaleOptions* core) {
+void AddRefusalOptions(CommandOptions* manager, DPScaleOptions* core) {
   manager->Group("When a run refuses (the refusal names the one to change)");
   manager->AddDefault("DPScaleEstimator.max_radius_px",
                       &core->max_radius_px,
@@ -199,9 +187,7 @@ void AddLargeProjectOptions(CommandOptions* manager,
                       "threads (-1: all cores)");
 }
 
-void AddMethodOptions(CommandOptions* manager,
-                      ScaleRunOptions* options,
-                      DPScaleOptions* core) {
+void AddMethodOptions(CommandOptions* manager, DPScaleOptions* core) {
   manager->Group("Method parameters (rarely changed; docs/user-guide.md)");
   manager->AddDefault(
       "DPScaleEstimator.resize_factor",
@@ -248,14 +234,14 @@ void AddMethodOptions(CommandOptions* manager,
 void AddCommandOptions(CommandOptions* manager,
                        ScaleRunOptions* options,
                        DPScaleOptions* core) {
-  AddRequiredOptions(manager, options, core);
-  AddLensOptions(manager, options, core);
-  AddOutputOptions(manager, options, core);
-  AddOtherInputOptions(manager, options, core);
-  AddDPProfileOptions(manager, options, core);
-  AddRefusalOptions(manager, options, core);
+  AddRequiredOptions(manager, options);
+  AddLensOptions(manager, options);
+  AddOutputOptions(manager, options);
+  AddOtherInputOptions(manager, options);
+  AddDPProfileOptions(manager, options);
+  AddRefusalOptions(manager, core);
   AddLargeProjectOptions(manager, options, core);
-  AddMethodOptions(manager, options, core);
+  AddMethodOptions(manager, core);
 }
 
 }  // namespace

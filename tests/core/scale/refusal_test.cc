@@ -185,23 +185,21 @@ TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
   const DPPsfField field =
       DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   BlurEstimationOptions blur;
-  DPScaleOptions options;
   const PatchGeometry g = PatchGeometryForRadius(5, 1);
   const cv::Size frame(768, 512);
   // 1.2 x 6.5 = 7.8 -> 8 (a half pixel up).
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 6.5, frame, field, blur, options), 8);
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 6.5, frame, field, blur), 8);
   // At most twice the bound: 1.2 x 20 = 24 -> 10.
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 20, frame, field, blur, options), 10);
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 20, frame, field, blur), 10);
   // No expected blur: LargerSearchBound(5) = 8.
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 0, frame, field, blur, options), 8);
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 0, frame, field, blur), 8);
   // 1.2 x 4 = 4.8 < 5: the patches at the bound are not the depth range's
   // blur; the bound stays.
-  EXPECT_EQ(GrownSearchBound(g, 4, frame, field, blur, options), 0);
+  EXPECT_EQ(GrownSearchBound(g, 4, frame, field, blur), 0);
   // The 5 px geometry's patch is 2 x 5 + 21 = 31 px, and at 8 px the
   // disk's kernels need a border of about 9 px: crops of ~49 px do not fit
   // twice into 90 px.
-  EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur, options),
-            0);
+  EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur), 0);
 }
 
 }  // namespace

@@ -84,32 +84,6 @@ void CheckModelFolderFiles(const fs::path& dir) {
 
 }  // namespace
 
-const char* ArtefactTypeName(ArtefactType type) {
-  switch (type) {
-    case ArtefactType::kImagesBinary:
-      return "images.bin";
-    case ArtefactType::kPoints3DBinary:
-      return "points3D.bin";
-    case ArtefactType::kImagesText:
-      return "images.txt";
-    case ArtefactType::kPoints3DText:
-      return "points3D.txt";
-    case ArtefactType::kRigsBinary:
-      return "rigs.bin";
-    case ArtefactType::kFramesBinary:
-      return "frames.bin";
-    case ArtefactType::kRigsText:
-      return "rigs.txt";
-    case ArtefactType::kFramesText:
-      return "frames.txt";
-    case ArtefactType::kDepthMap:
-      return "depth map";
-    case ArtefactType::kPly:
-      return "PLY";
-  }
-  return "unknown";
-}
-
 void CheckScale(double scale) {
   if (!(std::isfinite(scale) && scale > 0.0)) {
     std::ostringstream message;

@@ -40,9 +40,6 @@ enum class ArtefactType {
   kPly,           // fused.ply, meshed-*.ply: vertex x y z
 };
 
-// "images.bin", "depth map", ... for messages.
-const char* ArtefactTypeName(ArtefactType type);
-
 struct Artefact {
   ArtefactType type = ArtefactType::kImagesBinary;
   std::string path;

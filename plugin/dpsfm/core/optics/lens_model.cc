@@ -1,7 +1,6 @@
 #include "dpsfm/core/optics/lens_model.h"
 
 #include <cmath>
-#include <limits>
 #include <sstream>
 
 #include "dpsfm/core/util/check.h"
@@ -68,18 +67,6 @@ double PredictBlurRadiusPx(const DPLensData& lens,
   return BlurRadiusPxFromDiameterMm(
       SignedBlurDiameterMm(lens, mm * focus_distance_model, mm * depth_model),
       pixel_pitch_mm);
-}
-
-double DepthMmFromBlurDiameter(const DPLensData& lens,
-                               double focus_distance_mm,
-                               double b_mm) {
-  const double f = lens.focal_length_mm;
-  const double inv_g = 1.0 / focus_distance_mm;
-  // b (1 - f/g) / (L f) = 1/g - 1/z.
-  const double inv_z =
-      inv_g - b_mm * (1.0 - f * inv_g) / (lens.ApertureDiameterMm() * f);
-  if (inv_z == 0) return std::numeric_limits<double>::infinity();
-  return 1.0 / inv_z;
 }
 
 LinearRow MakeLinearRow(const DPLensData& lens,

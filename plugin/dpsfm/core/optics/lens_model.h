@@ -83,13 +83,6 @@ double PredictBlurRadiusPx(const DPLensData& lens,
                            double focus_distance_model,
                            double depth_model);
 
-// Inverse of eq. (focas_distance_ambiguity) for the depth: z (mm) that gives
-// blur diameter b (mm) for focus g (mm). Returns +inf if b reaches the
-// asymptote (z at infinity) and a negative value if b is beyond it.
-double DepthMmFromBlurDiameter(const DPLensData& lens,
-                               double focus_distance_mm,
-                               double b_mm);
-
 // One row of eq. (linear_system), from eq. (one_pixel):
 //   b z' / f = z' (b + L) gbar - L sbar,    gbar = 1/g [1/mm],
 //                                           sbar = 1/(1000 s) [model unit/mm].

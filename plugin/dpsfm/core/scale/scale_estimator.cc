@@ -176,13 +176,12 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                             options_)) {
       break;
     }
-    const double grown = GrownSearchBound(geometry,
-                                          ExpectedMaxBlur(candidates,
-                                                          data->samples),
-                                          working.left.size(),
-                                          field_,
-                                          blur,
-                                          options_);
+    const double grown =
+        GrownSearchBound(geometry,
+                         ExpectedMaxBlur(candidates, data->samples),
+                         working.left.size(),
+                         field_,
+                         blur);
     if (!(grown > 0)) break;
     // The patches stay as they were (an explicit max_radius_px keeps them
     // too): larger ones straddle more depth edges and leave fewer patches

@@ -223,8 +223,7 @@ double GrownSearchBound(const PatchGeometry& geometry,
                         double expected_max_blur_px,
                         const cv::Size& working_size,
                         const DPPsfField& field,
-                        const BlurEstimationOptions& blur,
-                        const DPScaleOptions& options) {
+                        const BlurEstimationOptions& blur) {
   // At most twice the bound: the search's cost grows with the bound (its
   // kernel grid and crops), and uncapped growth to 20-36 px on the
   // generated tabletops cost 3-4x the blur stage; patches beyond stay at

@@ -116,8 +116,7 @@ double GrownSearchBound(const PatchGeometry& geometry,
                         double expected_max_blur_px,
                         const cv::Size& working_size,
                         const DPPsfField& field,
-                        const BlurEstimationOptions& blur,
-                        const DPScaleOptions& options);
+                        const BlurEstimationOptions& blur);
 
 // Step 4: usable patches become samples (of view `view_index`); the others
 // are counted by reason in *rejections. *sample_candidate receives each
