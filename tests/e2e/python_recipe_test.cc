@@ -17,7 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kDpExe = DPSFM_DP_EXE;
 const std::string kRecipe =
     std::string(DPSFM_SOURCE_DIR) + "/examples/python/scale_with_dp.py";
 
@@ -77,7 +76,7 @@ TEST(PythonRecipe, PycolmapModelIsScaledAndReadBackMetric) {
   const std::string report_path = scene.temp() / "dp_scale.json";
   const std::vector<std::string> recipe = {kRecipe,
                                            "--exe",
-                                           kDpExe,
+                                           kDpsfm,
                                            "--workspace_path",
                                            scene / "dense",
                                            "--dp_image_path",
