@@ -50,12 +50,20 @@ flock 9
 ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
 
 # COLMAP's source and build trees out of reach: empty folders mounted over
-# them for the configure and the build (root and unshare; else the check
-# below alone).
+# them for the configure and the build, in a private mount namespace (root,
+# and a kernel or container that allows it; else the build.ninja check below
+# alone).
+empty="$DPSFM_CACHE_DIR/installed/.empty"
+mkdir -p "$empty"
+if [ "$(id -u)" -eq 0 ] && unshare --mount --propagation private \
+     mount --bind "$empty" "$empty" 2>/dev/null; then
+  hide=1
+else
+  hide=0
+  log "cannot mount in a private namespace here: COLMAP's trees stay visible, and only the build's files are checked not to name them"
+fi
 hidden() {
-  if [ "$(id -u)" -eq 0 ] && command -v unshare >/dev/null; then
-    local empty="$DPSFM_CACHE_DIR/installed/.empty"
-    mkdir -p "$empty"
+  if [ "$hide" -eq 1 ]; then
     unshare --mount --propagation private bash -c '
       set -e; empty="$1"; shift
       mount --bind "$empty" "$1"; mount --bind "$empty" "$2"; shift 2
