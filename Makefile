@@ -1,52 +1,84 @@
-# The two commands of the README, plus the pieces they are made of.
-.PHONY: example test build bench accuracy profiles real large clean-cache \
-        test-3.10 test-installed check-colmap-main
+# The two commands of the README (make example, make test), plus the pieces
+# they are made of. Each target runs at most one script on its way to CMake:
+#   make build -> scripts/build.sh -> CMake, which fetches, verifies and
+#   patches COLMAP (cmake/ColmapRelease.cmake) and builds it with dp-sfm.
+# Variables (environment or command line):
+#   DPSFM_COLMAP_VERSION  the COLMAP release built into: 4.1.1 (default) or
+#                         3.10; each has its own cached build tree
+#   DPSFM_CACHE_DIR       what survives between runs, outside the clone
+#   DPSFM_BUILD_TYPE      Release (default)
+#   DPSFM_JOBS            parallel jobs (default: the number of cores)
+#   CTEST_ARGS            more arguments for ctest (make test), e.g. -R Rescale
+.PHONY: example test build deps bench accuracy profiles real large \
+        clean-cache test-3.10 test-installed check-colmap-main
 
-example:
+DPSFM_COLMAP_VERSION ?= 4.1.1
+DPSFM_BUILD_TYPE ?= Release
+DPSFM_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+DPSFM_CACHE_DIR ?= $(if $(XDG_CACHE_HOME),$(XDG_CACHE_HOME),$(HOME)/.cache)/dp-sfm
+DPSFM_BUILD_DIR ?= $(DPSFM_CACHE_DIR)/build/colmap-$(DPSFM_COLMAP_VERSION)
+export DPSFM_COLMAP_VERSION DPSFM_BUILD_TYPE DPSFM_JOBS DPSFM_CACHE_DIR \
+       DPSFM_BUILD_DIR
+
+# ccache for every compile (CMake sets it as the compiler launcher). A fresh
+# clone gives every file a new mtime/ctime; the contents decide.
+export CCACHE_DIR ?= $(DPSFM_CACHE_DIR)/ccache
+export CCACHE_MAXSIZE ?= 5G
+export CCACHE_SLOPPINESS ?= include_file_mtime,include_file_ctime,time_macros
+
+example: build
 	bash scripts/run_example.sh
 
-test:
-	bash scripts/run_tests.sh
+test: build
+	ctest --test-dir "$(DPSFM_BUILD_DIR)" -j $(DPSFM_JOBS) \
+	  --output-on-failure --timeout 900 $(CTEST_ARGS)
 
-build:
-	bash scripts/build.sh
+# The Debian packages and the tests' pycolmap (a no-op when all are there).
+deps:
+	bash scripts/install_deps.sh
+
+build: deps
+	bash scripts/build.sh "$(DPSFM_BUILD_DIR)" \
+	  -DDPSFM_COLMAP_RELEASE=$(DPSFM_COLMAP_VERSION) \
+	  -DCMAKE_BUILD_TYPE=$(DPSFM_BUILD_TYPE)
 
 # The whole suite on the COLMAP 3.10 build (the default build is COLMAP 4.1.1;
 # DPSFM_COLMAP_VERSION=3.10 works with every target).
 test-3.10:
-	DPSFM_COLMAP_VERSION=3.10 bash scripts/run_tests.sh
+	$(MAKE) test DPSFM_COLMAP_VERSION=3.10 \
+	  DPSFM_BUILD_DIR="$(DPSFM_CACHE_DIR)/build/colmap-3.10"
 
 # dp-sfm built against an installed COLMAP 4.1.1 (find_package, the `dpsfm`
-# executable; the prefix is installed from make test's cached build) and its
+# executable; the prefix is installed from the default build) and its
 # end-to-end tests run through `dpsfm`.
-test-installed:
+test-installed: build
 	bash scripts/run_installed_tests.sh
 
 # dp-sfm's sources compiled against COLMAP's main branch (4.2.0.dev0) from
 # ../shared/sources: a compile check, nothing is linked or run.
-check-colmap-main:
+check-colmap-main: deps
 	bash scripts/check_colmap_main.sh
 
-bench:
+bench: build
 	bash scripts/run_bench.sh
 
 # Accuracy on generated scenes with known scale (tables; gates nothing).
-accuracy:
+accuracy: build
 	bash scripts/run_accuracy_bench.sh
 
 # DP PSF profiles x estimation modes on generated scenes (a table).
-profiles:
+profiles: build
 	bash scripts/run_profile_bench.sh
 
 # Real DP captures (../shared/realdp): calibration from their flat planes,
 # then r_s per scene and profile mode (a table; gates nothing).
-real:
+real: build
 	bash scripts/run_real_bench.sh
 
 # A 300-view workspace of 3000x2000 DP frames: the view budget against the
 # distinct views (a table; gates nothing).
-large:
+large: build
 	bash scripts/run_large_bench.sh
 
 clean-cache:
-	rm -rf "$${DPSFM_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/dp-sfm}"
+	rm -rf "$(DPSFM_CACHE_DIR)"

@@ -7,15 +7,14 @@ include(${CMAKE_CURRENT_LIST_DIR}/CheckColmapSource.cmake)
 dpsfm_check_colmap_source("${COLMAP_SOURCE_DIR}")
 
 # COLMAP's options for a headless CPU build that downloads nothing (COLMAP 4:
-# PoseLib from find_package on CMAKE_PREFIX_PATH, which
-# scripts/build_poselib.sh builds, faiss from the system, ONNX and its
-# learned features off); a user may override any of them.
+# PoseLib from find_package on CMAKE_PREFIX_PATH, or the one
+# cmake/ColmapRelease.cmake declares (FETCH_POSELIB), faiss from the system,
+# ONNX and its learned features off); a user may override any of them.
 foreach(option CUDA_ENABLED GUI_ENABLED OPENGL_ENABLED CGAL_ENABLED
                TESTS_ENABLED IPO_ENABLED UNINSTALL_ENABLED FETCH_POSELIB
                FETCH_FAISS FETCH_ONNX ONNX_ENABLED DOWNLOAD_ENABLED)
   set(${option} OFF CACHE BOOL "")
 endforeach()
-set(FETCHCONTENT_FULLY_DISCONNECTED ON CACHE BOOL "")
 # COLMAP overwrites CMAKE_MODULE_PATH and the C++ standard in its own scope.
 add_subdirectory(${COLMAP_SOURCE_DIR} colmap)
 
@@ -27,8 +26,11 @@ if(DPSFM_COLMAP_VERSION_MAJOR EQUAL 3)
   # 3.10's own targets are built as C++17 too, as COLMAP 4 is.
   dpsfm_set_cxx_standard_below(${COLMAP_SOURCE_DIR} 17)
 endif()
+if(NOT DPSFM_COLMAP_ROUTE_DETAIL)
+  set(DPSFM_COLMAP_ROUTE_DETAIL "${COLMAP_SOURCE_DIR}")
+endif()
 message(STATUS "dp-sfm: building into COLMAP ${DPSFM_COLMAP_VERSION} "
-               "(checkout route: the commands in `colmap`)")
+               "(${DPSFM_COLMAP_ROUTE_DETAIL}; the commands in `colmap`)")
 
 # COLMAP's in-tree targets carry no include directories or definitions:
 # COLMAP sets them for its own directory. Code that includes COLMAP headers

@@ -7,38 +7,21 @@
 # file that fails and exits non-zero if any does.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-[ -n "$POSELIB_REVISION" ] || die "run it with the default build (COLMAP 4), not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION"
-
-stage "install dependencies" "$DPSFM_ROOT/scripts/install_deps.sh"
-poselib_prefix="$("$DPSFM_ROOT/scripts/build_poselib.sh")"
-pristine="$("$DPSFM_ROOT/scripts/fetch_archive.sh" colmap-main \
-  "$COLMAP_MAIN_ARCHIVE" "$COLMAP_MAIN_ARCHIVE_SHA256" \
-  "$COLMAP_MAIN_TREE_SHA256" "$COLMAP_MAIN_URL")"
-
-# The patched tree and its build directory, keyed by the patch series.
-key="$(cat $(patch_series) | sha256sum | cut -c1-16)"
-source_dir="$DPSFM_CACHE_DIR/src/colmap-main-check-$key"
-if [ ! -f "$source_dir/.dpsfm-complete" ]; then
-  rm -rf "$source_dir.part"
-  cp -a "$pristine" "$source_dir.part"
-  apply_patch_series "$source_dir.part" "COLMAP's main branch"
-  touch "$source_dir.part/.dpsfm-complete"
-  rm -rf "$source_dir"
-  mv "$source_dir.part" "$source_dir"
-fi
-build_dir="$DPSFM_CACHE_DIR/build/colmap-main-check-$key"
+# COLMAP's main branch is fetched, verified and patched by CMake
+# (DPSFM_COLMAP_RELEASE=main, cmake/ColmapRelease.cmake) and configured with
+# dp-sfm; nothing is built through Ninja.
+build_dir="$DPSFM_CACHE_DIR/build/colmap-main-check"
 mkdir -p "$build_dir"
 ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
-
 configure() {
   cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
-    -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" -DCOLMAP_SOURCE_DIR="$source_dir" \
-    -DCMAKE_PREFIX_PATH="$poselib_prefix" "${DPSFM_COLMAP_OPTIONS[@]}" \
-    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \
-    >"$build_dir/configure.log" 2>&1 \
-    || { tail -n 40 "$build_dir/configure.log" >&2; die "CMake configuration against COLMAP's main branch failed (log: $build_dir/configure.log)"; }
+    -DDPSFM_COLMAP_RELEASE=main -DCMAKE_BUILD_TYPE="${DPSFM_BUILD_TYPE:-Release}" \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >"$build_dir/configure.log" 2>&1 \
+    || { grep -v '^-- ' "$build_dir/configure.log" | tail -n 30 >&2; die "CMake configuration against COLMAP's main branch failed (log: $build_dir/configure.log)"; }
 }
-stage "configure against $(grep -o 'COLMAP_VERSION "[^"]*"' "$source_dir/CMakeLists.txt")" configure
+stage "configure against COLMAP's main branch" configure
+source_dir="$(sed -n 's/^COLMAP_SOURCE_DIR:[A-Z]*=//p' "$build_dir/CMakeCache.txt")"
+log "$(grep -o 'COLMAP_VERSION "[^"]*"' "$source_dir/CMakeLists.txt") from $source_dir"
 
 # Every object of dp-sfm's own targets that sees COLMAP headers: the COLMAP
 # layer, the commands, the examples and the tests of tests/{colmap,e2e,scripts}

@@ -14,9 +14,9 @@ PACKAGES=(
   libsuitesparse-dev libglew-dev libopencv-dev libgtest-dev
   nlohmann-json3-dev python3 python3-venv
   # COLMAP 4: OpenImageIO replaced FreeImage (its CMake package names
-  # /usr/bin/iconvert, hence the tools), faiss for retrieval; curl for the
-  # sources a machine without ../shared/sources downloads.
-  libopenimageio-dev openimageio-tools libfaiss-dev curl ca-certificates
+  # /usr/bin/iconvert, hence the tools), faiss for retrieval; CA certificates
+  # for the sources CMake downloads on a machine without ../shared/sources.
+  libopenimageio-dev openimageio-tools libfaiss-dev ca-certificates
 )
 
 PYCOLMAP_VERSION="4.2.1"

@@ -49,7 +49,7 @@ run_colmap() {
 }
 # COLMAP 4 renamed SiftExtraction / SiftMatching to FeatureExtraction /
 # FeatureMatching.
-if [ -n "$POSELIB_REVISION" ]; then features=Feature; else features=Sift; fi
+if colmap_is_4; then features=Feature; else features=Sift; fi
 stage "colmap feature_extractor" run_colmap feature_extractor feature_extractor \
   --database_path "$pipeline/database.db" --image_path "$scene/images" \
   --ImageReader.single_camera 1 --ImageReader.camera_model SIMPLE_RADIAL \
@@ -70,7 +70,7 @@ stage "dp_scale_estimator (mapper's sparse model)" "$colmap" dp_scale_estimator 
   --database_path "$pipeline/database.db" --lens_path "$scene/lens.csv" \
   --report_path "$scene/report_sparse.json" 2>"$logs/sparse.log" \
   || { tail -n 5 "$logs/sparse.log" >&2; die "dp_scale_estimator failed on the mapper's model"; }
-if [ -n "$POSELIB_REVISION" ]; then
+if colmap_is_4; then
   mkdir -p "$pipeline/global"
   stage "colmap global_mapper" run_colmap global_mapper global_mapper \
     --database_path "$pipeline/database.db" --image_path "$scene/images" \
@@ -108,7 +108,7 @@ echo "== 2. Real COLMAP pipeline (feature_extractor, exhaustive_matcher, mapper)
 grep -E "Linear estimate|files rescaled" "$logs/sparse.log" | sed 's/^.*\] /   /'
 "$examples/dpsfm_compare_to_truth" --ground_truth "$scene/ground_truth.json" \
   --report "$scene/report_sparse.json" --model_path "$pipeline/sparse/0"
-if [ -n "$POSELIB_REVISION" ]; then
+if colmap_is_4; then
   echo
   echo "== 2b. The same with COLMAP 4's global_mapper, sparse mode:"
   grep -E "Linear estimate|files rescaled" "$logs/global.log" | sed 's/^.*\] /   /'

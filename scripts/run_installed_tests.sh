@@ -4,21 +4,23 @@
 #     cached checkout build (make test's) into a prefix in the cache, without
 #     its `colmap` executable (the patch series changes only that one), and
 #     nothing in the prefix may know the dp-sfm commands.
-#  2. dp-sfm is configured against that prefix and PoseLib's alone
-#     (find_package(COLMAP), no COLMAP_SOURCE_DIR) with COLMAP's source and
-#     build trees hidden (a private mount namespace), and built: `dpsfm`.
+#     COLMAP's release build fetched PoseLib (FETCH_POSELIB), so PoseLib is
+#     installed with it.
+#  2. dp-sfm is configured against that prefix alone (find_package(COLMAP),
+#     no COLMAP_SOURCE_DIR) with the fetched sources (COLMAP's, PoseLib's)
+#     and COLMAP's build tree hidden (a private mount namespace), and built:
+#     `dpsfm`.
 #  3. `dpsfm` is installed into a prefix of its own and its end-to-end tests
 #     run: the dp-sfm commands through `dpsfm`, COLMAP's own through the
 #     cached build's `colmap` behind a wrapper that refuses the dp-sfm ones.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-[ -n "$POSELIB_REVISION" ] || die "the installed route needs COLMAP 4 (not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION)"
+colmap_is_4 || die "the installed route needs COLMAP 4 (not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION)"
 total_start=$SECONDS
 checkout_build="$(build_tree)"
-poselib_prefix="$("$DPSFM_ROOT/scripts/build_poselib.sh")"
-colmap_source="$(sed -n 's/^COLMAP_SOURCE_DIR:[A-Z]*=//p' "$checkout_build/CMakeCache.txt")"
-[ -d "$colmap_source" ] || die "no COLMAP source tree named in $checkout_build/CMakeCache.txt"
-colmap_source="$(readlink -f "$colmap_source")"
+# The fetched sources (COLMAP's, PoseLib's) and COLMAP's build tree.
+fetched="$checkout_build/_deps"
+[ -d "$fetched" ] || die "$checkout_build has no fetched sources (_deps): not a release build"
 
 # 1. The installed COLMAP, keyed by the checkout build it comes from.
 prefix="$DPSFM_CACHE_DIR/installed/$(basename "$checkout_build")"
@@ -29,6 +31,8 @@ install_colmap() {
   # The executable is the patched one: leave it out.
   rm -f "$prefix.part/bin/colmap"
   rmdir "$prefix.part/bin" 2>/dev/null || true
+  [ -n "$(find "$prefix.part" -name 'PoseLibConfig.cmake' -print -quit)" ] \
+    || die "PoseLib was not installed with COLMAP (log: $prefix.install.log)"
   local knows
   knows="$(grep -rl -e dp_scale_estimator -e dp_psf_calibrator "$prefix.part" || true)"
   [ -z "$knows" ] || die "the installed COLMAP knows the dp-sfm commands: $knows"
@@ -38,8 +42,8 @@ install_colmap() {
 mkdir -p "$DPSFM_CACHE_DIR/installed"
 exec 8>"$prefix.lock"
 flock 8
-stage "install COLMAP $COLMAP_VERSION into $prefix" install_colmap
-log "the installed COLMAP: $(grep -o 'COLMAP_VERSION [0-9.]*' "$prefix/share/colmap/colmap-config.cmake"), $(find "$prefix/lib" -name '*.a' | wc -l) libraries, no executable; nothing in it knows dp_scale_estimator"
+stage "install COLMAP $DPSFM_COLMAP_VERSION into $prefix" install_colmap
+log "the installed COLMAP: $(grep -o 'COLMAP_VERSION [0-9.]*' "$prefix/share/colmap/colmap-config.cmake"), $(find "$prefix/lib" -name '*.a' | wc -l) libraries (PoseLib's among them), no executable; nothing in it knows dp_scale_estimator"
 
 # 2. dp-sfm against it. The build tree reaches the clone through a symlink,
 # as the checkout build does, so another clone reuses it.
@@ -49,7 +53,7 @@ exec 9>"$build_dir.lock"
 flock 9
 ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
 
-# COLMAP's source and build trees out of reach: empty folders mounted over
+# The fetched sources and COLMAP's build tree out of reach: empty folders mounted over
 # them for the configure and the build, in a private mount namespace (root,
 # and a kernel or container that allows it; else the build.ninja check below
 # alone).
@@ -67,7 +71,7 @@ hidden() {
     unshare --mount --propagation private bash -c '
       set -e; empty="$1"; shift
       mount --bind "$empty" "$1"; mount --bind "$empty" "$2"; shift 2
-      exec "$@"' _ "$empty" "$colmap_source" "$checkout_build/colmap" "$@"
+      exec "$@"' _ "$empty" "$fetched" "$checkout_build/colmap" "$@"
   else
     "$@"
   fi
@@ -75,7 +79,7 @@ hidden() {
 configure() {
   hidden cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
     -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" \
-    -DCMAKE_PREFIX_PATH="$prefix;$poselib_prefix" \
+    -DCMAKE_PREFIX_PATH="$prefix" \
     -DDPSFM_TEST_COLMAP="$checkout_build/bin/colmap" \
     -DDPSFM_BENCHMARKS_ENABLED=OFF \
     >"$build_dir/configure.log" 2>&1 \
@@ -87,9 +91,9 @@ start=$SECONDS
 stage "build dpsfm" hidden cmake --build "$build_dir" --target dpsfm -j "$(jobs_count)"
 log "warm cache to a built dpsfm: $((SECONDS - start)) s of build after the configure"
 stage "build the end-to-end tests" hidden cmake --build "$build_dir" --target e2e_tests -j "$(jobs_count)"
-# Nothing built may point into COLMAP's source or build tree.
-if grep -q -e "$colmap_source" -e "$checkout_build/colmap/" "$build_dir/build.ninja"; then
-  die "the installed-route build refers to COLMAP's source or build tree ($build_dir/build.ninja)"
+# Nothing built may point into the fetched sources or COLMAP's build tree.
+if grep -q -e "$fetched/" -e "$checkout_build/colmap/" "$build_dir/build.ninja"; then
+  die "the installed-route build refers to COLMAP's sources or build tree ($build_dir/build.ninja)"
 fi
 
 # 3. Installed, then tested.
