@@ -400,6 +400,30 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
   }
 }
 
+// A view Next() returned belongs to its caller alone: nothing in the
+// prefetcher (or COLMAP's thread pool, which keeps its finished tasks until
+// Wait()) holds its frames or depth map, so a run holds at most depth + 1
+// views whatever its length.
+TEST(ViewPrefetcher, ReturnedViewsAreHeldByTheCallerAlone) {
+  TempDir dir;
+  WriteModel(dir, 4, -1);
+  const ScaleRunOptions options = OptionsFor(dir);
+  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
+  const WorkspaceReader reader(options, layout);
+  for (const int depth : {0, 1, 3}) {
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth);
+    for (int k = 0; k < 4; ++k) {
+      const ViewPrefetcher::Read read = prefetcher.Next();
+      for (const cv::Mat* mat :
+           {&read.view.left, &read.view.right, &read.view.depth}) {
+        if (mat->empty()) continue;
+        ASSERT_NE(mat->u, nullptr);
+        EXPECT_EQ(mat->u->refcount, 1) << "depth " << depth << ", view " << k;
+      }
+    }
+  }
+}
+
 TEST(ViewPrefetcher, DroppingWaitsForTheReadsInFlight) {
   TempDir dir;
   WriteModel(dir, 5, -1);

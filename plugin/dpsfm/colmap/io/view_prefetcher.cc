@@ -1,5 +1,6 @@
 #include "dpsfm/colmap/io/view_prefetcher.h"
 
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -41,7 +42,7 @@ ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
 }
 
 ViewPrefetcher::~ViewPrefetcher() {
-  for (std::shared_future<Read>& read : in_flight_) {
+  for (std::future<Read>& read : in_flight_) {
     if (read.valid()) read.wait();
   }
 }
@@ -49,8 +50,11 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
-  in_flight_.emplace_back(
-      pool_->AddTask([reader, index]() { return TimedRead(reader, index); }));
+  auto promise = std::make_shared<std::promise<Read>>();
+  in_flight_.push_back(promise->get_future());
+  pool_->AddTask([reader, index, promise]() {
+    promise->set_value(TimedRead(reader, index));
+  });
 }
 
 ViewPrefetcher::Read ViewPrefetcher::Next() {
@@ -64,9 +68,9 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     read = TimedRead(reader_, order_[launched_++]);
   } else {
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
-    std::shared_future<Read> next = std::move(in_flight_.front());
+    std::future<Read> next = std::move(in_flight_.front());
     in_flight_.pop_front();
-    read = next.get();
+    read = next.get();  // moves the view out
     // The next read starts once this one is out, so reads stay in order
     // and at most depth views wait in memory.
     if (launched_ < order_.size()) Launch();
