@@ -92,13 +92,15 @@ void WriteModel(const TempDir& dir, int n, int broken) {
   }
 }
 
-ScaleRunOptions OptionsFor(const TempDir& dir) {
+// The workspace WriteModel(dir, n, broken) writes, opened as a run would.
+WorkspaceReader ReaderFor(const TempDir& dir, int n, int broken) {
+  WriteModel(dir, n, broken);
   ScaleRunOptions options;
   options.input_path = dir / "sparse";
   options.dp_image_path = dir / "dp";
   options.focal_length_mm = 50;
   options.f_number = 2;
-  return options;
+  return WorkspaceReader(options, ResolveWorkspaceLayout(options));
 }
 
 // Gates on the reads of chosen views (see the top of the file). A watcher
@@ -225,10 +227,7 @@ std::set<int> FirstOf(const std::vector<int>& order, size_t count) {
 
 TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
   TempDir dir;
-  WriteModel(dir, 6, -1);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 6, -1);
   const std::vector<int> order = {4, 0, 5, 2};  // not all views
   std::map<int, DPView> expected;
   for (const int index : order) expected[index] = reader.LoadView(index);
@@ -269,10 +268,7 @@ TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
 
 TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
   TempDir dir;
-  WriteModel(dir, 7, -1);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 7, -1);
   const std::vector<int> order = {6, 1, 4, 0, 3};  // 2 and 5 are not read
   // Time for reads that must not happen to show up if they did.
   const auto settle = std::chrono::milliseconds(50);
@@ -310,10 +306,7 @@ TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
 
 TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
   TempDir dir;
-  WriteModel(dir, 3, -1);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 3, -1);
   const double hold = 0.3;  // each gated read lasts at least this long
   {
     // Depth 0: the read happens inside Next(), which waits all of it.
@@ -357,10 +350,7 @@ TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
 
 TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
   TempDir dir;
-  WriteModel(dir, 5, 3);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 5, 3);
   const auto expect_error_names_v3 = [](ViewPrefetcher* prefetcher, int depth) {
     try {
       prefetcher->Next();
@@ -406,10 +396,7 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
 // views whatever its length.
 TEST(ViewPrefetcher, ReturnedViewsAreHeldByTheCallerAlone) {
   TempDir dir;
-  WriteModel(dir, 4, -1);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 4, -1);
   for (const int depth : {0, 1, 3}) {
     ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth);
     for (int k = 0; k < 4; ++k) {
@@ -426,10 +413,7 @@ TEST(ViewPrefetcher, ReturnedViewsAreHeldByTheCallerAlone) {
 
 TEST(ViewPrefetcher, DroppingWaitsForTheReadsInFlight) {
   TempDir dir;
-  WriteModel(dir, 5, -1);
-  const ScaleRunOptions options = OptionsFor(dir);
-  const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
-  const WorkspaceReader reader(options, layout);
+  const WorkspaceReader reader = ReaderFor(dir, 5, -1);
   const double hold = 0.1;
   ReadGates gates(dir, {{0, hold}, {1, hold}, {2, hold}, {3, hold}, {4, 0}});
   ASSERT_EQ(gates.error(), "");
