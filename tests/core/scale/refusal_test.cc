@@ -202,6 +202,40 @@ TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
   EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur), 0);
 }
 
+// The blur search's estimators are built once per (crop, bound) and kept
+// across views; a geometry beyond the last two used is dropped and built
+// again when it comes back.
+TEST(BlurSearchEstimators, BuiltOncePerGeometryTheLastTwoKept) {
+  DPPsfField field;
+  field.layout = DPPsfLayout::ColumnBands(2);
+  field.cells = {std::make_shared<TranslatingDiskPsf>(),
+                 std::make_shared<TranslatingDiskPsf>()};
+  BlurSearchEstimators estimators(field);
+  BlurEstimationOptions blur;
+  blur.max_radius_px = 4;
+  const int crop = 16 + 2 * BlurSearchBorder(field, blur, 4);
+  const PatchBlurEstimator* first = estimators.For(blur, crop)[0].get();
+  EXPECT_EQ(estimators.NumBuilt(), 2);  // one per cell
+  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);
+  EXPECT_EQ(estimators.NumBuilt(), 2);
+  BlurEstimationOptions grown = blur;
+  grown.max_radius_px = 6.5;
+  const auto& larger = estimators.For(grown, crop + 6);
+  ASSERT_EQ(larger.size(), 2u);
+  EXPECT_EQ(larger[1]->PatchSize(), cv::Size(crop + 6, crop + 6));
+  EXPECT_DOUBLE_EQ(larger[1]->Options().max_radius_px, 6.5);
+  EXPECT_EQ(estimators.NumBuilt(), 4);
+  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);  // still kept
+  EXPECT_EQ(estimators.NumBuilt(), 4);
+  // A third geometry drops the least recently used (the grown one).
+  estimators.For(grown, crop);
+  EXPECT_EQ(estimators.NumBuilt(), 6);
+  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);
+  EXPECT_EQ(estimators.NumBuilt(), 6);
+  estimators.For(grown, crop + 6);
+  EXPECT_EQ(estimators.NumBuilt(), 8);
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace dpsfm

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <limits>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -223,24 +225,36 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
   const double radius = std::abs(signed_radius_px);
   const int side = 2 * half + 1;
   const double p = params_.split_exponent;
-  // Antiderivative of g(t) = sign(t) |t|^p.
-  auto g_integral = [p](double t) {
-    return std::pow(std::abs(t), p + 1) / (p + 1);
+  // Antiderivatives of g(t) = sign(t) |t|^p and of t^2 g(t) (the bright
+  // rim's x^2 term): |t|^(p + 1) / (p + 1) and |t|^(p + 3) / (p + 3), from
+  // one pow. Neighbouring pieces of a chord share an end (hi of one is lo
+  // of the next), so the last end's values are kept: one pow per piece
+  // instead of four (the kernel grid of a profile fit renders hundreds of
+  // kernels per candidate profile).
+  struct Antiderivatives {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    double g1 = 0, g3 = 0;
   };
-  // Antiderivative of t^2 g(t), for the bright rim's x^2 term.
-  auto g3_integral = [p](double t) {
-    return std::pow(std::abs(t), p + 3) / (p + 3);
+  auto antiderivatives = [p](double t, Antiderivatives* at) {
+    if (t == at->t) return;
+    const double power = std::pow(std::abs(t), p + 1);
+    at->t = t;
+    at->g1 = power / (p + 1);
+    at->g3 = power * t * t / (p + 3);
   };
   const double b = params_.rim_brightness;
   const double inv_r2 = radius > 0 ? 1 / (radius * radius) : 0;
-  // Weight towards +x; the view leaning -x is its mirror image.
+  // Weight towards +x; the view leaning -x is its mirror image. The profile
+  // is symmetric in y: rows i >= 0 are integrated and mirrored (as the
+  // translating disk's).
   std::vector<double> plus(side * side, 0.0), minus(side * side, 0.0);
   const double dy = 1.0 / subsamples_per_pixel_;
+  Antiderivatives at_lo, at_hi;
   ForEachChordPiece(
       radius,
       half,
       subsamples_per_pixel_,
-      -half,
+      0,
       [&](int i, int j, double lo, double hi, double a) {
         // Exact along x, with the weight 1 + b (x^2 + y^2) /
         // R^2 (y^2 = R^2 - a^2): (1 / 2) integral of w (1 +-
@@ -250,14 +264,23 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
         const double base =
             0.5 * (w0 * (hi - lo) + w2 * (hi * hi * hi - lo * lo * lo) / 3) *
             dy;
-        const double split =
-            0.5 *
-            (w0 * a * (g_integral(hi / a) - g_integral(lo / a)) +
-             w2 * a * a * a * (g3_integral(hi / a) - g3_integral(lo / a))) *
-            dy;
+        if (lo / a == at_hi.t) std::swap(at_lo, at_hi);
+        antiderivatives(lo / a, &at_lo);
+        antiderivatives(hi / a, &at_hi);
+        const double split = 0.5 *
+                             (w0 * a * (at_hi.g1 - at_lo.g1) +
+                              w2 * a * a * a * (at_hi.g3 - at_lo.g3)) *
+                             dy;
         plus[(i + half) * side + j + half] += base + split;
         minus[(i + half) * side + j + half] += base - split;
       });
+  for (int i = 1; i <= half; ++i) {
+    for (std::vector<double>* weights : {&plus, &minus}) {
+      std::copy(weights->begin() + (half + i) * side,
+                weights->begin() + (half + i + 1) * side,
+                weights->begin() + (half - i) * side);
+    }
+  }
   cv::Mat towards_plus_x(side, side, CV_32FC1);
   cv::Mat towards_minus_x(side, side, CV_32FC1);
   double total = 0;

@@ -105,6 +105,7 @@ DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
                   DPScaleOptions::SelfCalibration::kOff)
       << "self-calibration fits one profile for the whole frame";
   psf_ = field_.cells[0];
+  blur_estimators_.reset(new BlurSearchEstimators(field_));
 }
 
 DPScaleEstimator::~DPScaleEstimator() = default;
@@ -149,14 +150,14 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     candidates = PatchesWithDepth(view, working, geometry, border, options_);
     int with_depth = 0;
     for (const PatchCandidate& c : candidates) with_depth += c.reject.empty();
-    search = SearchViewBlur(working,
-                            candidates,
-                            field_,
-                            blur,
-                            border,
-                            geometry.patch_size,
-                            with_depth > 0,
-                            options_);
+    search = SearchViewBlur(
+        working,
+        candidates,
+        field_,
+        blur_estimators_->For(blur, geometry.patch_size + 2 * border),
+        border,
+        with_depth > 0,
+        options_);
     rejections.clear();
     sample_candidate.clear();
     data->samples = ViewSamples(candidates,

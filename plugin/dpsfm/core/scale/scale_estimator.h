@@ -29,6 +29,8 @@
 
 namespace dpsfm {
 
+class BlurSearchEstimators;  // view_patches.h
+
 // What the DP frames were before they reached the core in linear light:
 // reported with the view, and what an 8-bit or lossy file costs is said.
 struct DPFrameInfo {
@@ -575,6 +577,8 @@ class DPScaleEstimator {
   DPPsfField field_;
   std::shared_ptr<const DPPsfModel> psf_;  // field_.cells[0]
   std::vector<std::unique_ptr<ViewData>> views_;
+  // The blur search's tables, kept across views (view_patches.h).
+  std::unique_ptr<BlurSearchEstimators> blur_estimators_;
 };
 
 }  // namespace dpsfm

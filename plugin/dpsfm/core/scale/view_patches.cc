@@ -112,14 +112,40 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
   return candidates;
 }
 
-ViewBlurSearch SearchViewBlur(const WorkingView& working,
-                              const std::vector<PatchCandidate>& candidates,
-                              const DPPsfField& field,
-                              const BlurEstimationOptions& blur,
-                              int border,
-                              int patch_size,
-                              bool any_depth,
-                              const DPScaleOptions& options) {
+BlurSearchEstimators::BlurSearchEstimators(const DPPsfField& field)
+    : field_(field) {}
+
+const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
+    const BlurEstimationOptions& blur, int crop) {
+  const std::pair<int, double> key(crop, blur.max_radius_px);
+  auto it = std::find_if(geometries_.begin(),
+                         geometries_.end(),
+                         [&](const auto& g) { return g.first == key; });
+  if (it != geometries_.end()) {
+    std::rotate(it, it + 1, geometries_.end());  // most recently used last
+    return *geometries_.back().second;
+  }
+  if (static_cast<int>(geometries_.size()) >= kMaxGeometries) {
+    geometries_.erase(geometries_.begin());
+  }
+  std::unique_ptr<Estimators> estimators(new Estimators);
+  for (const auto& psf : field_.cells) {
+    estimators->emplace_back(
+        new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
+    ++num_built_;
+  }
+  geometries_.emplace_back(key, std::move(estimators));
+  return *geometries_.back().second;
+}
+
+ViewBlurSearch SearchViewBlur(
+    const WorkingView& working,
+    const std::vector<PatchCandidate>& candidates,
+    const DPPsfField& field,
+    const BlurSearchEstimators::Estimators& estimators,
+    int border,
+    bool any_depth,
+    const DPScaleOptions& options) {
   const int num = static_cast<int>(candidates.size());
   ViewBlurSearch out;
   out.estimates.resize(num);
@@ -143,12 +169,9 @@ ViewBlurSearch SearchViewBlur(const WorkingView& working,
       static_cast<int>(std::count(search.begin(), search.end(), 1));
   if (out.num_searched == 0) return out;
 
-  const int crop = patch_size + 2 * border;
-  std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
-  for (const auto& psf : field.cells) {
-    estimators.emplace_back(
-        new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
-    DPSFM_CHECK_LE(estimators.back()->Border(), border);
+  DPSFM_CHECK_EQ(estimators.size(), field.cells.size());
+  for (const auto& estimator : estimators) {
+    DPSFM_CHECK_LE(estimator->Border(), border);
   }
 #ifdef _OPENMP
   const int threads = EffectiveNumThreads(options.num_threads);

@@ -69,14 +69,47 @@ struct ViewBlurSearch {
   ScreenedPatches screened;
   int num_searched = 0;
 };
-ViewBlurSearch SearchViewBlur(const WorkingView& working,
-                              const std::vector<PatchCandidate>& candidates,
-                              const DPPsfField& field,
-                              const BlurEstimationOptions& blur,
-                              int border,
-                              int patch_size,
-                              bool any_depth,
-                              const DPScaleOptions& options);
+// The blur search's estimators, one per cell of a field, kept across views:
+// their kernel tables cost tens of ms for the translating disk and up to a
+// second for a measured kernel pair at a large bound, a measured field has
+// one per cell, and the views of a project search crops of one size at one
+// or two bounds (the first and the grown one). The least recently used
+// geometry beyond the last kMaxGeometries is dropped (each holds a cell's
+// tables: a few MB, tens for a large bound).
+class BlurSearchEstimators {
+ public:
+  using Estimators = std::vector<std::unique_ptr<PatchBlurEstimator>>;
+  static constexpr int kMaxGeometries = 2;
+
+  // `field` must outlive this.
+  explicit BlurSearchEstimators(const DPPsfField& field);
+
+  // The field's estimators for square crops of side `crop` with the search
+  // options `blur` (only blur.max_radius_px may differ between calls: it is
+  // part of the key, the other options are taken as they were first).
+  const Estimators& For(const BlurEstimationOptions& blur, int crop);
+
+  // Tables built so far (for tests: views of one geometry build them once).
+  int NumBuilt() const { return num_built_; }
+
+ private:
+  const DPPsfField& field_;
+  // (crop, bound) -> the estimators; most recently used last.
+  std::vector<std::pair<std::pair<int, double>, std::unique_ptr<Estimators>>>
+      geometries_;
+  int num_built_ = 0;
+};
+
+// `estimators`: the field's, for crops of the patch size plus `border` on
+// each side (BlurSearchEstimators::For).
+ViewBlurSearch SearchViewBlur(
+    const WorkingView& working,
+    const std::vector<PatchCandidate>& candidates,
+    const DPPsfField& field,
+    const BlurSearchEstimators::Estimators& estimators,
+    int border,
+    bool any_depth,
+    const DPScaleOptions& options);
 
 // Searched patches whose blur sits at the search bound (their estimate is
 // the bound, not the blur).
