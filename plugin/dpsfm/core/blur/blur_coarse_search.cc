@@ -3,47 +3,54 @@
 #include <vector>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace internal {
 
-CoarseCurve CoarseSearch(const BlurTables& t,
-                         const cv::Mat& gl,
-                         const cv::Mat& gr,
-                         double sigma2_hp) {
+std::vector<float> CoarseBandTerms(const BlurTables& t,
+                                   const cv::Mat& gl,
+                                   const cv::Mat& gr) {
   const int height = t.patch_size.height;
   const int width = t.patch_size.width;
   const int num_band = static_cast<int>(t.band_rows.size());
-  Eigen::VectorXf data(4 * num_band);
-  {
-    cv::Mat wl = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    cv::Mat wr = cv::Mat::zeros(t.dft_size, CV_32FC1);
-    for (int y = 0; y < height; ++y) {
-      const float* l = gl.ptr<float>(y);
-      const float* r = gr.ptr<float>(y);
-      float* ol = wl.ptr<float>(y);
-      float* orr = wr.ptr<float>(y);
-      const float wy = t.window_y[y];
-      for (int x = 0; x < width; ++x) {
-        const float w = wy * t.window_x[x];
-        ol[x] = w * l[x];
-        orr[x] = w * r[x];
-      }
-    }
-    cv::Mat fl, fr;
-    cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
-    cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
-    for (int k = 0; k < num_band; ++k) {
-      const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
-      const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
-      // D = G_l conj(G_r); loss_k = |G_l|^2 |H_r|^2 + |G_r|^2 |H_l|^2
-      //                            - 2 Re(D K).
-      data[4 * k + 0] = a[0] * a[0] + a[1] * a[1];
-      data[4 * k + 1] = b[0] * b[0] + b[1] * b[1];
-      data[4 * k + 2] = -2.f * (a[0] * b[0] + a[1] * b[1]);
-      data[4 * k + 3] = 2.f * (a[1] * b[0] - a[0] * b[1]);
+  std::vector<float> data(4 * num_band);
+  cv::Mat wl = cv::Mat::zeros(t.dft_size, CV_32FC1);
+  cv::Mat wr = cv::Mat::zeros(t.dft_size, CV_32FC1);
+  for (int y = 0; y < height; ++y) {
+    const float* l = gl.ptr<float>(y);
+    const float* r = gr.ptr<float>(y);
+    float* ol = wl.ptr<float>(y);
+    float* orr = wr.ptr<float>(y);
+    const float wy = t.window_y[y];
+    for (int x = 0; x < width; ++x) {
+      const float w = wy * t.window_x[x];
+      ol[x] = w * l[x];
+      orr[x] = w * r[x];
     }
   }
+  cv::Mat fl, fr;
+  cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
+  cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
+  for (int k = 0; k < num_band; ++k) {
+    const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+    const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
+    // D = G_l conj(G_r); loss_k = |G_l|^2 |H_r|^2 + |G_r|^2 |H_l|^2
+    //                            - 2 Re(D K).
+    data[4 * k + 0] = a[0] * a[0] + a[1] * a[1];
+    data[4 * k + 1] = b[0] * b[0] + b[1] * b[1];
+    data[4 * k + 2] = -2.f * (a[0] * b[0] + a[1] * b[1]);
+    data[4 * k + 3] = 2.f * (a[1] * b[0] - a[0] * b[1]);
+  }
+  return data;
+}
+
+CoarseCurve CoarseSearch(const BlurTables& t,
+                         const std::vector<float>& band_terms,
+                         double sigma2_hp) {
+  DPSFM_CHECK_EQ(band_terms.size(), 4 * t.band_rows.size());
+  const Eigen::Map<const Eigen::VectorXf> data(
+      band_terms.data(), static_cast<Eigen::Index>(band_terms.size()));
   const Eigen::VectorXf coarse_raw_f = t.coarse_table * data;
   const int num_coarse = static_cast<int>(t.coarse_nodes.size());
   std::vector<double> coarse_raw(num_coarse);

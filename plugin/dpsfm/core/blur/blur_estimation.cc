@@ -256,6 +256,11 @@ bool BlurEstimationOptions::Check(std::string* failure) const {
 
 PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
                                                const cv::Mat& right) const {
+  return Estimate(Prepare(left, right));
+}
+
+PreparedBlurPatch PatchBlurEstimator::Prepare(const cv::Mat& left,
+                                              const cv::Mat& right) const {
   const BlurTables& t = *tables_;
   const BlurEstimationOptions& options = t.options;
   DPSFM_CHECK(left.type() == CV_32FC1 && right.type() == CV_32FC1)
@@ -265,29 +270,49 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,
       << t.patch_size.height << ", got " << left.cols << "x" << left.rows
       << " and " << right.cols << "x" << right.rows;
 
-  PatchBlurEstimate result;
+  PreparedBlurPatch patch;
+  patch.patch_size = t.patch_size;
+  patch.dft_size = t.dft_size;
+  PatchBlurEstimate& result = patch.early;
   result.opposite_sign_loss = kInf;
   if (!AllFinite(left) || !AllFinite(right)) {
     result.reject_reason = "non-finite pixels";
-    return result;
+    return patch;
   }
   result.texture = ViewsTexture(left, right);
   if (!(result.texture > options.min_texture) || result.texture <= 0) {
     result.reject_reason = "no horizontal texture";
-    return result;
+    return patch;
   }
   EqualisedViews views;
   if (!EqualiseViews(left, right, options, &views)) {
     result.reject_reason = "view too dark for gain equalisation";
-    return result;
+    return patch;
   }
-  const double sigma2_hp = PatchNoiseVariance(views.gl, views.gr, options);
+  patch.gl = views.gl;
+  patch.gr = views.gr;
+  patch.offset = views.offset;
+  patch.sigma2_hp = PatchNoiseVariance(views.gl, views.gr, options);
+  patch.coarse_band_terms = internal::CoarseBandTerms(t, views.gl, views.gr);
+  return patch;
+}
 
+PatchBlurEstimate PatchBlurEstimator::Estimate(
+    const PreparedBlurPatch& patch) const {
+  const BlurTables& t = *tables_;
+  const BlurEstimationOptions& options = t.options;
+  DPSFM_CHECK(patch.patch_size == t.patch_size && patch.dft_size == t.dft_size)
+      << "a patch prepared for " << patch.patch_size.width << "x"
+      << patch.patch_size.height << " crops, searched as " << t.patch_size.width
+      << "x" << t.patch_size.height;
+  PatchBlurEstimate result = patch.early;
+  if (!result.reject_reason.empty()) return result;
+  const double sigma2_hp = patch.sigma2_hp;
   const CoarseCurve coarse =
-      internal::CoarseSearch(t, views.gl, views.gr, sigma2_hp);
+      internal::CoarseSearch(t, patch.coarse_band_terms, sigma2_hp);
 
   // ---- Exact refinement. ----
-  BlurRefinement refinement(t, views.gl, views.gr, views.offset, sigma2_hp);
+  BlurRefinement refinement(t, patch.gl, patch.gr, patch.offset, sigma2_hp);
   Minimum best = RefineCoarseMinima(t, coarse, &refinement);
   // Final values with the final noise estimate.
   const double sigma2 = refinement.CurrentSigma2();

@@ -140,6 +140,23 @@ struct PatchBlurEstimate {
   std::string reject_reason;
 };
 
+// The part of a patch's search that does not depend on the PSF: its
+// texture, the gain-equalised views, their noise and what the coarse search
+// needs of their spectra. A caller that searches one patch with many
+// profiles (the profile fit: one search per candidate profile) prepares it
+// once (PatchBlurEstimator::Prepare) and passes it to estimators of the same
+// options and patch size.
+struct PreparedBlurPatch {
+  // The texture; reject_reason set when the search ends before it starts
+  // (non-finite pixels, no texture, too dark to equalise).
+  PatchBlurEstimate early;
+  cv::Mat gl, gr;  // the gain-equalised views minus `offset`
+  double offset = 0;
+  double sigma2_hp = 0;  // the patch's noise variance (inf without a floor)
+  std::vector<float> coarse_band_terms;
+  cv::Size patch_size, dft_size;  // the geometry it was prepared for
+};
+
 namespace internal {
 struct BlurTables;
 }  // namespace internal
@@ -157,6 +174,12 @@ class PatchBlurEstimator {
   // left/right: CV_32FC1, patch_size, intensities roughly [0, 1], including a
   // border of Border() pixels that the loss ignores.
   PatchBlurEstimate Estimate(const cv::Mat& left, const cv::Mat& right) const;
+
+  // Estimate in two steps: what does not depend on the PSF, then the search
+  // with this estimator's. `patch` must come from an estimator of the same
+  // options and patch size (checked: its geometry).
+  PreparedBlurPatch Prepare(const cv::Mat& left, const cv::Mat& right) const;
+  PatchBlurEstimate Estimate(const PreparedBlurPatch& patch) const;
 
   // Width of the ignored border: psf.KernelRadius(max_radius_px).
   int Border() const;

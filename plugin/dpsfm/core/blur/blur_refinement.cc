@@ -60,12 +60,12 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
       evals_(t.num_nodes) {
   left_positive_ = gl_ + offset_;
   right_positive_ = gr_ + offset_;
-  TransformViews();
 }
 
 void BlurRefinement::Evaluate(int n) {
   NodeEval& e = evals_[n];
   if (e.done) return;
+  if (spectra_stale_) TransformViews();
   cv::mulSpectrums(spec_left_, t_.grid->RightSpectrum(n), product_left_, 0);
   cv::mulSpectrums(spec_right_, t_.grid->LeftSpectrum(n), product_right_, 0);
   product_left_ -= product_right_;
@@ -194,9 +194,14 @@ void BlurRefinement::EqualiseGain(double radius) {
   const double half_log_ratio = 0.5 * std::log(a / b);
   left_positive_ *= std::exp(-half_log_ratio);
   right_positive_ *= std::exp(half_log_ratio);
-  left_positive_.convertTo(gl_, CV_32FC1, 1.0, -offset_);
-  right_positive_.convertTo(gr_, CV_32FC1, 1.0, -offset_);
-  TransformViews();
+  // Into new matrices: gl_ and gr_ may share the caller's (a prepared
+  // patch searched with many profiles, from several threads).
+  cv::Mat gl, gr;
+  left_positive_.convertTo(gl, CV_32FC1, 1.0, -offset_);
+  right_positive_.convertTo(gr, CV_32FC1, 1.0, -offset_);
+  gl_ = gl;
+  gr_ = gr;
+  spectra_stale_ = true;
 }
 
 void BlurRefinement::TransformViews() {
@@ -207,6 +212,7 @@ void BlurRefinement::TransformViews() {
   gr_.copyTo(pr(cv::Rect(0, 0, width, height)));
   cv::dft(pl, spec_left_, 0, height);
   cv::dft(pr, spec_right_, 0, height);
+  spectra_stale_ = false;
 }
 
 }  // namespace internal

@@ -69,10 +69,17 @@ struct CoarseCurve {
   double min = 0, max = 0;
 };
 
-// The coarse global search on the gain-equalised views.
+// What the coarse search needs of the gain-equalised views, whatever the
+// PSF: per band frequency of their windowed spectra G_l, G_r, the four
+// terms (|G_l|^2, |G_r|^2, -2 Re D, 2 Im D), D = G_l conj(G_r), that the
+// coarse table's rows weigh.
+std::vector<float> CoarseBandTerms(const BlurTables& t,
+                                   const cv::Mat& gl,
+                                   const cv::Mat& gr);
+
+// The coarse global search on the views' band terms.
 CoarseCurve CoarseSearch(const BlurTables& t,
-                         const cv::Mat& gl,
-                         const cv::Mat& gr,
+                         const std::vector<float>& band_terms,
                          double sigma2_hp);
 
 // The exact refinement (spatial valid-region loss via inverse FFT) of one
@@ -122,8 +129,9 @@ class BlurRefinement {
   // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
   // alone moves the estimate by ~0.2 px. The right comparison is the
   // interior means of the two blurred cross views at the blur, which agree
-  // exactly for equal gains. Re-transforms the views; evaluations made
-  // before stay (the caller resets them when the gain moved the estimate).
+  // exactly for equal gains. The views are transformed again at the next
+  // evaluation; evaluations made before stay (the caller resets them when
+  // the gain moved the estimate).
   void EqualiseGain(double radius);
 
   void ResetEvaluations() { evals_.assign(t_.num_nodes, NodeEval()); }
@@ -137,6 +145,9 @@ class BlurRefinement {
     double next_dot = std::numeric_limits<double>::infinity();
   };
 
+  // The views' spectra, when an evaluation needs them: the search
+  // equalises the gain before its first evaluation, so transforming in the
+  // constructor would be wasted.
   void TransformViews();
 
   const BlurTables& t_;
@@ -147,6 +158,7 @@ class BlurRefinement {
   const double sigma2_hp_;
   const double inv_m_;
   cv::Mat spec_left_, spec_right_;
+  bool spectra_stale_ = true;  // gl_, gr_ changed since TransformViews
   std::vector<NodeEval> evals_;
   cv::Mat product_left_, product_right_, residual_image_;
 };

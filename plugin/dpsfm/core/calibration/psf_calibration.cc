@@ -111,7 +111,7 @@ class ProfileSearch {
     const SplitProfilePsf psf(
         SplitProfileParams::ForCentroidOffset(std::exp(log_kappa)));
     const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
-        psf, options_.blur, patch_ptrs_, options_.num_threads);
+        psf, options_.blur, patch_ptrs_, options_.num_threads, &prepared_);
     Evaluation e;
     e.radius.assign(n_, kNaN);
     e.residual.assign(n_, 1.0);  // no estimate: counts as unexplained
@@ -236,9 +236,17 @@ class ProfileSearch {
   // translating disk (1 where its search gives no estimate; all patches).
   std::vector<double> TranslatingDiskResiduals() const {
     std::vector<const ProfilePatch*> usable_ptrs;
-    for (int i : usable_) usable_ptrs.push_back(&patches_[i]);
-    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
-        TranslatingDiskPsf(), options_.blur, usable_ptrs, options_.num_threads);
+    std::vector<PreparedBlurPatch> usable_prepared;
+    for (int i : usable_) {
+      usable_ptrs.push_back(&patches_[i]);
+      if (!prepared_.empty()) usable_prepared.push_back(prepared_[i]);
+    }
+    const std::vector<PatchBlurEstimate> estimates =
+        EstimateProfilePatches(TranslatingDiskPsf(),
+                               options_.blur,
+                               usable_ptrs,
+                               options_.num_threads,
+                               &usable_prepared);
     std::vector<double> residual(n_, 1.0);
     for (size_t k = 0; k < usable_.size(); ++k) {
       if (estimates[k].valid && std::isfinite(estimates[k].relative_residual)) {
@@ -297,6 +305,9 @@ class ProfileSearch {
   const SplitProfileFitOptions& options_;
   const int n_;
   std::vector<const ProfilePatch*> patch_ptrs_;
+  // The patches as every profile's search starts from them (filled by the
+  // first evaluation).
+  std::vector<PreparedBlurPatch> prepared_;
   std::map<double, Evaluation> evaluations_;  // by log centroid offset
   std::vector<int> usable_;
   std::vector<double> known_radius_;
@@ -521,18 +532,31 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
     const DPPsfModel& psf,
     const BlurEstimationOptions& blur,
     const std::vector<const ProfilePatch*>& patches,
-    int num_threads) {
+    int num_threads,
+    std::vector<PreparedBlurPatch>* prepared) {
   std::vector<PatchBlurEstimate> estimates(patches.size());
   if (patches.empty()) return estimates;
   const PatchBlurEstimator estimator(psf, blur, patches[0]->left.size());
   const int n = static_cast<int>(patches.size());
+  const bool prepare = prepared != nullptr && prepared->empty();
+  if (prepare) prepared->resize(n);
+  DPSFM_CHECK(prepared == nullptr || static_cast<int>(prepared->size()) == n)
+      << "prepared patches of another list";
 #ifdef _OPENMP
   const int threads = EffectiveNumThreads(num_threads);
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
   for (int i = 0; i < n; ++i) {
     try {
-      estimates[i] = estimator.Estimate(patches[i]->left, patches[i]->right);
+      if (prepared == nullptr) {
+        estimates[i] = estimator.Estimate(patches[i]->left, patches[i]->right);
+      } else {
+        if (prepare) {
+          (*prepared)[i] =
+              estimator.Prepare(patches[i]->left, patches[i]->right);
+        }
+        estimates[i] = estimator.Estimate((*prepared)[i]);
+      }
       if (estimates[i].at_bound || !std::isfinite(estimates[i].radius_px)) {
         estimates[i].valid = false;
       }

@@ -139,12 +139,17 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
 
 // The blur search of every patch (crops of one size) under one profile, in
 // parallel (num_threads -1 = all). An estimate that failed, lies at the
-// bound or is not finite comes back with valid = false.
+// bound or is not finite comes back with valid = false. `prepared` (may be
+// null): what the search needs of the patches whatever the profile
+// (PreparedBlurPatch), filled by the first call when empty and reused by the
+// next ones on the same patches and options: a search along the family's
+// path makes one call per profile.
 std::vector<PatchBlurEstimate> EstimateProfilePatches(
     const DPPsfModel& psf,
     const BlurEstimationOptions& blur,
     const std::vector<const ProfilePatch*>& patches,
-    int num_threads);
+    int num_threads,
+    std::vector<PreparedBlurPatch>* prepared);
 
 // Calibration from captures of known blur, for the whole frame and for
 // `num_bands` equal-width column bands: real DP profiles change across the

@@ -94,12 +94,14 @@ TargetReadings ReadAlongPath(const std::vector<double>& kappas,
                              const TargetCalibrationOptions& options) {
   const int n = static_cast<int>(patches.size());
   TargetReadings readings(kappas.size(), std::vector<double>(n, kNaN));
+  std::vector<PreparedBlurPatch> prepared;  // by the first profile's search
   for (size_t k = 0; k < kappas.size(); ++k) {
     const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
         SplitProfilePsf(SplitProfileParams::ForCentroidOffset(kappas[k])),
         options.blur,
         patches,
-        options.num_threads);
+        options.num_threads,
+        &prepared);
     for (int p = 0; p < n; ++p) {
       if (estimates[p].valid) readings[k][p] = estimates[p].radius_px;
     }
