@@ -9,7 +9,7 @@
 #   DPSFM_BUILD_TYPE      Release (default)
 #   DPSFM_JOBS            parallel jobs (default: the number of cores)
 #   CTEST_ARGS            more arguments for ctest (make test), e.g. -R Rescale
-.PHONY: example test build deps bench accuracy profiles real large \
+.PHONY: example test build deps bench cost accuracy profiles real large \
         clean-cache test-3.10 test-installed check-colmap-main
 
 DPSFM_COLMAP_VERSION ?= 4.1.1
@@ -61,6 +61,11 @@ check-colmap-main: deps
 
 bench: build
 	bash scripts/run_bench.sh
+
+# The command's cost per stage and PSF path against decoding the frames
+# (also the last part of make bench; a table, gates nothing).
+cost: build
+	bash scripts/run_cost_bench.sh
 
 # Accuracy on generated scenes with known scale (tables; gates nothing).
 accuracy: build

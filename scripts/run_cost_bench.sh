@@ -1,0 +1,168 @@
+#!/usr/bin/env bash
+# Cost benchmark (part of `make bench`, alone `make cost`): where the time
+# of `colmap dp_scale_estimator` goes, per stage and per PSF path, against
+# the time to decode the DP frames. Dry runs, defaults otherwise:
+#  - scenes of `make accuracy` (accuracy_suite.sh, the same generator
+#    options and seeds, plus calibration captures of a planar target made by
+#    the same simulated camera), each with the self-calibrated profile
+#    (auto), the paper's translating disk, and a measured-kernel profile
+#    calibrated from the captures with `colmap dp_psf_calibrator` (as
+#    `make profiles` does: the captures' camera and lens setting are the
+#    scene's, so no transfer uncertainty);
+#  - the 300-view workspace of `make large` (3000x2000, the view budget),
+#    with auto and the translating disk (its generated views have no
+#    calibration captures).
+# Each run's figures are the median of DPSFM_COST_RUNS runs (3): decode
+# (the report's `read`: reading and decoding the frames, in the read-ahead
+# thread), blur search, profile fit, linear, intensity, the estimate's
+# total (the report's `total`), after it (wall minus total: plots, report,
+# start-up), wall, peak RSS, and total / decode. Prints tables; gates
+# nothing.
+#
+# Environment: DPSFM_COST_SCENES (accuracy scene ids, default below),
+# DPSFM_COST_RUNS (3), DPSFM_COST_LARGE=0 (skip the 300 views),
+# DPSFM_COST_COLMAP (another binary that has dp_scale_estimator, e.g. an
+# older build's or `dpsfm`, to compare; the profiles are calibrated with
+# the tree's own), DPSFM_COST_DIR (<cache>/cost).
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/accuracy_suite.sh"
+
+build_dir="$(build_tree)"
+out="${DPSFM_COST_DIR:-$DPSFM_CACHE_DIR/cost}"
+runs="${DPSFM_COST_RUNS:-3}"
+# Six of the 29: the three scene types, a phone (2016x1512 frames; `auto`
+# refuses it, as make accuracy does), sensor noise and a gain artefact.
+read -r -a scenes <<<"${DPSFM_COST_SCENES:-tabletop_50f2.8 facade_85f4 planes_35f2 tabletop_phone planes_noise planes_gain}"
+mkdir -p "$out/scenes" "$out/runs" "$out/bin"
+# Run copies of the binaries: a rebuild during the benchmark must not
+# change them halfway.
+cp "$build_dir/colmap/src/colmap/exe/colmap" "$build_dir/examples/dpsfm_make_example" "$out/bin/"
+calibrator="$out/bin/colmap"
+colmap="${DPSFM_COST_COLMAP:-$out/bin/colmap}"
+generator="$out/bin/dpsfm_make_example"
+log "source: $(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$DPSFM_ROOT" status --porcelain 2>/dev/null | grep -q . && echo ' (with uncommitted changes)'); estimating with $colmap"
+
+# 1. The scenes and their profiles, made once (kept while their generator
+# options are the same).
+for id in "${scenes[@]}"; do
+  k="$(suite_index "$id")" || die "no accuracy scene '$id' (accuracy_suite.sh)"
+  entry="${suite[$((k - 1))]}"
+  options="--seed $((100 + k)) --num_views 8 $(field "$entry" 5) --calibration_captures 6"
+  dir="$out/scenes/$id"
+  key="$options; dp_psf_calibrator --DPPsfCalibrator.transfer_uncertainty 0"
+  if [ "$(cat "$dir.options" 2>/dev/null)" != "$key" ]; then
+    rm -rf "$dir" "$dir.options"
+    log "generating $id ..."
+    # shellcheck disable=SC2086
+    "$generator" --output_path "$dir" $options >"$dir.generate.log" 2>&1 \
+      || die "generation failed: $dir.generate.log"
+    "$calibrator" dp_psf_calibrator --dp_image_path "$dir/calibration/dp" \
+      --targets_path "$dir/calibration/targets.csv" \
+      --output_path "$dir/camera.dpsf" \
+      --DPPsfCalibrator.transfer_uncertainty 0 >"$dir.calibrate.log" 2>&1 \
+      || log "$id: no profile from its captures ($(tail -n 1 "$dir.calibrate.log"))"
+    echo "$key" >"$dir.options"
+  fi
+done
+if [ "${DPSFM_COST_LARGE:-1}" = 1 ]; then
+  base="$DPSFM_CACHE_DIR/large/base10_3000x2000_seed31"
+  if [ ! -f "$base/ground_truth.json" ]; then
+    log "no $base: run make large once (it generates the 10 views, about 15 min); the 300 views are left out"
+  else
+    rm -rf "$out/large300"
+    "$build_dir/examples/dpsfm_repeat_workspace" --input_path "$base" \
+      --output_path "$out/large300" --times 30 >&2 || die "repeat failed"
+  fi
+fi
+
+# 2. The runs: run NAME WORKSPACE_ROOT ARGS... (one dry run, its report and
+# /usr/bin/time's figures kept as runs/NAME.json and runs/NAME.time).
+run() {
+  local name="$1" ws="$2"
+  shift 2
+  rm -f "$out/runs/$name.json"
+  /usr/bin/time -f "%e %U %S %M" -o "$out/runs/$name.time" \
+    "$colmap" dp_scale_estimator --workspace_path "$ws/dense" \
+    --dp_image_path "$ws/dp" --lens_path "$ws/lens.csv" --dry_run 1 \
+    --report_path "$out/runs/$name.json" "$@" >"$out/runs/$name.log" 2>&1 \
+    || log "$name: $(tail -n 1 "$out/runs/$name.log")"
+}
+rm -f "$out"/runs/*
+start=$SECONDS
+for ((i = 1; i <= runs; ++i)); do
+  for id in "${scenes[@]}"; do
+    dir="$out/scenes/$id"
+    run "$id.auto.$i" "$dir"
+    run "$id.translating_disk.$i" "$dir" --DPScaleEstimator.psf_model translating_disk
+    if [ -f "$dir/camera.dpsf" ]; then
+      run "$id.measured_kernels.$i" "$dir" --DPScaleEstimator.psf_model calibrated \
+        --DPScaleEstimator.psf_path "$dir/camera.dpsf"
+    fi
+  done
+  if [ -d "$out/large300" ]; then
+    run "large300.auto.$i" "$out/large300"
+    run "large300.translating_disk.$i" "$out/large300" --DPScaleEstimator.psf_model translating_disk
+  fi
+  log "round $i of $runs done ($((SECONDS - start)) s)"
+done
+
+python3 - "$out/runs" "$runs" <<'PY'
+import collections, json, os, statistics, sys
+runs_dir, runs = sys.argv[1], int(sys.argv[2])
+rows = collections.OrderedDict()
+for name in sorted(os.listdir(runs_dir)):
+    if not name.endswith(".time"):
+        continue
+    scene, path, _ = name[:-5].rsplit(".", 2)
+    wall, user, system, rss_kb = open(os.path.join(runs_dir, name)).read().split()[-4:]
+    figures = {"wall": float(wall), "cpu": float(user) + float(system),
+               "rss": float(rss_kb) / 1024 / 1024}
+    try:
+        r = json.load(open(os.path.join(runs_dir, name[:-5] + ".json")))
+    except Exception:
+        r = {}
+    t = r.get("timings", {})
+    for key in ["read", "read_wait", "blur", "psf_fit", "linear", "intensity", "total"]:
+        figures[key] = t.get(key, float("nan"))
+    figures["after"] = figures["wall"] - figures["total"]
+    figures["views"] = r.get("view_budget", {}).get("views_visited") or len(r.get("views", []))
+    figures["scale"] = r.get("scale") if r.get("success") else None
+    rows.setdefault((scene, path), []).append(figures)
+
+def median(values):
+    values = [v for v in values if v == v]
+    return statistics.median(values) if values else float("nan")
+
+print("\nMedians of %d runs (seconds; decode = reading and decoding the frames,"
+      " overlapped with the blur search but for `wait`):\n" % runs)
+print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | total | after | wall | peak RSS (GB) | total / decode | scale |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+sums = collections.defaultdict(lambda: [0.0, 0.0])
+totals = collections.defaultdict(dict)
+for (scene, path), figures in rows.items():
+    m = {k: median([f[k] for f in figures]) for k in figures[0] if k not in ("scale",)}
+    scales = {f["scale"] for f in figures}
+    scale = ("%.6g" % figures[0]["scale"]) if figures[0]["scale"] else "refused"
+    if len(scales) > 1:
+        scale += " (runs differ)"
+    ratio = m["total"] / m["read"] if m["read"] > 0 else float("nan")
+    print("| %s | %s | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s |" % (
+        scene, path, m["views"], m["read"], m["read_wait"], m["blur"], m["psf_fit"],
+        m["linear"], m["intensity"], m["total"], m["after"], m["wall"], m["rss"],
+        ratio, scale))
+    if not scene.startswith("large"):
+        sums[path][0] += m["total"]
+        sums[path][1] += m["read"]
+        totals[scene][path] = m["total"]
+    else:
+        print("|  | per visited view | | | | | | | | | | %.2f | %.3f | | |" % (
+            m["wall"] / max(m["views"], 1), m["rss"] / max(m["views"], 1)))
+print("\nAccuracy scenes, in sum: " + "; ".join(
+    "%s total %.1f s = %.1f x decode (%.1f s)" % (p, s[0], s[0] / s[1] if s[1] else float("nan"), s[1])
+    for p, s in sums.items()))
+both = [t for t in totals.values() if "measured_kernels" in t and "translating_disk" in t]
+if both:
+    print("Measured-kernel profile / translating disk, totals over the %d scenes that have both: %.2f"
+          % (len(both), sum(t["measured_kernels"] for t in both) / sum(t["translating_disk"] for t in both)))
+PY
+log "cost benchmark took $((SECONDS - start)) s of runs"
