@@ -150,14 +150,15 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     candidates = PatchesWithDepth(view, working, geometry, border, options_);
     int with_depth = 0;
     for (const PatchCandidate& c : candidates) with_depth += c.reject.empty();
-    search = SearchViewBlur(
-        working,
-        candidates,
-        field_,
-        blur_estimators_->For(blur, geometry.patch_size + 2 * border),
-        border,
-        with_depth > 0,
-        options_);
+    search = SearchViewBlur(working,
+                            candidates,
+                            field_,
+                            blur,
+                            border,
+                            geometry.patch_size,
+                            with_depth > 0,
+                            options_,
+                            blur_estimators_.get());
     rejections.clear();
     sample_candidate.clear();
     data->samples = ViewSamples(candidates,

@@ -138,14 +138,15 @@ const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
   return *geometries_.back().second;
 }
 
-ViewBlurSearch SearchViewBlur(
-    const WorkingView& working,
-    const std::vector<PatchCandidate>& candidates,
-    const DPPsfField& field,
-    const BlurSearchEstimators::Estimators& estimators,
-    int border,
-    bool any_depth,
-    const DPScaleOptions& options) {
+ViewBlurSearch SearchViewBlur(const WorkingView& working,
+                              const std::vector<PatchCandidate>& candidates,
+                              const DPPsfField& field,
+                              const BlurEstimationOptions& blur,
+                              int border,
+                              int patch_size,
+                              bool any_depth,
+                              const DPScaleOptions& options,
+                              BlurSearchEstimators* cache) {
   const int num = static_cast<int>(candidates.size());
   ViewBlurSearch out;
   out.estimates.resize(num);
@@ -169,6 +170,8 @@ ViewBlurSearch SearchViewBlur(
       static_cast<int>(std::count(search.begin(), search.end(), 1));
   if (out.num_searched == 0) return out;
 
+  const BlurSearchEstimators::Estimators& estimators =
+      cache->For(blur, patch_size + 2 * border);
   DPSFM_CHECK_EQ(estimators.size(), field.cells.size());
   for (const auto& estimator : estimators) {
     DPSFM_CHECK_LE(estimator->Border(), border);

@@ -100,16 +100,18 @@ class BlurSearchEstimators {
   int num_built_ = 0;
 };
 
-// `estimators`: the field's, for crops of the patch size plus `border` on
-// each side (BlurSearchEstimators::For).
-ViewBlurSearch SearchViewBlur(
-    const WorkingView& working,
-    const std::vector<PatchCandidate>& candidates,
-    const DPPsfField& field,
-    const BlurSearchEstimators::Estimators& estimators,
-    int border,
-    bool any_depth,
-    const DPScaleOptions& options);
+// `estimators`: the field's (BlurSearchEstimators::For, asked only when a
+// patch is to be searched), for crops of `patch_size` plus `border` on each
+// side.
+ViewBlurSearch SearchViewBlur(const WorkingView& working,
+                              const std::vector<PatchCandidate>& candidates,
+                              const DPPsfField& field,
+                              const BlurEstimationOptions& blur,
+                              int border,
+                              int patch_size,
+                              bool any_depth,
+                              const DPScaleOptions& options,
+                              BlurSearchEstimators* estimators);
 
 // Searched patches whose blur sits at the search bound (their estimate is
 // the bound, not the blur).
