@@ -538,9 +538,9 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
   if (patches.empty()) return estimates;
   const PatchBlurEstimator estimator(psf, blur, patches[0]->left.size());
   const int n = static_cast<int>(patches.size());
-  const bool prepare = prepared != nullptr && prepared->empty();
+  const bool prepare = prepared->empty();
   if (prepare) prepared->resize(n);
-  DPSFM_CHECK(prepared == nullptr || static_cast<int>(prepared->size()) == n)
+  DPSFM_CHECK_EQ(static_cast<int>(prepared->size()), n)
       << "prepared patches of another list";
 #ifdef _OPENMP
   const int threads = EffectiveNumThreads(num_threads);
@@ -548,15 +548,10 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
 #endif
   for (int i = 0; i < n; ++i) {
     try {
-      if (prepared == nullptr) {
-        estimates[i] = estimator.Estimate(patches[i]->left, patches[i]->right);
-      } else {
-        if (prepare) {
-          (*prepared)[i] =
-              estimator.Prepare(patches[i]->left, patches[i]->right);
-        }
-        estimates[i] = estimator.Estimate((*prepared)[i]);
+      if (prepare) {
+        (*prepared)[i] = estimator.Prepare(patches[i]->left, patches[i]->right);
       }
+      estimates[i] = estimator.Estimate((*prepared)[i]);
       if (estimates[i].at_bound || !std::isfinite(estimates[i].radius_px)) {
         estimates[i].valid = false;
       }

@@ -139,11 +139,11 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
 
 // The blur search of every patch (crops of one size) under one profile, in
 // parallel (num_threads -1 = all). An estimate that failed, lies at the
-// bound or is not finite comes back with valid = false. `prepared` (may be
-// null): what the search needs of the patches whatever the profile
-// (PreparedBlurPatch), filled by the first call when empty and reused by the
-// next ones on the same patches and options: a search along the family's
-// path makes one call per profile.
+// bound or is not finite comes back with valid = false. `prepared`: what
+// the search needs of the patches whatever the profile (PreparedBlurPatch),
+// filled by the first call when empty and reused by the next ones on the
+// same patches and options: a search along the family's path makes one call
+// per profile.
 std::vector<PatchBlurEstimate> EstimateProfilePatches(
     const DPPsfModel& psf,
     const BlurEstimationOptions& blur,

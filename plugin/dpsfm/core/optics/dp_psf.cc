@@ -64,6 +64,19 @@ DPKernels AssignBySign(double signed_radius_px,
   return kernels;
 }
 
+// Profiles symmetric in y integrate the kernel rows i >= 0 (ForEachChordPiece
+// from i_begin 0) and copy them onto the rows below the centre, so the
+// kernel is exactly symmetric: `weights` is side x side, row-major, side =
+// 2 half + 1.
+void MirrorRowsBelowCentre(int half, std::vector<double>* weights) {
+  const int side = 2 * half + 1;
+  for (int i = 1; i <= half; ++i) {
+    std::copy(weights->begin() + (half + i) * side,
+              weights->begin() + (half + i + 1) * side,
+              weights->begin() + (half - i) * side);
+  }
+}
+
 // Pixel-area integral of the translating-disk profile whose mass leans
 // towards +x: weight(x, y) = x + sqrt(R^2 - y^2) inside the disk of radius R.
 // Row i of the kernel covers y in [i - 0.5, i + 0.5], column j covers x in
@@ -89,11 +102,7 @@ cv::Mat IntegrateTranslatingDisk(double radius,
                       weights[(i + half_size) * side + j + half_size] +=
                           (0.5 * (hi * hi - lo * lo) + a * (hi - lo)) * dy;
                     });
-  for (int i = 1; i <= half_size; ++i) {
-    std::copy(weights.begin() + (half_size + i) * side,
-              weights.begin() + (half_size + i + 1) * side,
-              weights.begin() + (half_size - i) * side);
-  }
+  MirrorRowsBelowCentre(half_size, &weights);
   double sum = 0;
   for (const double w : weights) {
     sum += w;
@@ -274,13 +283,8 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
         plus[(i + half) * side + j + half] += base + split;
         minus[(i + half) * side + j + half] += base - split;
       });
-  for (int i = 1; i <= half; ++i) {
-    for (std::vector<double>* weights : {&plus, &minus}) {
-      std::copy(weights->begin() + (half + i) * side,
-                weights->begin() + (half + i + 1) * side,
-                weights->begin() + (half - i) * side);
-    }
-  }
+  MirrorRowsBelowCentre(half, &plus);
+  MirrorRowsBelowCentre(half, &minus);
   cv::Mat towards_plus_x(side, side, CV_32FC1);
   cv::Mat towards_minus_x(side, side, CV_32FC1);
   double total = 0;

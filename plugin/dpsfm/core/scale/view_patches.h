@@ -69,6 +69,7 @@ struct ViewBlurSearch {
   ScreenedPatches screened;
   int num_searched = 0;
 };
+
 // The blur search's estimators, one per cell of a field, kept across views:
 // their kernel tables cost tens of ms for the translating disk and up to a
 // second for a measured kernel pair at a large bound, a measured field has
@@ -85,8 +86,8 @@ class BlurSearchEstimators {
   explicit BlurSearchEstimators(const DPPsfField& field);
 
   // The field's estimators for square crops of side `crop` with the search
-  // options `blur` (only blur.max_radius_px may differ between calls: it is
-  // part of the key, the other options are taken as they were first).
+  // options `blur`. The key is (crop, blur.max_radius_px): the other options
+  // must be the same on every call.
   const Estimators& For(const BlurEstimationOptions& blur, int crop);
 
   // Tables built so far (for tests: views of one geometry build them once).
@@ -100,9 +101,9 @@ class BlurSearchEstimators {
   int num_built_ = 0;
 };
 
-// `estimators`: the field's (BlurSearchEstimators::For, asked only when a
-// patch is to be searched), for crops of `patch_size` plus `border` on each
-// side.
+// `cache`: the field's estimators (BlurSearchEstimators::For, asked only
+// when a patch is to be searched), for crops of `patch_size` plus `border`
+// on each side.
 ViewBlurSearch SearchViewBlur(const WorkingView& working,
                               const std::vector<PatchCandidate>& candidates,
                               const DPPsfField& field,
@@ -111,7 +112,7 @@ ViewBlurSearch SearchViewBlur(const WorkingView& working,
                               int patch_size,
                               bool any_depth,
                               const DPScaleOptions& options,
-                              BlurSearchEstimators* estimators);
+                              BlurSearchEstimators* cache);
 
 // Searched patches whose blur sits at the search bound (their estimate is
 // the bound, not the blur).
