@@ -32,6 +32,22 @@ stage() {
   log "stage '$name' took $((SECONDS - start)) s"
 }
 
+# timed_dry_run COLMAP PREFIX WORKSPACE ARGS...: one dry run of `COLMAP
+# dp_scale_estimator` on WORKSPACE (its dense/, dp/ and lens.csv) with ARGS;
+# /usr/bin/time's wall, user and system seconds and peak RSS (KB) in
+# PREFIX.time, the report in PREFIX.json, the log in PREFIX.log. A refusal
+# is logged, not fatal: the benchmarks print it.
+timed_dry_run() {
+  local colmap="$1" prefix="$2" ws="$3"
+  shift 3
+  rm -f "$prefix.json"
+  /usr/bin/time -f "%e %U %S %M" -o "$prefix.time" \
+    "$colmap" dp_scale_estimator --workspace_path "$ws/dense" \
+    --dp_image_path "$ws/dp" --lens_path "$ws/lens.csv" --dry_run 1 \
+    --report_path "$prefix.json" "$@" >"$prefix.log" 2>&1 \
+    || log "$(basename "$prefix"): $(tail -n 1 "$prefix.log")"
+}
+
 as_root() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }

@@ -64,6 +64,7 @@ for id in "${scenes[@]}"; do
     echo "$key" >"$dir.options"
   fi
 done
+large_ws=""
 if [ "${DPSFM_COST_LARGE:-1}" = 1 ]; then
   base="$DPSFM_CACHE_DIR/large/base10_3000x2000_seed31"
   if [ ! -f "$base/ground_truth.json" ]; then
@@ -72,20 +73,16 @@ if [ "${DPSFM_COST_LARGE:-1}" = 1 ]; then
     rm -rf "$out/large300"
     "$build_dir/examples/dpsfm_repeat_workspace" --input_path "$base" \
       --output_path "$out/large300" --times 30 >&2 || die "repeat failed"
+    large_ws="$out/large300"
   fi
 fi
 
 # 2. The runs: run NAME WORKSPACE_ROOT ARGS... (one dry run, its report and
 # /usr/bin/time's figures kept as runs/NAME.json and runs/NAME.time).
 run() {
-  local name="$1" ws="$2"
-  shift 2
-  rm -f "$out/runs/$name.json"
-  /usr/bin/time -f "%e %U %S %M" -o "$out/runs/$name.time" \
-    "$colmap" dp_scale_estimator --workspace_path "$ws/dense" \
-    --dp_image_path "$ws/dp" --lens_path "$ws/lens.csv" --dry_run 1 \
-    --report_path "$out/runs/$name.json" "$@" >"$out/runs/$name.log" 2>&1 \
-    || log "$name: $(tail -n 1 "$out/runs/$name.log")"
+  local name="$1"
+  shift
+  timed_dry_run "$colmap" "$out/runs/$name" "$@"
 }
 rm -f "$out"/runs/*
 start=$SECONDS
@@ -99,9 +96,9 @@ for ((i = 1; i <= runs; ++i)); do
         --DPScaleEstimator.psf_path "$dir/camera.dpsf"
     fi
   done
-  if [ -d "$out/large300" ]; then
-    run "large300.auto.$i" "$out/large300"
-    run "large300.translating_disk.$i" "$out/large300" --DPScaleEstimator.psf_model translating_disk
+  if [ -n "$large_ws" ]; then
+    run "large300.auto.$i" "$large_ws"
+    run "large300.translating_disk.$i" "$large_ws" --DPScaleEstimator.psf_model translating_disk
   fi
   log "round $i of $runs done ($((SECONDS - start)) s)"
 done

@@ -30,13 +30,9 @@ rm -rf "$large/repeat300"
 truth="$(python3 -c "import json,sys;print(json.load(open(sys.argv[1]))['scale'])" "$base/ground_truth.json")"
 
 run() {  # name workspace extra-args...
-  local name="$1" ws="$2"
-  shift 2
-  /usr/bin/time -f "%e %U %S %M" -o "$large/$name.time" \
-    "$colmap" dp_scale_estimator --workspace_path "$ws/dense" \
-    --dp_image_path "$ws/dp" --lens_path "$ws/lens.csv" --dry_run 1 \
-    --report_path "$large/$name.json" "$@" >"$large/$name.log" 2>&1 \
-    || log "$name: $(tail -n 1 "$large/$name.log")"
+  local name="$1"
+  shift
+  timed_dry_run "$colmap" "$large/$name" "$@"
 }
 run reference10 "$base" --DPScaleEstimator.all_views 1
 run budget300 "$large/repeat300"
