@@ -9,6 +9,10 @@
 #    calibrated from the captures with `colmap dp_psf_calibrator` (as
 #    `make profiles` does: the captures' camera and lens setting are the
 #    scene's, so no transfer uncertainty);
+#  - three of the seven real Canon R6 II scenes of `make real`
+#    (realdp_captures.sh; single views of 768x512, 8-bit sRGB as given, no
+#    recorded focus), with auto, the translating disk and the camera's
+#    profile as `make real` calibrates it from the flat planes;
 #  - the 300-view workspace of `make large` (3000x2000, the view budget),
 #    with auto and the translating disk (its generated views have no
 #    calibration captures).
@@ -20,12 +24,14 @@
 # nothing.
 #
 # Environment: DPSFM_COST_SCENES (accuracy scene ids, default below),
-# DPSFM_COST_RUNS (3), DPSFM_COST_LARGE=0 (skip the 300 views),
+# DPSFM_COST_RUNS (3), DPSFM_COST_REAL=0 (skip the real scenes; they are
+# left out without the captures), DPSFM_COST_LARGE=0 (skip the 300 views),
 # DPSFM_COST_COLMAP (another binary that has dp_scale_estimator, e.g. an
 # older build's or `dpsfm`, to compare; the profiles are calibrated with
 # the tree's own), DPSFM_COST_DIR (<cache>/cost).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/accuracy_suite.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/realdp_captures.sh"
 
 build_dir="$(build_tree)"
 out="${DPSFM_COST_DIR:-$DPSFM_CACHE_DIR/cost}"
@@ -36,7 +42,8 @@ read -r -a scenes <<<"${DPSFM_COST_SCENES:-tabletop_50f2.8 facade_85f4 planes_35
 mkdir -p "$out/scenes" "$out/runs" "$out/bin"
 # Run copies of the binaries: a rebuild during the benchmark must not
 # change them halfway.
-cp "$build_dir/colmap/src/colmap/exe/colmap" "$build_dir/examples/dpsfm_make_example" "$out/bin/"
+cp "$build_dir/colmap/src/colmap/exe/colmap" "$build_dir/examples/dpsfm_make_example" \
+   "$build_dir/examples/dpsfm_make_realdp_workspace" "$out/bin/"
 calibrator="$out/bin/colmap"
 colmap="${DPSFM_COST_COLMAP:-$out/bin/colmap}"
 generator="$out/bin/dpsfm_make_example"
@@ -64,6 +71,32 @@ for id in "${scenes[@]}"; do
     echo "$key" >"$dir.options"
   fi
 done
+# The real scenes and the camera's profile, made once per captures folder.
+real_scenes=(box/001 casual/orbbec/001 casual/iphone/001)
+real_names=()
+if [ "${DPSFM_COST_REAL:-1}" = 1 ]; then
+  if ! realdp="$(find_realdp 2>/dev/null)"; then
+    log "no real DP captures (DPSFM_REALDP_DIR): the real scenes are left out"
+  else
+    realdp="$realdp/canon_r6m2_rf50"
+    real="$out/real"
+    if [ "$(cat "$real.options" 2>/dev/null)" != "$realdp" ]; then
+      rm -rf "$real" "$real.options"
+      log "calibrating the R6 II profile from $realdp/flat ..."
+      realdp_calibration_set "$realdp" "$out/bin/dpsfm_make_realdp_workspace" "$real/calibration" srgb8
+      realdp_calibrate "$calibrator" "$real/calibration" \
+        || die "calibration failed: $real/calibration/log"
+      for scene in "${real_scenes[@]}"; do
+        "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/$scene" \
+          --output_path "$real/r6m2_${scene//\//_}" --name "${scene//\//_}" \
+          >"$real/r6m2_${scene//\//_}.make.log" 2>&1 \
+          || die "workspace failed: $real/r6m2_${scene//\//_}.make.log"
+      done
+      echo "$realdp" >"$real.options"
+    fi
+    for scene in "${real_scenes[@]}"; do real_names+=("r6m2_${scene//\//_}"); done
+  fi
+fi
 large_ws=""
 if [ "${DPSFM_COST_LARGE:-1}" = 1 ]; then
   base="$DPSFM_CACHE_DIR/large/base10_3000x2000_seed31"
@@ -95,6 +128,13 @@ for ((i = 1; i <= runs; ++i)); do
       run "$id.measured_kernels.$i" "$dir" --DPScaleEstimator.psf_model calibrated \
         --DPScaleEstimator.psf_path "$dir/camera.dpsf"
     fi
+  done
+  for name in "${real_names[@]}"; do
+    dir="$out/real/$name"
+    run "$name.auto.$i" "$dir"
+    run "$name.translating_disk.$i" "$dir" --DPScaleEstimator.psf_model translating_disk
+    run "$name.measured_kernels.$i" "$dir" --DPScaleEstimator.psf_model calibrated \
+      --DPScaleEstimator.psf_path "$out/real/calibration/r6m2_rf50_f4.dpsf"
   done
   if [ -n "$large_ws" ]; then
     run "large300.auto.$i" "$large_ws"
@@ -134,8 +174,9 @@ print("\nMedians of %d runs (seconds; decode = reading and decoding the frames,"
       " overlapped with the blur search but for `wait`):\n" % runs)
 print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | total | after | wall | peak RSS (GB) | total / decode | scale |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-sums = collections.defaultdict(lambda: [0.0, 0.0])
-totals = collections.defaultdict(dict)
+# Sums per group of scenes: the accuracy scenes, the real R6 II ones.
+sums = collections.defaultdict(lambda: collections.defaultdict(lambda: [0.0, 0.0]))
+totals = collections.defaultdict(lambda: collections.defaultdict(dict))
 for (scene, path), figures in rows.items():
     m = {k: median([f[k] for f in figures]) for k in figures[0] if k not in ("scale",)}
     scales = {f["scale"] for f in figures}
@@ -148,18 +189,20 @@ for (scene, path), figures in rows.items():
         m["linear"], m["intensity"], m["total"], m["after"], m["wall"], m["rss"],
         ratio, scale))
     if not scene.startswith("large"):
-        sums[path][0] += m["total"]
-        sums[path][1] += m["read"]
-        totals[scene][path] = m["total"]
+        group = "Real R6 II scenes" if scene.startswith("r6m2_") else "Accuracy scenes"
+        sums[group][path][0] += m["total"]
+        sums[group][path][1] += m["read"]
+        totals[group][scene][path] = m["total"]
     else:
         print("|  | per visited view | | | | | | | | | | %.2f | %.3f | | |" % (
             m["wall"] / max(m["views"], 1), m["rss"] / max(m["views"], 1)))
-print("\nAccuracy scenes, in sum: " + "; ".join(
-    "%s total %.1f s = %.1f x decode (%.1f s)" % (p, s[0], s[0] / s[1] if s[1] else float("nan"), s[1])
-    for p, s in sums.items()))
-both = [t for t in totals.values() if "measured_kernels" in t and "translating_disk" in t]
-if both:
-    print("Measured-kernel profile / translating disk, totals over the %d scenes that have both: %.2f"
-          % (len(both), sum(t["measured_kernels"] for t in both) / sum(t["translating_disk"] for t in both)))
+for group, group_sums in sums.items():
+    print("\n%s, in sum: " % group + "; ".join(
+        "%s total %.1f s = %.1f x decode (%.1f s)" % (p, s[0], s[0] / s[1] if s[1] else float("nan"), s[1])
+        for p, s in group_sums.items()))
+    both = [t for t in totals[group].values() if "measured_kernels" in t and "translating_disk" in t]
+    if both:
+        print("Measured-kernel profile / translating disk, totals over the %d scenes that have both: %.2f"
+              % (len(both), sum(t["measured_kernels"] for t in both) / sum(t["translating_disk"] for t in both)))
 PY
 log "cost benchmark took $((SECONDS - start)) s of runs"

@@ -26,14 +26,8 @@
 # clone, then /work/shared/realdp), DPSFM_REAL_DIR (output, default
 # <cache>/real), DPSFM_REAL_SCALE (the known factor, default 0.37).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/realdp_captures.sh"
 
-find_realdp() {
-  local d
-  for d in "${DPSFM_REALDP_DIR:-}" "$DPSFM_ROOT/../shared/realdp" /work/shared/realdp; do
-    [ -n "$d" ] && [ -d "$d/canon_r6m2_rf50" ] && { (cd "$d" && pwd); return; }
-  done
-  die "no real DP captures found (set DPSFM_REALDP_DIR to the folder holding canon_r6m2_rf50/)"
-}
 realdp="$(find_realdp)/canon_r6m2_rf50"
 build_dir="$(build_tree)"
 out="${DPSFM_REAL_DIR:-$DPSFM_CACHE_DIR/real}"
@@ -53,22 +47,9 @@ start=$SECONDS
 encodings=(srgb8 linear16)
 pupil_mm=39.9
 calibrate() {  # encoding
-  local enc="$1" cal="$out/calibration/$1" d f
-  mkdir -p "$cal/dp/left" "$cal/dp/right"
-  echo "name,target_distance_m,focus_distance_m,focal_length_mm,f_number,pixel_pitch_um" >"$cal/targets.csv"
-  for d in 0600 1500; do
-    for f in f4 f20; do
-      "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/flat/001/$d/$f" \
-        --output_path "$cal" --name "${d}_$f" --frames_only 1 \
-        --linear16 "$([ "$enc" = linear16 ] && echo 1 || echo 0)" >/dev/null \
-        || die "calibration frames failed: flat/001/$d/$f"
-      echo "${d}_$f.png,$(awk "BEGIN{print $d/1000}"),,49.57,${f#f},46.875" >>"$cal/targets.csv"
-    done
-  done
-  "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
-    --targets_path "$cal/targets.csv" --output_path "$cal/r6m2_rf50_f4.dpsf" \
-    --DPPsfCalibrator.camera "Canon / Canon EOS R6m2" \
-    --DPPsfCalibrator.lens "RF50mm F1.8 STM" >"$cal/log" 2>&1 \
+  local enc="$1" cal="$out/calibration/$1"
+  realdp_calibration_set "$realdp" "$out/bin/dpsfm_make_realdp_workspace" "$cal" "$enc"
+  realdp_calibrate "$colmap" "$cal" \
     || { tail -n 3 "$cal/log" >&2; log "calibration ($enc) failed"; return 0; }
   log "calibration ($enc): $(grep -o 'centroid offset [0-9.]* R (95.*' "$cal/log" | tail -n 1)"
   log "  $(grep -o 'Profile: .*' "$cal/log" | tail -n 1)"

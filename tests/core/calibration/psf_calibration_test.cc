@@ -191,6 +191,50 @@ TEST(CalibrateSplitProfile, BandsOnlyWhenTheProfileChangesAcrossTheFrame) {
   EXPECT_NEAR(uniform.frame.centroid_offset / Centroid(0.4), 1.0, 0.02);
 }
 
+// The bands' fits read the whole frame's searches of their patches
+// (ProfileSearches): each band comes out as a fit of its patches alone. Two
+// bands of a sharper split, a third of their patches near focus (not
+// usable: the searches after the first leave them out).
+TEST(CalibrateSplitProfile, EachBandFitsAsItsPatchesAlone) {
+  SplitProfileParams sharp;
+  sharp.split_exponent = 0.6;
+  const SplitProfilePsf psf(sharp);
+  std::vector<ProfilePatch> patches = RenderPatches(psf, 36, 0.004, false, 71);
+  for (int k = 0; k < 18; ++k) {
+    test::TextureOptions texture;
+    const cv::Mat sharp_texture =
+        test::MakeTexture(cv::Size(kCrop, kCrop), 300 + k, texture);
+    const test::DPPair pair =
+        test::RenderDP(sharp_texture, psf, k % 2 == 0 ? 0.8 : -1.2);
+    ProfilePatch patch;
+    patch.left = test::ToGray(pair.left);
+    patch.right = test::ToGray(pair.right);
+    patches.push_back(patch);
+  }
+  std::vector<std::vector<ProfilePatch>> alone(2);
+  for (size_t k = 0; k < patches.size(); ++k) {
+    patches[k].x_fraction = k % 2 == 0 ? 0.2 : 0.7;
+    alone[k % 2].push_back(patches[k]);
+  }
+  const SplitProfileCalibration calibration =
+      CalibrateSplitProfile(patches, 2, FastOptions(), 0.02, true);
+  ASSERT_EQ(calibration.bands.size(), 2u) << calibration.summary;
+  for (int b = 0; b < 2; ++b) {
+    const SplitProfileFit fit = FitSplitProfile(alone[b], FastOptions());
+    const SplitProfileFit& band = calibration.bands[b];
+    Print("band", band);
+    EXPECT_EQ(band.num_patches, fit.num_patches);
+    EXPECT_LT(band.num_patches, static_cast<int>(alone[b].size()));
+    EXPECT_EQ(band.centroid_offsets, fit.centroid_offsets);
+    EXPECT_EQ(band.criterion, fit.criterion);
+    EXPECT_EQ(band.centroid_offset, fit.centroid_offset);
+    EXPECT_EQ(band.translating_disk_criterion, fit.translating_disk_criterion);
+    EXPECT_EQ(band.consistent_low, fit.consistent_low);
+    EXPECT_EQ(band.consistent_high, fit.consistent_high);
+    EXPECT_EQ(band.reason, fit.reason);
+  }
+}
+
 // Nothing but near-focus patches: the profile cannot be seen, and the fit
 // says so instead of guessing.
 TEST(FitSplitProfile, SaysWhenTheDataCannotDetermineIt) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -22,6 +23,100 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct Evaluation {
   std::vector<double> radius;    // NaN where the search gave no estimate
   std::vector<double> residual;  // relative residual; 1 where none
+};
+
+// The blur searches of one calibration's patches (CalibrateSplitProfile:
+// the whole frame's fit, then each band's on its share of the same
+// patches), kept per patch and profile: a search of the same crop under
+// the same profile and options gives the same estimate, so a band's fit
+// reads the frame's searches of its patches instead of repeating them. The
+// patches are prepared once (PreparedBlurPatch).
+class ProfileSearches {
+ public:
+  // The key of the paper's translating disk: no log centroid offset is
+  // infinite.
+  static constexpr double kTranslatingDisk =
+      std::numeric_limits<double>::infinity();
+
+  ProfileSearches(const std::vector<ProfilePatch>& patches,
+                  const SplitProfileFitOptions& options)
+      : patches_(patches),
+        options_(options),
+        prepared_(patches.size()),
+        is_prepared_(patches.size(), false) {}
+
+  const std::vector<ProfilePatch>& Patches() const { return patches_; }
+
+  // The outcome for `members` (indices into the patches) under the profile
+  // of log centroid offset `key` (or kTranslatingDisk): those not searched
+  // under it yet are searched (in parallel), the others read.
+  Evaluation Search(double key, const std::vector<int>& members) {
+    std::vector<Outcome>& known = outcomes_[key];
+    if (known.empty()) known.resize(patches_.size());
+    std::vector<int> todo;
+    for (int i : members) {
+      if (!known[i].searched) todo.push_back(i);
+    }
+    if (!todo.empty()) SearchPatches(key, todo, &known);
+    Evaluation e;
+    for (int i : members) {
+      e.radius.push_back(known[i].radius);
+      e.residual.push_back(known[i].residual);
+    }
+    return e;
+  }
+
+ private:
+  struct Outcome {
+    bool searched = false;
+    double radius = kNaN;   // NaN where the search gave no estimate
+    double residual = 1.0;  // no estimate: counts as unexplained
+  };
+
+  void SearchPatches(double key,
+                     const std::vector<int>& todo,
+                     std::vector<Outcome>* known) {
+    std::vector<const ProfilePatch*> ptrs;
+    std::vector<PreparedBlurPatch> prepared;
+    bool all_prepared = true;
+    for (int i : todo) {
+      ptrs.push_back(&patches_[i]);
+      all_prepared = all_prepared && is_prepared_[i];
+    }
+    // Prepared all at once or not at all (EstimateProfilePatches); a
+    // patch prepared again comes out the same.
+    if (all_prepared) {
+      for (int i : todo) prepared.push_back(prepared_[i]);
+    }
+    std::unique_ptr<DPPsfModel> psf;
+    if (key == kTranslatingDisk) {
+      psf.reset(new TranslatingDiskPsf());
+    } else {
+      psf.reset(new SplitProfilePsf(
+          SplitProfileParams::ForCentroidOffset(std::exp(key))));
+    }
+    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
+        *psf, options_.blur, ptrs, options_.num_threads, &prepared);
+    for (size_t k = 0; k < todo.size(); ++k) {
+      const int i = todo[k];
+      if (!all_prepared) {
+        prepared_[i] = prepared[k];
+        is_prepared_[i] = true;
+      }
+      Outcome& o = (*known)[i];
+      o.searched = true;
+      if (estimates[k].valid && std::isfinite(estimates[k].relative_residual)) {
+        o.radius = estimates[k].radius_px;
+        o.residual = estimates[k].relative_residual;
+      }
+    }
+  }
+
+  const std::vector<ProfilePatch>& patches_;
+  const SplitProfileFitOptions& options_;
+  std::vector<PreparedBlurPatch> prepared_;
+  std::vector<bool> is_prepared_;
+  std::map<double, std::vector<Outcome>> outcomes_;  // by key
 };
 
 // Self-calibration criterion: mean residual of the patches (with
@@ -92,15 +187,23 @@ struct PathCurve {
 // criterion and its solution over any members of them.
 class ProfileSearch {
  public:
-  ProfileSearch(const std::vector<ProfilePatch>& patches,
+  // The fit of the patches `members` (indices into searches->Patches()).
+  ProfileSearch(ProfileSearches* searches,
+                const std::vector<int>& members,
                 bool known,
                 const SplitProfileFitOptions& options)
-      : patches_(patches),
+      : searches_(*searches),
+        members_(members),
         known_(known),
         options_(options),
-        n_(static_cast<int>(patches.size())) {
-    for (const ProfilePatch& p : patches) patch_ptrs_.push_back(&p);
+        n_(static_cast<int>(members.size())) {
+    searched_.resize(n_);
+    std::iota(searched_.begin(), searched_.end(), 0);
     SelectUsablePatches();
+    // Every criterion reads the usable patches alone (Criterion's members,
+    // ValidShare, SetResiduals, the translating disk's residuals): the
+    // profiles after the first search them alone.
+    searched_ = usable_;
   }
 
   const std::vector<int>& Usable() const { return usable_; }
@@ -108,20 +211,7 @@ class ProfileSearch {
   const Evaluation& Evaluate(double log_kappa) {
     auto it = evaluations_.find(log_kappa);
     if (it != evaluations_.end()) return it->second;
-    const SplitProfilePsf psf(
-        SplitProfileParams::ForCentroidOffset(std::exp(log_kappa)));
-    const std::vector<PatchBlurEstimate> estimates = EstimateProfilePatches(
-        psf, options_.blur, patch_ptrs_, options_.num_threads, &prepared_);
-    Evaluation e;
-    e.radius.assign(n_, kNaN);
-    e.residual.assign(n_, 1.0);  // no estimate: counts as unexplained
-    for (int i = 0; i < n_; ++i) {
-      if (estimates[i].valid && std::isfinite(estimates[i].relative_residual)) {
-        e.radius[i] = estimates[i].radius_px;
-        e.residual[i] = estimates[i].relative_residual;
-      }
-    }
-    return evaluations_.emplace(log_kappa, std::move(e)).first->second;
+    return evaluations_.emplace(log_kappa, Outcomes(log_kappa)).first->second;
   }
 
   double Criterion(const Evaluation& e, const std::vector<int>& members) const {
@@ -234,26 +324,8 @@ class ProfileSearch {
 
   // The relative residual of each usable patch under the paper's
   // translating disk (1 where its search gives no estimate; all patches).
-  std::vector<double> TranslatingDiskResiduals() const {
-    std::vector<const ProfilePatch*> usable_ptrs;
-    std::vector<PreparedBlurPatch> usable_prepared;
-    for (int i : usable_) {
-      usable_ptrs.push_back(&patches_[i]);
-      if (!prepared_.empty()) usable_prepared.push_back(prepared_[i]);
-    }
-    const std::vector<PatchBlurEstimate> estimates =
-        EstimateProfilePatches(TranslatingDiskPsf(),
-                               options_.blur,
-                               usable_ptrs,
-                               options_.num_threads,
-                               &usable_prepared);
-    std::vector<double> residual(n_, 1.0);
-    for (size_t k = 0; k < usable_.size(); ++k) {
-      if (estimates[k].valid && std::isfinite(estimates[k].relative_residual)) {
-        residual[usable_[k]] = estimates[k].relative_residual;
-      }
-    }
-    return residual;
+  std::vector<double> TranslatingDiskResiduals() {
+    return Outcomes(ProfileSearches::kTranslatingDisk).residual;
   }
 
  private:
@@ -264,13 +336,29 @@ class ProfileSearch {
     const Evaluation& disk =
         Evaluate(std::log(SplitProfileParams().CentroidOffset()));
     for (int i = 0; i < n_; ++i) {
-      known_radius_[i] = patches_[i].known_radius_px;
+      known_radius_[i] = searches_.Patches()[members_[i]].known_radius_px;
       const double r = known_ ? known_radius_[i] : disk.radius[i];
       if (std::isfinite(r) && std::abs(r) >= options_.min_abs_radius_px &&
           std::isfinite(disk.radius[i])) {
         usable_.push_back(i);
       }
     }
+  }
+
+  // The outcome of the searched patches under the profile `key`
+  // (ProfileSearches), per member (the others: no estimate).
+  Evaluation Outcomes(double key) {
+    std::vector<int> ids;
+    for (int i : searched_) ids.push_back(members_[i]);
+    const Evaluation searched = searches_.Search(key, ids);
+    Evaluation e;
+    e.radius.assign(n_, kNaN);
+    e.residual.assign(n_, 1.0);
+    for (size_t k = 0; k < searched_.size(); ++k) {
+      e.radius[searched_[k]] = searched.radius[k];
+      e.residual[searched_[k]] = searched.residual[k];
+    }
+    return e;
   }
 
   void Curve(const std::vector<int>& members,
@@ -300,14 +388,14 @@ class ProfileSearch {
     return x;
   }
 
-  const std::vector<ProfilePatch>& patches_;
+  ProfileSearches& searches_;
+  const std::vector<int> members_;
   const bool known_;
   const SplitProfileFitOptions& options_;
   const int n_;
-  std::vector<const ProfilePatch*> patch_ptrs_;
-  // The patches as every profile's search starts from them (filled by the
-  // first evaluation).
-  std::vector<PreparedBlurPatch> prepared_;
+  // The members each profile's search runs on (indices into members_): all
+  // for the first profile, then the usable ones.
+  std::vector<int> searched_;
   std::map<double, Evaluation> evaluations_;  // by log centroid offset
   std::vector<int> usable_;
   std::vector<double> known_radius_;
@@ -382,12 +470,13 @@ void WidenToConsistentRange(const ProfileSearch& search,
 
 // Self-calibration: the paper's translating disk against the best split
 // profile.
-void WeighTranslatingDisk(const ProfileSearch& search,
+void WeighTranslatingDisk(ProfileSearch* search_ptr,
                           const Evaluation& at_fit,
                           const SplitProfileFitOptions& options,
                           SplitProfileFit* fit) {
+  const ProfileSearch& search = *search_ptr;
   const std::vector<int>& usable = search.Usable();
-  const std::vector<double> residual = search.TranslatingDiskResiduals();
+  const std::vector<double> residual = search_ptr->TranslatingDiskResiduals();
   fit->translating_disk_criterion =
       TrimmedMean(residual, usable, options.trim_fraction);
   // The paper's model is kept unless the split profile fits significantly
@@ -477,9 +566,12 @@ bool SplitProfileFitOptions::Check(std::string* failure) const {
   return true;
 }
 
-SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
-                                const SplitProfileFitOptions& options) {
-  DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
+namespace {
+
+// FitSplitProfile on the patches `members` of `searches`.
+SplitProfileFit FitProfile(ProfileSearches* searches,
+                           const std::vector<int>& members,
+                           const SplitProfileFitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   SplitProfileFit fit;
   fit.translating_disk_centroid_offset =
@@ -495,17 +587,17 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
             .count();
     return fit;
   };
-  if (patches.empty()) {
+  if (members.empty()) {
     fit.reason = "no patches";
     return finish();
   }
-  const bool known = RadiiKnown(patches);
+  const bool known = RadiiKnown(searches->Patches());
   fit.self_calibrated = !known;
-  ProfileSearch search(patches, known, options);
+  ProfileSearch search(searches, members, known, options);
   fit.num_patches = static_cast<int>(search.Usable().size());
   if (fit.num_patches < options.min_patches) {
     fit.reason = TooFewUsablePatches(
-        fit.num_patches, static_cast<int>(patches.size()), options);
+        fit.num_patches, static_cast<int>(members.size()), options);
     return finish();
   }
 
@@ -522,10 +614,21 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
   if (!known) WidenToConsistentRange(search, curve, options, &fit);
 
   const Evaluation& at_fit = search.Evaluate(curve.best);
-  if (!known) WeighTranslatingDisk(search, at_fit, options, &fit);
+  if (!known) WeighTranslatingDisk(&search, at_fit, options, &fit);
   search.SetResiduals(at_fit, &fit);
   Conclude(search.Criterion(at_fit, search.Usable()), options, &fit);
   return finish();
+}
+
+}  // namespace
+
+SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
+                                const SplitProfileFitOptions& options) {
+  DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
+  ProfileSearches searches(patches, options);
+  std::vector<int> all(patches.size());
+  std::iota(all.begin(), all.end(), 0);
+  return FitProfile(&searches, all, options);
 }
 
 std::vector<PatchBlurEstimate> EstimateProfilePatches(
@@ -597,8 +700,13 @@ SplitProfileCalibration CalibrateSplitProfile(
     double min_band_difference,
     bool bands_when_frame_fits) {
   DPSFM_CHECK_GE(num_bands, 1);
+  DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
   SplitProfileCalibration calibration;
-  calibration.frame = FitSplitProfile(patches, options);
+  // The bands' fits read the frame's searches of their patches.
+  ProfileSearches searches(patches, options);
+  std::vector<int> all(patches.size());
+  std::iota(all.begin(), all.end(), 0);
+  calibration.frame = FitProfile(&searches, all, options);
   std::ostringstream summary;
   summary << "whole frame: " << calibration.frame.reason;
   if (num_bands == 1 ||
@@ -606,19 +714,19 @@ SplitProfileCalibration CalibrateSplitProfile(
     calibration.summary = summary.str();
     return calibration;
   }
-  std::vector<std::vector<ProfilePatch>> by_band(num_bands);
-  for (const ProfilePatch& patch : patches) {
+  std::vector<std::vector<int>> by_band(num_bands);
+  for (size_t i = 0; i < patches.size(); ++i) {
     const int band =
         std::max(0,
                  std::min(num_bands - 1,
-                          static_cast<int>(patch.x_fraction * num_bands)));
-    by_band[band].push_back(patch);
+                          static_cast<int>(patches[i].x_fraction * num_bands)));
+    by_band[band].push_back(static_cast<int>(i));
   }
   bool all_determined = true;
   bool significant = false;  // some band's interval excludes the frame's
   double largest_difference = 0;
   for (int b = 0; b < num_bands; ++b) {
-    calibration.bands.push_back(FitSplitProfile(by_band[b], options));
+    calibration.bands.push_back(FitProfile(&searches, by_band[b], options));
     const SplitProfileFit& fit = calibration.bands.back();
     summary << "; band " << b + 1 << " of " << num_bands << ": "
             << (fit.determined ? "" : "not determined, ") << fit.reason;
