@@ -10,8 +10,9 @@
 #    `make profiles` does: the captures' camera and lens setting are the
 #    scene's, so no transfer uncertainty);
 #  - three of the seven real Canon R6 II scenes of `make real`
-#    (realdp_captures.sh; single views of 768x512, 8-bit sRGB as given, no
-#    recorded focus), with auto, the translating disk and the camera's
+#    (realdp_captures.sh; single views of 768x512, 8-bit sRGB as given,
+#    with the recorded "1 m" focus: without it these refuse before the
+#    intensity stage), with auto, the translating disk and the camera's
 #    profile as `make real` calibrates it from the flat planes;
 #  - the 300-view workspace of `make large` (3000x2000, the view budget),
 #    with auto and the translating disk (its generated views have no
@@ -80,7 +81,8 @@ if [ "${DPSFM_COST_REAL:-1}" = 1 ]; then
   else
     realdp="$realdp/canon_r6m2_rf50"
     real="$out/real"
-    if [ "$(cat "$real.options" 2>/dev/null)" != "$realdp" ]; then
+    key="$realdp; --recorded_focus_m 1.0"
+    if [ "$(cat "$real.options" 2>/dev/null)" != "$key" ]; then
       rm -rf "$real" "$real.options"
       log "calibrating the R6 II profile from $realdp/flat ..."
       realdp_calibration_set "$realdp" "$out/bin/dpsfm_make_realdp_workspace" "$real/calibration" srgb8
@@ -89,10 +91,11 @@ if [ "${DPSFM_COST_REAL:-1}" = 1 ]; then
       for scene in "${real_scenes[@]}"; do
         "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/$scene" \
           --output_path "$real/r6m2_${scene//\//_}" --name "${scene//\//_}" \
+          --recorded_focus_m 1.0 \
           >"$real/r6m2_${scene//\//_}.make.log" 2>&1 \
           || die "workspace failed: $real/r6m2_${scene//\//_}.make.log"
       done
-      echo "$realdp" >"$real.options"
+      echo "$key" >"$real.options"
     fi
     for scene in "${real_scenes[@]}"; do real_names+=("r6m2_${scene//\//_}"); done
   fi
