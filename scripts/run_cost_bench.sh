@@ -89,11 +89,11 @@ if [ "${DPSFM_COST_REAL:-1}" = 1 ]; then
       realdp_calibrate "$calibrator" "$real/calibration" \
         || die "calibration failed: $real/calibration/log"
       for scene in "${real_scenes[@]}"; do
+        name="r6m2_${scene//\//_}"
         "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/$scene" \
-          --output_path "$real/r6m2_${scene//\//_}" --name "${scene//\//_}" \
-          --recorded_focus_m 1.0 \
-          >"$real/r6m2_${scene//\//_}.make.log" 2>&1 \
-          || die "workspace failed: $real/r6m2_${scene//\//_}.make.log"
+          --output_path "$real/$name" --name "${scene//\//_}" \
+          --recorded_focus_m 1.0 >"$real/$name.make.log" 2>&1 \
+          || die "workspace failed: $real/$name.make.log"
       done
       echo "$key" >"$real.options"
     fi

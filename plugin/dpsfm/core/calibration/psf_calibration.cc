@@ -119,6 +119,13 @@ class ProfileSearches {
   std::map<double, std::vector<Outcome>> outcomes_;  // by key
 };
 
+// 0, 1, ..., n - 1.
+std::vector<int> Indices(size_t n) {
+  std::vector<int> indices(n);
+  std::iota(indices.begin(), indices.end(), 0);
+  return indices;
+}
+
 // Self-calibration criterion: mean residual of the patches (with
 // multiplicities `weight`) after trimming the largest `trim` share.
 double TrimmedMean(const std::vector<double>& residual,
@@ -197,8 +204,7 @@ class ProfileSearch {
         known_(known),
         options_(options),
         n_(static_cast<int>(members.size())) {
-    searched_.resize(n_);
-    std::iota(searched_.begin(), searched_.end(), 0);
+    searched_ = Indices(n_);
     SelectUsablePatches();
     // Every criterion reads the usable patches alone (Criterion's members,
     // ValidShare, SetResiduals, the translating disk's residuals): the
@@ -470,13 +476,12 @@ void WidenToConsistentRange(const ProfileSearch& search,
 
 // Self-calibration: the paper's translating disk against the best split
 // profile.
-void WeighTranslatingDisk(ProfileSearch* search_ptr,
+void WeighTranslatingDisk(ProfileSearch* search,
                           const Evaluation& at_fit,
                           const SplitProfileFitOptions& options,
                           SplitProfileFit* fit) {
-  const ProfileSearch& search = *search_ptr;
-  const std::vector<int>& usable = search.Usable();
-  const std::vector<double> residual = search_ptr->TranslatingDiskResiduals();
+  const std::vector<int>& usable = search->Usable();
+  const std::vector<double> residual = search->TranslatingDiskResiduals();
   fit->translating_disk_criterion =
       TrimmedMean(residual, usable, options.trim_fraction);
   // The paper's model is kept unless the split profile fits significantly
@@ -487,7 +492,7 @@ void WeighTranslatingDisk(ProfileSearch* search_ptr,
   int family_better = 0, resamples = 0;
   if (fit->translating_disk_criterion >
       options.min_improvement_over_translating_disk *
-          search.Criterion(at_fit, usable)) {
+          search->Criterion(at_fit, usable)) {
     std::mt19937_64 rng(options.seed + 1);
     std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
     std::vector<int> members(usable.size());
@@ -501,9 +506,9 @@ void WeighTranslatingDisk(ProfileSearch* search_ptr,
     }
   }
   fit->translating_disk = resamples == 0 || family_better < 0.95 * resamples;
-  if (fit->translating_disk ||
-      fit->translating_disk_criterion <= (1 + options.consistency_tolerance) *
-                                             search.Criterion(at_fit, usable)) {
+  if (fit->translating_disk || fit->translating_disk_criterion <=
+                                   (1 + options.consistency_tolerance) *
+                                       search->Criterion(at_fit, usable)) {
     fit->consistent_low =
         std::min(fit->consistent_low, fit->translating_disk_centroid_offset);
     fit->consistent_high =
@@ -626,9 +631,7 @@ SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options) {
   DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
   ProfileSearches searches(patches, options);
-  std::vector<int> all(patches.size());
-  std::iota(all.begin(), all.end(), 0);
-  return FitProfile(&searches, all, options);
+  return FitProfile(&searches, Indices(patches.size()), options);
 }
 
 std::vector<PatchBlurEstimate> EstimateProfilePatches(
@@ -704,9 +707,7 @@ SplitProfileCalibration CalibrateSplitProfile(
   SplitProfileCalibration calibration;
   // The bands' fits read the frame's searches of their patches.
   ProfileSearches searches(patches, options);
-  std::vector<int> all(patches.size());
-  std::iota(all.begin(), all.end(), 0);
-  calibration.frame = FitProfile(&searches, all, options);
+  calibration.frame = FitProfile(&searches, Indices(patches.size()), options);
   std::ostringstream summary;
   summary << "whole frame: " << calibration.frame.reason;
   if (num_bands == 1 ||
