@@ -235,7 +235,7 @@ TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
   ASSERT_NE(cv::norm(expected[4].left, expected[0].left, cv::NORM_INF), 0);
   for (const int depth : {0, 1, 2, 5}) {
     const Clock::time_point created = Clock::now();
-    ViewPrefetcher prefetcher(&reader, order, depth);
+    ViewPrefetcher prefetcher(&reader, order, depth, nullptr);
     for (const int index : order) {
       const Clock::time_point called = Clock::now();
       const ViewPrefetcher::Read read = prefetcher.Next();
@@ -263,7 +263,8 @@ TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
     // Only the given order is read.
     EXPECT_THROW(prefetcher.Next(), std::out_of_range) << depth;
   }
-  EXPECT_THROW(ViewPrefetcher(&reader, order, -1), std::invalid_argument);
+  EXPECT_THROW(ViewPrefetcher(&reader, order, -1, nullptr),
+               std::invalid_argument);
 }
 
 TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
@@ -277,7 +278,7 @@ TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
     for (int view = 0; view < 7; ++view) no_hold[view] = 0;
     ReadGates gates(dir, no_hold);
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, order, depth);
+    ViewPrefetcher prefetcher(&reader, order, depth, nullptr);
     // Before the first Next(): the first `depth` views, read ahead.
     for (int k = 0; k < depth; ++k) {
       EXPECT_TRUE(gates.WaitStarted(order[k])) << depth << " " << k;
@@ -312,7 +313,7 @@ TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
     // Depth 0: the read happens inside Next(), which waits all of it.
     ReadGates gates(dir, {{1, hold}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1}, 0);
+    ViewPrefetcher prefetcher(&reader, {0, 1}, 0, nullptr);
     EXPECT_EQ(prefetcher.Next().view.name, "v0.png");
     const ViewPrefetcher::Read read = prefetcher.Next();
     EXPECT_EQ(read.view.name, "v1.png");
@@ -323,7 +324,7 @@ TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
   {
     ReadGates gates(dir, {{1, hold}, {2, hold}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2}, 1);
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2}, 1, nullptr);
     EXPECT_EQ(prefetcher.Next().view.name, "v0.png");
     // View 1 is read while the caller works on view 0: once its gate has
     // opened (the read has lasted `hold`), Next() waits at most for the
@@ -363,7 +364,7 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
   for (const int depth : {0, 1, 3}) {
     ReadGates gates(dir, {{3, 0}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3, 4}, depth);
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3, 4}, depth, nullptr);
     for (int k = 0; k < 3; ++k) {
       EXPECT_EQ(prefetcher.Next().view.name, "v" + std::to_string(k) + ".png")
           << depth;
@@ -383,10 +384,53 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
     ASSERT_EQ(gates.error(), "");
     std::unique_ptr<ViewPrefetcher> prefetcher;
     EXPECT_NO_THROW(prefetcher = std::make_unique<ViewPrefetcher>(
-                        &reader, std::vector<int>{3, 0}, depth));
+                        &reader, std::vector<int>{3, 0}, depth, nullptr));
     ASSERT_NE(prefetcher, nullptr);
     if (depth > 0) EXPECT_TRUE(gates.WaitStarted(3));
     expect_error_names_v3(prefetcher.get(), depth);
+  }
+}
+
+// Each view is prepared once, after its read and on the reading thread (the
+// caller's own at depth 0), before Next() hands it out; what the preparation
+// throws reaches the caller at that view, as a read's error does.
+TEST(ViewPrefetcher, EachViewIsPreparedOnceOnTheReadingThread) {
+  TempDir dir;
+  const WorkspaceReader reader = ReaderFor(dir, 5, -1);
+  for (const int depth : {0, 1, 3}) {
+    std::mutex mutex;
+    std::map<std::string, std::vector<std::thread::id>> prepared;
+    const auto prepare = [&](DPView* view) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        prepared[view->name].push_back(std::this_thread::get_id());
+      }
+      if (view->name == "v3.png") throw InputError("cannot prepare v3");
+      view->left = view->left(cv::Rect(0, 0, 2, 1)).clone();
+    };
+    ViewPrefetcher prefetcher(&reader, {4, 0, 3, 1}, depth, prepare);
+    for (const int index : {4, 0}) {
+      const ViewPrefetcher::Read read = prefetcher.Next();
+      EXPECT_EQ(read.view.name, "v" + std::to_string(index) + ".png");
+      EXPECT_EQ(read.view.left.size(), cv::Size(2, 1)) << depth;
+    }
+    try {
+      prefetcher.Next();
+      ADD_FAILURE() << "v3's preparation did not fail at depth " << depth;
+    } catch (const InputError& error) {
+      EXPECT_EQ(std::string(error.what()), "cannot prepare v3");
+    }
+    EXPECT_EQ(prefetcher.Next().view.name, "v1.png");
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_EQ(prepared.size(), 4u) << depth;
+    for (const auto& [name, threads] : prepared) {
+      ASSERT_EQ(threads.size(), 1u) << name << " at depth " << depth;
+      if (depth == 0) {
+        EXPECT_EQ(threads[0], std::this_thread::get_id()) << name;
+      } else {
+        EXPECT_NE(threads[0], std::this_thread::get_id()) << name;
+      }
+    }
   }
 }
 
@@ -398,7 +442,7 @@ TEST(ViewPrefetcher, ReturnedViewsAreHeldByTheCallerAlone) {
   TempDir dir;
   const WorkspaceReader reader = ReaderFor(dir, 4, -1);
   for (const int depth : {0, 1, 3}) {
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth);
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth, nullptr);
     for (int k = 0; k < 4; ++k) {
       const ViewPrefetcher::Read read = prefetcher.Next();
       for (const cv::Mat* mat :
@@ -419,7 +463,7 @@ TEST(ViewPrefetcher, DroppingWaitsForTheReadsInFlight) {
   ASSERT_EQ(gates.error(), "");
   {
     // Dropped at once: reads 0-3 are in flight (or queued), 4 is not.
-    ViewPrefetcher dropped(&reader, {0, 1, 2, 3, 4}, 4);
+    ViewPrefetcher dropped(&reader, {0, 1, 2, 3, 4}, 4, nullptr);
   }
   // Every read in flight ran to its end (its gate opened before its open
   // returned), none beyond them started.

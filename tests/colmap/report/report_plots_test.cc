@@ -293,6 +293,35 @@ TEST(ReportPlots, OverlayColoursPositiveBlurRedAndNegativeBlue) {
   EXPECT_NEAR(background[0], background[2], 3) << background;
 }
 
+// The run keeps the overlay's image at the working resolution: with the DP
+// frame's size given, a half-size image puts the patches where the frame
+// itself does, and the picture is laid out as the frame's.
+TEST(ReportPlots, OverlayOfAReducedImageIsLaidOutForItsFrame) {
+  const cv::Mat image(300, 400, CV_32FC1, cv::Scalar(0.05));
+  cv::Mat half;
+  cv::resize(image, half, cv::Size(200, 150), 0, 0, cv::INTER_AREA);
+  const DPScaleResult result = TwoPatchResult();
+  const cv::Mat full = RenderPatchOverlay(image, "DP_0001.jpg", 0, result, 40);
+  const cv::Mat reduced =
+      RenderPatchOverlay(half, "DP_0001.jpg", 0, result, 40, image.size());
+  ASSERT_FALSE(reduced.empty());
+  EXPECT_EQ(reduced.size(), full.size());
+  // Taken for the frame, the half-size image puts the patches elsewhere.
+  const cv::Mat wrong = RenderPatchOverlay(half, "DP_0001.jpg", 0, result, 40);
+  EXPECT_GT(
+      cv::norm(
+          MeanColourAround(wrong, PatchOverlayPoint(image.size(), 300, 220)) -
+          MeanColourAround(full, PatchOverlayPoint(image.size(), 300, 220))),
+      20);
+  for (const cv::Point2d& at : {cv::Point2d(100, 80), cv::Point2d(300, 220)}) {
+    const cv::Vec3d want =
+        MeanColourAround(full, PatchOverlayPoint(image.size(), at.x, at.y));
+    const cv::Vec3d got =
+        MeanColourAround(reduced, PatchOverlayPoint(image.size(), at.x, at.y));
+    EXPECT_LT(cv::norm(got - want), 3) << at << ": " << got << " vs " << want;
+  }
+}
+
 TEST(ReportPlots, OverlayFillsEachUsedPatchSquareWithItsColour) {
   const cv::Mat image(300, 400, CV_32FC1, cv::Scalar(0.05));
   const DPScaleResult result = TwoPatchResult();

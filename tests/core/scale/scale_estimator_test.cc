@@ -692,6 +692,77 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
   EXPECT_EQ(r.scale, r.scale_initial);
 }
 
+// A reader may reduce a view's frames to the working resolution before
+// AddView (ReduceFrames, on its own thread): the patches' positions, depths
+// (dense and sparse, which map through the frame's size as captured) and
+// blurs, and the scale, are those of the view at full size. Frames of
+// another size than the working one are refused naming the view.
+TEST(DPScaleEstimator, ReducedFramesGiveTheSameResult) {
+  const double scale = 0.5;
+  DPScaleOptions options = SmallFrameOptions();
+  options.resize_factor = 0.5;
+  options.patch_size = 25;
+  options.stride = 10;
+  options.max_radius_px = 5;
+  std::vector<DPView> views =
+      RenderAll(SixPositions(Lens(50, 2.8), Lens(50, 2.8), /*seed=*/70), scale);
+  views.resize(4);
+  // The last one in sparse mode: points from its depth map.
+  DPView& sparse = views.back();
+  for (int y = 3; y < kHeight; y += 7) {
+    for (int x = 3; x < kWidth; x += 7) {
+      sparse.depth_points.push_back(
+          {x + 0.5, y + 0.5, sparse.depth.at<float>(y / 2, x / 2)});
+    }
+  }
+  sparse.depth = cv::Mat();
+
+  auto psf = std::make_shared<TranslatingDiskPsf>();
+  DPScaleEstimator full(options, psf), reduced(options, psf);
+  for (const DPView& view : views) {
+    const DPViewSummary a = full.AddView(view);
+    DPView copy = view;
+    reduced.ReduceFrames(&copy);
+    ASSERT_EQ(copy.left.size(), cv::Size(kWidth / 2, kHeight / 2));
+    ASSERT_EQ(copy.right.size(), copy.left.size());
+    ASSERT_EQ(copy.frame_size, cv::Size(kWidth, kHeight));
+    reduced.ReduceFrames(&copy);  // once reduced, left as it is
+    ASSERT_EQ(copy.left.size(), cv::Size(kWidth / 2, kHeight / 2));
+    const DPViewSummary b = reduced.AddView(copy);
+    EXPECT_GT(a.patches_valid, 10) << view.name;
+    EXPECT_EQ(b.frame_size, a.frame_size);
+    EXPECT_EQ(b.working_size, a.working_size);
+    EXPECT_EQ(b.patches_with_depth, a.patches_with_depth) << view.name;
+    EXPECT_EQ(b.patches_valid, a.patches_valid) << view.name;
+    EXPECT_EQ(b.patches_kept, a.patches_kept) << view.name;
+  }
+  const DPScaleResult a = full.Estimate(), b = reduced.Estimate();
+  ASSERT_TRUE(a.success) << Why(a);
+  EXPECT_NEAR(a.scale / scale, 1.0, 0.05);
+  EXPECT_EQ(b.scale, a.scale);
+  EXPECT_EQ(b.scale_ci_low, a.scale_ci_low);
+  EXPECT_EQ(b.scale_ci_high, a.scale_ci_high);
+  ASSERT_EQ(b.patches.size(), a.patches.size());
+  for (size_t k = 0; k < a.patches.size(); ++k) {
+    EXPECT_EQ(b.patches[k].x, a.patches[k].x) << k;
+    EXPECT_EQ(b.patches[k].y, a.patches[k].y) << k;
+    EXPECT_EQ(b.patches[k].depth, a.patches[k].depth) << k;
+    EXPECT_EQ(b.patches[k].radius_px, a.patches[k].radius_px) << k;
+  }
+
+  DPView wrong = views[0];
+  wrong.left = wrong.left(cv::Rect(0, 0, 150, 150)).clone();
+  wrong.right = wrong.right(cv::Rect(0, 0, 150, 150)).clone();
+  wrong.frame_size = cv::Size(kWidth, kHeight);
+  try {
+    reduced.AddView(wrong);
+    FAIL() << "frames of another size were taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(views[0].name), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DPScaleEstimator, MalformedInputThrowsNamingTheView) {
   auto psf = std::make_shared<TranslatingDiskPsf>();
   DPScaleEstimator estimator(SmallFrameOptions(), psf);

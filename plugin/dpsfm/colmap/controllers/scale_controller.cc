@@ -77,11 +77,14 @@ ScaleRun DPScaleController::Run() {
   views_timer.Start();
   const int planned = run.planned;
   // Views are read ahead (decoding and depth maps overlap the blur search),
-  // never beyond those planned.
+  // never beyond those planned, and reduced to their working frames as they
+  // are read, so a view waiting holds no more than the search needs.
+  const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
       std::vector<int>(order.begin(), order.begin() + planned),
-      prefetch_views_);
+      prefetch_views_,
+      [estimator](DPView* view) { estimator->ReduceFrames(view); });
   // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
@@ -103,10 +106,13 @@ ScaleRun DPScaleController::Run() {
     run.timings.blur += summary.seconds;
     if (capture_overlays_ &&
         (k == 0 || k == (planned - 1) / 2 || k == planned - 1) &&
-        (run.overlay_images.empty() || run.overlay_images.back().first != k)) {
-      cv::Mat image;
-      cv::Mat(0.5 * (view.left + view.right)).convertTo(image, CV_8U, 255.0);
-      run.overlay_images.emplace_back(k, image);
+        (run.overlay_images.empty() || run.overlay_images.back().view != k)) {
+      OverlayImage overlay;
+      overlay.view = k;
+      cv::Mat(0.5 * (view.left + view.right))
+          .convertTo(overlay.image, CV_8U, 255.0);
+      overlay.frame_size = view.frame_size;
+      run.overlay_images.push_back(overlay);
     }
     run.visited.push_back(index);
     const double elapsed = views_timer.ElapsedSeconds();

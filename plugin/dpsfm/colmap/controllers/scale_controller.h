@@ -13,6 +13,7 @@
 
 #include "dpsfm/colmap/controllers/run_outcome.h"
 #include "dpsfm/colmap/io/workspace_reader.h"
+#include "dpsfm/colmap/report/patch_overlay_plot.h"
 #include "dpsfm/colmap/report/report.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/view_budget.h"
@@ -22,8 +23,9 @@ namespace dpsfm {
 struct ScaleRun {
   DPScaleResult result;
   std::vector<DPViewSummary> summaries;  // visited views, in visiting order
-  // A few visited views' images (8-bit) for the report's patch overlays.
-  std::vector<std::pair<int, cv::Mat>> overlay_images;
+  // A few visited views' images (8-bit, at the working resolution) for the
+  // report's patch overlays.
+  std::vector<OverlayImage> overlay_images;
   RunTimings timings;
   std::vector<int> visited;  // reader indices, in visiting order
   std::vector<int> skipped;  // never visited

@@ -10,12 +10,15 @@
 namespace dpsfm {
 namespace {
 
-ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader, int index) {
+ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
+                               int index,
+                               const std::function<void(DPView*)>& prepare) {
   colmap::Timer timer;
   timer.Start();
   ViewPrefetcher::Read read;
   try {
     read.view = reader->LoadView(index);
+    if (prepare) prepare(&read.view);
   } catch (...) {
     read.error = std::current_exception();
   }
@@ -27,8 +30,12 @@ ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader, int index) {
 
 ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
                                std::vector<int> order,
-                               int depth)
-    : reader_(reader), order_(std::move(order)), depth_(depth) {
+                               int depth,
+                               std::function<void(DPView*)> prepare)
+    : reader_(reader),
+      order_(std::move(order)),
+      prepare_(std::move(prepare)),
+      depth_(depth) {
   if (depth_ < 0) {
     throw std::invalid_argument("prefetch depth must be >= 0");
   }
@@ -50,10 +57,11 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
+  const std::function<void(DPView*)>* prepare = &prepare_;
   auto promise = std::make_shared<std::promise<Read>>();
   in_flight_.push_back(promise->get_future());
-  pool_->AddTask([reader, index, promise]() {
-    promise->set_value(TimedRead(reader, index));
+  pool_->AddTask([reader, index, prepare, promise]() {
+    promise->set_value(TimedRead(reader, index, *prepare));
   });
 }
 
@@ -65,7 +73,7 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     if (launched_ >= order_.size()) {
       throw std::out_of_range("no more views to read");
     }
-    read = TimedRead(reader_, order_[launched_++]);
+    read = TimedRead(reader_, order_[launched_++], prepare_);
   } else {
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
     std::future<Read> next = std::move(in_flight_.front());

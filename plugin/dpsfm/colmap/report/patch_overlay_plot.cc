@@ -412,8 +412,8 @@ void DrawOverlayLegend(cv::Mat& canvas,
 
 }  // namespace
 
-cv::Point2d PatchOverlayPoint(const cv::Size& image_size, double x, double y) {
-  const double d = OverlayScale(image_size);
+cv::Point2d PatchOverlayPoint(const cv::Size& frame_size, double x, double y) {
+  const double d = OverlayScale(frame_size);
   return {kOverlayMarginX + (x + 0.5) * d - 0.5,
           kOverlayHeader + (y + 0.5) * d - 0.5};
 }
@@ -422,12 +422,14 @@ cv::Mat RenderPatchOverlay(const cv::Mat& image,
                            const std::string& view_name,
                            int view_index,
                            const DPScaleResult& result,
-                           double patch_size_px) {
+                           double patch_size_px,
+                           const cv::Size& frame_size) {
   if (image.empty() || image.cols <= 0 || image.rows <= 0) return cv::Mat();
-  const OverlayLayout layout = LayoutFor(image.size());
+  const cv::Size frame = frame_size.empty() ? image.size() : frame_size;
+  const OverlayLayout layout = LayoutFor(frame);
   cv::Mat canvas(layout.canvas_size, CV_8UC3, plot::kWhite);
   DrawImage(canvas, image, layout);
-  const double patch_side = PatchSide(patch_size_px, image.size());
+  const double patch_side = PatchSide(patch_size_px, frame);
   const OverlayPatches selection = SelectPatches(result, view_index);
   const PatchSquares squares(layout, patch_side);
   cv::Mat image_area = canvas(layout.image_rect);

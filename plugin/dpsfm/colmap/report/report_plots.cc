@@ -41,7 +41,7 @@ void WritePlot(const std::string& plot_name,
 // working-frame side.
 double OverlayPatchSide(int working_patch_size,
                         int view,
-                        const cv::Mat& image,
+                        const cv::Size& frame_size,
                         const std::map<int, double>& frame_per_working) {
   if (working_patch_size <= 0) return 0;
   double ratio = plot::kNaN;
@@ -49,7 +49,7 @@ double OverlayPatchSide(int working_patch_size,
   if (it != frame_per_working.end()) ratio = it->second;
   if (!plot::Finite(ratio)) {
     const std::optional<PatchGeometry> geometry =
-        plot::DefaultFrameGeometry(image.size());
+        plot::DefaultFrameGeometry(frame_size);
     ratio = geometry ? 1.0 / geometry->resize_factor : 1;
   }
   return working_patch_size * (plot::Finite(ratio) ? ratio : 1.0);
@@ -70,7 +70,7 @@ std::string PlotFileComponent(const std::string& view_name) {
 
 ReportPlotFiles WriteReportPlots(
     const DPScaleResult& result,
-    const std::vector<std::pair<int, cv::Mat>>& overlay_images,
+    const std::vector<OverlayImage>& overlay_images,
     const std::string& report_path,
     int working_patch_size) {
   ReportPlotFiles files;
@@ -89,21 +89,24 @@ ReportPlotFiles WriteReportPlots(
   const std::map<int, double> frame_per_working =
       plot::FramePerWorkingPixel(result);
   std::set<std::string> used_names;
-  for (const auto& overlay : overlay_images) {
-    const int view = overlay.first;
-    const cv::Mat& image = overlay.second;
+  for (const OverlayImage& overlay : overlay_images) {
+    const int view = overlay.view;
+    const cv::Mat& image = overlay.image;
     if (image.empty()) continue;
+    const cv::Size frame =
+        overlay.frame_size.empty() ? image.size() : overlay.frame_size;
     const std::string view_name = plot::ViewName(result, view);
     std::string component = PlotFileComponent(view_name);
     if (used_names.count(component)) component += "_" + std::to_string(view);
     used_names.insert(component);
     const double patch_size =
-        OverlayPatchSide(working_patch_size, view, image, frame_per_working);
+        OverlayPatchSide(working_patch_size, view, frame, frame_per_working);
     WritePlot(
         "patches_" + component,
         stem + "_patches_" + component + ".png",
         [&] {
-          return RenderPatchOverlay(image, view_name, view, result, patch_size);
+          return RenderPatchOverlay(
+              image, view_name, view, result, patch_size, frame);
         },
         &files);
   }

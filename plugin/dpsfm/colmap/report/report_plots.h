@@ -38,20 +38,20 @@ struct ReportPlotFiles {
   std::vector<PlotFailure> failures;
 };
 
-// Writes <stem>_blur_fit.png, <stem>_loss.png and, for each
-// (view index, DP image) in `overlay_images`, <stem>_patches_<view>.png next
+// Writes <stem>_blur_fit.png, <stem>_loss.png and, for each view's picture
+// in `overlay_images` (OverlayImage), <stem>_patches_<view>.png next
 // to `report_path` (stem = report path without its extension; <view> = the
 // view's name without its extension, every character other than
 // [A-Za-z0-9._-] replaced by '_', made unique by the view index if needed;
 // an empty image is skipped). `working_patch_size` is the patch side in
 // working-frame pixels as in DPViewSummary::patch_size (<= 0:
-// DefaultPatchGeometry of the image); it is converted to DP-frame pixels
+// DefaultPatchGeometry of the DP frame); it is converted to DP-frame pixels
 // with the view's resize factor, recovered from its patches (radius_px /
 // radius_frame_px). An exception while drawing or writing one picture costs
 // that picture only and is recorded among the failures.
 ReportPlotFiles WriteReportPlots(
     const DPScaleResult& result,
-    const std::vector<std::pair<int, cv::Mat>>& overlay_images,
+    const std::vector<OverlayImage>& overlay_images,
     const std::string& report_path,
     int working_patch_size);
 

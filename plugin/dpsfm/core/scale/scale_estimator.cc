@@ -122,10 +122,10 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   summary.name = view.name;
   summary.frames = view.frames;
   summary.index = static_cast<int>(views_.size());
-  summary.frame_size = view.left.size();
+  summary.frame_size = FrameSize(view);
   data->lens = view.lens;
 
-  PatchGeometry geometry = ViewPatchGeometry(view.left.size(), options_);
+  PatchGeometry geometry = ViewPatchGeometry(summary.frame_size, options_);
   const double rf = geometry.resize_factor;
   summary.resize_factor = rf;
   summary.initial_max_radius_px = geometry.max_radius_px;
@@ -217,6 +217,19 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   summary.seconds = SecondsSince(start);
   views_.push_back(std::move(data));
   return summary;
+}
+
+void DPScaleEstimator::ReduceFrames(DPView* view) const {
+  // Reduced already, or frames AddView will refuse (naming the fault).
+  if (!view->frame_size.empty() || view->left.empty() ||
+      view->left.size() != view->right.size()) {
+    return;
+  }
+  const cv::Size frame = view->left.size();
+  const double rf = ViewPatchGeometry(frame, options_).resize_factor;
+  view->left = WorkingFrame(view->left, rf);
+  view->right = WorkingFrame(view->right, rf);
+  view->frame_size = frame;
 }
 
 bool DPScaleEstimator::LinearStage(

@@ -46,6 +46,10 @@ struct DPView {
   // (core/optics/encoding.h). Left/right follow the CLI contract (a nearer
   // point lies towards +x in the left view).
   cv::Mat left, right;
+  // Empty: left and right are the frames as captured. Otherwise their size
+  // as captured, and left/right already reduced to the working resolution
+  // (DPScaleEstimator::ReduceFrames).
+  cv::Size frame_size;
   DPFrameInfo frames;
   DPLensData lens;
   // Dense mode: CV_32FC1 z' covering the same field as the frame at any
@@ -451,6 +455,14 @@ class DPScaleEstimator {
   // map nor points. Data that merely carry no information (no texture, no
   // depth) are recorded, not thrown.
   DPViewSummary AddView(const DPView& view);
+
+  // Reduces the view's frames to the working resolution AddView searches
+  // them at (ViewPatchGeometry; frame_size records the size they had), as
+  // AddView would: AddView gives the same result for the view either way.
+  // A reader calls it on its own thread (it reads only the options) so that
+  // views waiting to be searched hold their working frames alone (a quarter
+  // of a 3000 x 2000 view's). Frames AddView would refuse stay as they are.
+  void ReduceFrames(DPView* view) const;
 
   int NumViews() const;
 

@@ -50,22 +50,45 @@ PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
   return geometry;
 }
 
+cv::Size FrameSize(const DPView& view) {
+  return view.frame_size.empty() ? view.left.size() : view.frame_size;
+}
+
+namespace {
+
+cv::Size WorkingSize(const cv::Size& frame, double resize_factor) {
+  if (!(resize_factor < 1)) return frame;
+  return {
+      std::max(1, static_cast<int>(std::round(frame.width * resize_factor))),
+      std::max(1, static_cast<int>(std::round(frame.height * resize_factor)))};
+}
+
+}  // namespace
+
+cv::Mat WorkingFrame(const cv::Mat& frame, double resize_factor) {
+  const cv::Size size = WorkingSize(frame.size(), resize_factor);
+  if (size == frame.size()) return frame;
+  cv::Mat working;
+  cv::resize(frame, working, size, 0, 0, cv::INTER_AREA);
+  return working;
+}
+
 WorkingView MakeWorkingView(const DPView& view, double resize_factor) {
+  const cv::Size frame = FrameSize(view);
   WorkingView working;
-  working.left = view.left;
-  working.right = view.right;
-  if (resize_factor < 1) {
-    // Area averaging is the anti-aliased resize the reference code uses.
-    const cv::Size size(
-        std::max(1,
-                 static_cast<int>(std::round(view.left.cols * resize_factor))),
-        std::max(1,
-                 static_cast<int>(std::round(view.left.rows * resize_factor))));
-    cv::resize(view.left, working.left, size, 0, 0, cv::INTER_AREA);
-    cv::resize(view.right, working.right, size, 0, 0, cv::INTER_AREA);
+  if (view.frame_size.empty()) {
+    working.left = WorkingFrame(view.left, resize_factor);
+    working.right = WorkingFrame(view.right, resize_factor);
+  } else {
+    DPSFM_CHECK(view.left.size() == WorkingSize(frame, resize_factor))
+        << "view '" << view.name << "': frames of " << view.left.cols << "x"
+        << view.left.rows << " are not the " << frame.width << "x"
+        << frame.height << " frame reduced by " << resize_factor;
+    working.left = view.left;
+    working.right = view.right;
   }
-  working.sx = static_cast<double>(working.left.cols) / view.left.cols;
-  working.sy = static_cast<double>(working.left.rows) / view.left.rows;
+  working.sx = static_cast<double>(working.left.cols) / frame.width;
+  working.sy = static_cast<double>(working.left.rows) / frame.height;
   working.gray_left = ToLuma(working.left);
   working.gray_right = ToLuma(working.right);
   return working;
@@ -104,7 +127,7 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
   depth_options.max_relative_spread = options.max_relative_depth_spread;
   MeasurePatchDepths(view.depth,
                      view.depth_points,
-                     view.left.size(),
+                     FrameSize(view),
                      working.sx,
                      working.sy,
                      depth_options,

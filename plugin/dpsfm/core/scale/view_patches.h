@@ -31,9 +31,17 @@ void CheckViewInput(const DPView& view);
 PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
                                 const DPScaleOptions& options);
 
-// The view on the working frame (area-averaged when downsampled) and its
-// grey versions; sx, sy: working / frame pixels per axis (exact for the
-// rounded size).
+// The size of the view's frames as captured (DPView::frame_size).
+cv::Size FrameSize(const DPView& view);
+
+// A frame reduced by `resize_factor` (area-averaged: the anti-aliased
+// resize the reference code uses); the frame itself when it is not reduced.
+cv::Mat WorkingFrame(const cv::Mat& frame, double resize_factor);
+
+// The view on the working frame (WorkingFrame, or the view's frames when
+// DPScaleEstimator::ReduceFrames reduced them already) and its grey
+// versions; sx, sy: working / frame pixels per axis (exact for the rounded
+// size).
 struct WorkingView {
   cv::Mat left, right;
   cv::Mat gray_left, gray_right;
