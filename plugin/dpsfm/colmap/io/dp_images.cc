@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <sstream>
 
@@ -14,6 +12,7 @@
 
 #include "colmap/util/string.h"
 #include "dpsfm/colmap/io/text.h"
+#include "dpsfm/colmap/util/durable_file.h"
 
 namespace dpsfm {
 namespace {
@@ -131,18 +130,19 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
   }
-  // Read once: the pixels and what the file declares about its encoding
-  // come from the same bytes.
-  std::ifstream stream(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(stream)),
-                          std::istreambuf_iterator<char>());
-  const cv::Mat raw = bytes.empty() ? cv::Mat() : DecodeImage(bytes, path);
+  DPFrameFile file;
+  cv::Mat raw;
+  {
+    // Read once: the pixels and what the file declares about its encoding
+    // come from the same bytes, released before the conversion below.
+    const std::string bytes = ReadFileBytes(path);
+    file.declared = ParseDeclaredEncoding(bytes);
+    if (!bytes.empty()) raw = DecodeImage(bytes, path);
+  }
   if (raw.empty()) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
   }
-  DPFrameFile file;
-  file.declared = ParseDeclaredEncoding(bytes);
   double unit;
   switch (raw.depth()) {
     case CV_8U:

@@ -17,7 +17,9 @@ namespace dpsfm {
 std::string DPSFMVersion();
 
 struct RunTimings {
-  double read = 0;       // loading DP views and depths (the reads' own time)
+  // Loading DP views and depths, and reducing the frames to the working
+  // resolution (DPScaleEstimator::ReduceFrames): the reads' own time.
+  double read = 0;
   double read_wait = 0;  // of it, not hidden behind the blur search
   double blur = 0;       // per-patch blur estimation (inside AddView)
   double linear = 0;
