@@ -391,44 +391,56 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
   }
 }
 
-// Each view is prepared once, after its read and on the reading thread (the
-// caller's own at depth 0), before Next() hands it out; what the preparation
-// throws reaches the caller at that view, as a read's error does.
-TEST(ViewPrefetcher, EachViewIsPreparedOnceOnTheReadingThread) {
+// Each frame of each view is reduced once, during its read and on the
+// reading thread (the caller's own at depth 0), before Next() hands the
+// view out with the size the frames had; what the reduction throws reaches
+// the caller at that view, as a read's error does.
+TEST(ViewPrefetcher, EachFrameIsReducedOnTheReadingThread) {
   TempDir dir;
   const WorkspaceReader reader = ReaderFor(dir, 5, -1);
+  // The views' frames are flat, each at its own level: v3's tells it apart.
+  const float v3_level = reader.LoadView(3).left.at<float>(0, 0);
+  ASSERT_NE(reader.LoadView(2).left.at<float>(0, 0), v3_level);
   for (const int depth : {0, 1, 3}) {
     std::mutex mutex;
-    std::map<std::string, std::vector<std::thread::id>> prepared;
-    const auto prepare = [&](DPView* view) {
+    std::map<float, std::vector<std::thread::id>> reduced;
+    const auto reduce = [&](const cv::Mat& frame) {
+      const float level = frame.at<float>(0, 0);
       {
         std::lock_guard<std::mutex> lock(mutex);
-        prepared[view->name].push_back(std::this_thread::get_id());
+        reduced[level].push_back(std::this_thread::get_id());
       }
-      if (view->name == "v3.png") throw InputError("cannot prepare v3");
-      view->left = view->left(cv::Rect(0, 0, 2, 1)).clone();
+      if (level == v3_level) throw InputError("cannot reduce v3");
+      return cv::Mat(frame(cv::Rect(0, 0, 2, 1)).clone());
     };
-    ViewPrefetcher prefetcher(&reader, {4, 0, 3, 1}, depth, prepare);
+    ViewPrefetcher prefetcher(&reader, {4, 0, 3, 1}, depth, reduce);
     for (const int index : {4, 0}) {
       const ViewPrefetcher::Read read = prefetcher.Next();
       EXPECT_EQ(read.view.name, "v" + std::to_string(index) + ".png");
       EXPECT_EQ(read.view.left.size(), cv::Size(2, 1)) << depth;
+      EXPECT_EQ(read.view.right.size(), cv::Size(2, 1)) << depth;
+      EXPECT_EQ(read.view.frame_size, cv::Size(40, 30)) << depth;
     }
     try {
       prefetcher.Next();
-      ADD_FAILURE() << "v3's preparation did not fail at depth " << depth;
+      ADD_FAILURE() << "v3's reduction did not fail at depth " << depth;
     } catch (const InputError& error) {
-      EXPECT_EQ(std::string(error.what()), "cannot prepare v3");
+      EXPECT_EQ(std::string(error.what()), "cannot reduce v3");
     }
     EXPECT_EQ(prefetcher.Next().view.name, "v1.png");
     std::lock_guard<std::mutex> lock(mutex);
-    EXPECT_EQ(prepared.size(), 4u) << depth;
-    for (const auto& [name, threads] : prepared) {
-      ASSERT_EQ(threads.size(), 1u) << name << " at depth " << depth;
-      if (depth == 0) {
-        EXPECT_EQ(threads[0], std::this_thread::get_id()) << name;
-      } else {
-        EXPECT_NE(threads[0], std::this_thread::get_id()) << name;
+    // Four views, both frames of each at the same level; v3 stopped at its
+    // left frame.
+    EXPECT_EQ(reduced.size(), 4u) << depth;
+    for (const auto& [level, threads] : reduced) {
+      ASSERT_EQ(threads.size(), level == v3_level ? 1u : 2u)
+          << level << " at depth " << depth;
+      for (const std::thread::id& thread : threads) {
+        if (depth == 0) {
+          EXPECT_EQ(thread, std::this_thread::get_id()) << level;
+        } else {
+          EXPECT_NE(thread, std::this_thread::get_id()) << level;
+        }
       }
     }
   }

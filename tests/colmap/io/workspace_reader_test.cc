@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "dpsfm/colmap/io/dp_images.h"
 #include "dpsfm/colmap/io/lens_data.h"
@@ -512,6 +513,63 @@ TEST(LoadDPFrames, BroughtToLinearLight) {
   sum_paths.sum = dir / "sum8.png";
   frames = LoadDPFrames(sum_paths, false);
   EXPECT_NEAR(frames.right.at<float>(3, 3), 0.5775804 - 0.2158605, 1e-6);
+}
+
+// A reduction replaces each view in linear light as it is decoded: the
+// frames are the reduction of those loaded without it (to the bit), in
+// either order of the views and from a sum frame (subtracted at full size
+// first), and the frames' size is the files'. With two files, the left
+// view is reduced before the right file is read, so a read holds one
+// full-size frame at a time.
+TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
+  TempDir dir;
+  cv::Mat left(20, 24, CV_16UC3), right(20, 24, CV_16UC3);
+  cv::randu(left, 0, 30000);
+  cv::randu(right, 0, 30000);
+  cv::imwrite(dir / "l.png", left);
+  cv::imwrite(dir / "r.png", right);
+  cv::imwrite(dir / "s.png", cv::Mat(left + right));
+  const FrameReduction halve = [](const cv::Mat& frame) {
+    cv::Mat out;
+    cv::resize(frame, out, frame.size() / 2, 0, 0, cv::INTER_AREA);
+    return out;
+  };
+  const auto same = [](const cv::Mat& a, const cv::Mat& b) {
+    return a.size() == b.size() && a.type() == b.type() &&
+           cv::norm(a, b, cv::NORM_INF) == 0;
+  };
+  DPFramePaths paths;
+  paths.left = dir / "l.png";
+  paths.right = dir / "r.png";
+  DPFramePaths sum_paths;
+  sum_paths.left = dir / "l.png";
+  sum_paths.sum = dir / "s.png";
+  for (const DPFramePaths& p : {paths, sum_paths}) {
+    for (const bool swap : {false, true}) {
+      const DPFrames full = LoadDPFrames(p, swap);
+      const DPFrames reduced = LoadDPFrames(p, swap, DPEncoding::kAuto, halve);
+      EXPECT_EQ(full.frame_size, cv::Size(24, 20));
+      EXPECT_EQ(reduced.frame_size, cv::Size(24, 20));
+      EXPECT_TRUE(same(reduced.left, halve(full.left))) << swap;
+      EXPECT_TRUE(same(reduced.right, halve(full.right))) << swap;
+      EXPECT_EQ(reduced.encoding, full.encoding);
+    }
+  }
+  // The right file, rewritten by the left view's reduction, is read after
+  // it: the right view is the new file's.
+  const DPFrames old_right = LoadDPFrames(paths, false);
+  const cv::Mat other_right = cv::Mat(20, 24, CV_16UC3, cv::Scalar(1, 2, 3));
+  int calls = 0;
+  const FrameReduction rewrite_right = [&](const cv::Mat& frame) {
+    if (calls++ == 0) cv::imwrite(dir / "r.png", other_right);
+    return halve(frame);
+  };
+  const DPFrames reduced =
+      LoadDPFrames(paths, false, DPEncoding::kAuto, rewrite_right);
+  EXPECT_EQ(calls, 2);
+  EXPECT_TRUE(same(reduced.left, halve(old_right.left)));
+  EXPECT_TRUE(same(reduced.right, halve(LoadDPFrames(paths, false).right)));
+  EXPECT_FALSE(same(reduced.right, halve(old_right.right)));
 }
 
 TEST(LoadDPFrames, EightBitColour) {

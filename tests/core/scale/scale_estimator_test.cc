@@ -693,7 +693,7 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
 }
 
 // A reader may reduce a view's frames to the working resolution before
-// AddView (ReduceFrames, on its own thread): the patches' positions, depths
+// AddView (ReduceFrame, on its own thread): the patches' positions, depths
 // (dense and sparse, which map through the frame's size as captured) and
 // blurs, and the scale, are those of the view at full size. Frames of
 // another size than the working one are refused naming the view.
@@ -722,12 +722,11 @@ TEST(DPScaleEstimator, ReducedFramesGiveTheSameResult) {
   for (const DPView& view : views) {
     const DPViewSummary a = full.AddView(view);
     DPView copy = view;
-    reduced.ReduceFrames(&copy);
+    copy.left = reduced.ReduceFrame(view.left);
+    copy.right = reduced.ReduceFrame(view.right);
+    copy.frame_size = view.left.size();
     ASSERT_EQ(copy.left.size(), cv::Size(kWidth / 2, kHeight / 2));
     ASSERT_EQ(copy.right.size(), copy.left.size());
-    ASSERT_EQ(copy.frame_size, cv::Size(kWidth, kHeight));
-    reduced.ReduceFrames(&copy);  // once reduced, left as it is
-    ASSERT_EQ(copy.left.size(), cv::Size(kWidth / 2, kHeight / 2));
     const DPViewSummary b = reduced.AddView(copy);
     EXPECT_GT(a.patches_valid, 10) << view.name;
     EXPECT_EQ(b.frame_size, a.frame_size);

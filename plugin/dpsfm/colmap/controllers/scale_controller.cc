@@ -77,14 +77,17 @@ ScaleRun DPScaleController::Run() {
   views_timer.Start();
   const int planned = run.planned;
   // Views are read ahead (decoding and depth maps overlap the blur search),
-  // never beyond those planned, and reduced to their working frames as they
-  // are read, so a view waiting holds no more than the search needs.
+  // never beyond those planned, each frame reduced to the working resolution
+  // as soon as it is decoded, so a read holds one full-size frame at a time
+  // and a view waiting no more than the search needs.
   const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
       std::vector<int>(order.begin(), order.begin() + planned),
       prefetch_views_,
-      [estimator](DPView* view) { estimator->ReduceFrames(view); });
+      [estimator](const cv::Mat& frame) {
+        return estimator->ReduceFrame(frame);
+      });
   // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
@@ -128,6 +131,9 @@ ScaleRun DPScaleController::Run() {
                       : std::string())
               << ")";
     run.summaries.push_back(summary);
+    // The view's frames and depth map are done with: the checkpoint below
+    // runs on what AddView kept.
+    read = ViewPrefetcher::Read();
     if (budget.IsCheckpoint(k + 1)) {
       colmap::Timer check_timer;
       check_timer.Start();

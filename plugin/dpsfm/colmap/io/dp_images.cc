@@ -200,23 +200,32 @@ DPEncoding DecideEncoding(DPEncoding requested,
 
 DPFrames LoadDPFrames(const DPFramePaths& paths,
                       bool swap_views,
-                      DPEncoding encoding) {
-  const std::string& other_path = paths.right.empty() ? paths.sum : paths.right;
+                      DPEncoding encoding,
+                      const FrameReduction& reduce) {
+  const bool from_sum = paths.right.empty();
+  const std::string& other_path = from_sum ? paths.sum : paths.right;
+  DPFrames frames;
+  // The left view first, brought to linear light by its own encoding (the
+  // other file must agree, below) and reduced before the other is read;
+  // with a sum frame it is needed at full size for the subtraction.
   DPFrameFile first = ReadDPFrameFile(paths.left);
+  frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
+  DecodeToLinearLight(frames.encoding, &first.values);
+  frames.frame_size = first.values.size();
+  const int channels = first.values.channels();
+  frames.left = reduce && !from_sum ? reduce(first.values) : first.values;
+  first.values.release();
   DPFrameFile second = ReadDPFrameFile(other_path);
-  if (second.values.size() != first.values.size() ||
-      second.values.channels() != first.values.channels()) {
+  if (second.values.size() != frames.frame_size ||
+      second.values.channels() != channels) {
     std::ostringstream message;
     message << "DP views differ in size or channels: " << paths.left << " is "
-            << first.values.cols << "x" << first.values.rows << "x"
-            << first.values.channels() << ", " << other_path << " is "
-            << second.values.cols << "x" << second.values.rows << "x"
-            << second.values.channels();
+            << frames.frame_size.width << "x" << frames.frame_size.height << "x"
+            << channels << ", " << other_path << " is " << second.values.cols
+            << "x" << second.values.rows << "x" << second.values.channels();
     throw InputError(message.str());
   }
-  DPFrames frames;
   std::string other_reason;
-  frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
   const DPEncoding other_encoding =
       DecideEncoding(encoding, second, &other_reason);
   if (other_encoding != frames.encoding) {
@@ -229,10 +238,8 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   }
   frames.bits = std::min(first.bits, second.bits);
   frames.lossy = first.lossy || second.lossy;
-  DecodeToLinearLight(frames.encoding, &first.values);
   DecodeToLinearLight(frames.encoding, &second.values);
-  frames.left = first.values;
-  if (paths.right.empty()) {
+  if (from_sum) {
     // right = sum - left. A "sum" frame darker than the left view means the
     // files are not A and A+B.
     frames.right = second.values - frames.left;
@@ -243,8 +250,12 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
                        "; expected A+B and A frames in the same units");
     }
     cv::max(frames.right, 0.0, frames.right);
+    if (reduce) {
+      frames.left = reduce(frames.left);
+      frames.right = reduce(frames.right);
+    }
   } else {
-    frames.right = second.values;
+    frames.right = reduce ? reduce(second.values) : second.values;
   }
   if (swap_views) {
     std::swap(frames.left, frames.right);

@@ -1,6 +1,7 @@
 // Finding and reading the DP views of a model's images.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -75,9 +76,10 @@ DPEncoding DecideEncoding(DPEncoding requested,
                           std::string* reason);
 
 struct DPFrames {
-  // Linear light, [0, 1].
+  // Linear light, [0, 1]; reduced when LoadDPFrames was given a reduction.
   cv::Mat left;
   cv::Mat right;
+  cv::Size frame_size;  // as decoded
   // What the files were, and why.
   DPEncoding encoding = DPEncoding::kLinear;
   std::string encoding_reason;
@@ -89,10 +91,15 @@ struct DPFrames {
 // frame, right = sum - left in linear light (Canon's DPRSplit gives A and
 // A+B in the same units). `swap_views` exchanges left and right for sensors
 // with the opposite naming. Throws InputError when the two files differ in
-// size, channels or encoding.
+// size, channels or encoding. `reduce` (if given) replaces each view in
+// linear light as soon as it is decoded (a sum frame's right view after
+// the subtraction), so a read holds one full-size frame at a time, as
+// LoadView does with DPScaleEstimator::ReduceFrame.
+using FrameReduction = std::function<cv::Mat(const cv::Mat&)>;
 DPFrames LoadDPFrames(const DPFramePaths& paths,
                       bool swap_views,
-                      DPEncoding encoding = DPEncoding::kAuto);
+                      DPEncoding encoding = DPEncoding::kAuto,
+                      const FrameReduction& reduce = nullptr);
 
 // The integer factor k with frame size = camera size / k (phones give half
 // size DP frames), or throws InputError naming the image and both sizes.

@@ -12,13 +12,12 @@ namespace {
 
 ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
                                int index,
-                               const std::function<void(DPView*)>& prepare) {
+                               const FrameReduction& reduce) {
   colmap::Timer timer;
   timer.Start();
   ViewPrefetcher::Read read;
   try {
-    read.view = reader->LoadView(index);
-    if (prepare) prepare(&read.view);
+    read.view = reader->LoadView(index, reduce);
   } catch (...) {
     read.error = std::current_exception();
   }
@@ -31,10 +30,10 @@ ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
 ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
                                std::vector<int> order,
                                int depth,
-                               std::function<void(DPView*)> prepare)
+                               FrameReduction reduce)
     : reader_(reader),
       order_(std::move(order)),
-      prepare_(std::move(prepare)),
+      reduce_(std::move(reduce)),
       depth_(depth) {
   if (depth_ < 0) {
     throw std::invalid_argument("prefetch depth must be >= 0");
@@ -57,11 +56,11 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
-  const std::function<void(DPView*)>* prepare = &prepare_;
+  const FrameReduction* reduce = &reduce_;
   auto promise = std::make_shared<std::promise<Read>>();
   in_flight_.push_back(promise->get_future());
-  pool_->AddTask([reader, index, prepare, promise]() {
-    promise->set_value(TimedRead(reader, index, *prepare));
+  pool_->AddTask([reader, index, reduce, promise]() {
+    promise->set_value(TimedRead(reader, index, *reduce));
   });
 }
 
@@ -73,7 +72,7 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     if (launched_ >= order_.size()) {
       throw std::out_of_range("no more views to read");
     }
-    read = TimedRead(reader_, order_[launched_++], prepare_);
+    read = TimedRead(reader_, order_[launched_++], reduce_);
   } else {
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
     std::future<Read> next = std::move(in_flight_.front());

@@ -5,7 +5,6 @@
 
 #include <deque>
 #include <exception>
-#include <functional>
 #include <future>
 #include <memory>
 #include <vector>
@@ -21,22 +20,22 @@ namespace dpsfm {
 
 class ViewPrefetcher {
  public:
-  // Reads reader->LoadView(order[k]) for k = 0, 1, ... in that order on
-  // `depth` worker threads, then `prepare` on each view read (e.g. reducing
-  // its frames: DPScaleEstimator::ReduceFrames), at most `depth` views ahead
-  // of the one Next() returned last (so memory holds at most depth + 1
-  // views). depth 0 reads in Next() itself. The reader and whatever
-  // `prepare` uses must outlive the prefetcher.
+  // Reads reader->LoadView(order[k], reduce) for k = 0, 1, ... in that order
+  // on `depth` worker threads (so `reduce`, e.g. DPScaleEstimator::
+  // ReduceFrame, runs there too), at most `depth` views ahead of the one
+  // Next() returned last (so memory holds at most depth + 1 views). depth 0
+  // reads in Next() itself. The reader and whatever `reduce` uses must
+  // outlive the prefetcher.
   ViewPrefetcher(const WorkspaceReader* reader,
                  std::vector<int> order,
                  int depth,
-                 std::function<void(DPView*)> prepare);
+                 FrameReduction reduce);
   // Waits for the reads in flight (their views are dropped).
   ~ViewPrefetcher();
 
   struct Read {
     DPView view;
-    double seconds = 0;  // the read itself and its preparation
+    double seconds = 0;  // the read itself
     double waited = 0;   // how long Next() blocked for it
     // The read's error, rethrown by Next(). Tasks never throw: COLMAP 4's
     // thread pool treats an exception no one collected through Wait() as
@@ -51,7 +50,7 @@ class ViewPrefetcher {
 
   const WorkspaceReader* reader_;
   const std::vector<int> order_;
-  const std::function<void(DPView*)> prepare_;
+  const FrameReduction reduce_;
   const int depth_;
   size_t launched_ = 0;
   std::unique_ptr<colmap::ThreadPool> pool_;

@@ -371,13 +371,16 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
   return mapped;
 }
 
-DPView WorkspaceReader::LoadView(size_t index) const {
+DPView WorkspaceReader::LoadView(size_t index,
+                                 const FrameReduction& reduce) const {
   const ViewSource& source = sources_.at(index);
   const colmap::Image& image = reconstruction_.Image(source.image_id);
   const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
 
-  const DPFrames frames = LoadDPFrames(
-      source.dp, options_.swap_dp_views, ParseDPEncoding(options_.dp_encoding));
+  const DPFrames frames = LoadDPFrames(source.dp,
+                                       options_.swap_dp_views,
+                                       ParseDPEncoding(options_.dp_encoding),
+                                       reduce);
   // A dense workspace's model is undistorted; the DP frames keep the
   // geometry of the original images. With the original camera known (from
   // the database) and different, depths are mapped through both cameras.
@@ -398,7 +401,7 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   const colmap::Camera& frame_camera = original ? *original : camera;
   int k = 0;
   try {
-    k = DPFrameDownsampling(frames.left.size(),
+    k = DPFrameDownsampling(frames.frame_size,
                             static_cast<int>(frame_camera.width),
                             static_cast<int>(frame_camera.height),
                             source.image_name);
@@ -418,6 +421,7 @@ DPView WorkspaceReader::LoadView(size_t index) const {
   view.name = source.image_name;
   view.left = frames.left;
   view.right = frames.right;
+  if (reduce) view.frame_size = frames.frame_size;
   view.frames.encoding = frames.encoding;
   view.frames.encoding_reason = frames.encoding_reason;
   view.frames.bits = frames.bits;
@@ -432,7 +436,7 @@ DPView WorkspaceReader::LoadView(size_t index) const {
       view.depth = ResampleDepthToFrame(view.depth,
                                         camera,
                                         *original,
-                                        frames.left.size(),
+                                        frames.frame_size,
                                         k,
                                         read_.num_threads);
     }

@@ -18,7 +18,7 @@ std::string DPSFMVersion();
 
 struct RunTimings {
   // Loading DP views and depths, and reducing the frames to the working
-  // resolution (DPScaleEstimator::ReduceFrames): the reads' own time.
+  // resolution (DPScaleEstimator::ReduceFrame): the reads' own time.
   double read = 0;
   double read_wait = 0;  // of it, not hidden behind the blur search
   double blur = 0;       // per-patch blur estimation (inside AddView)

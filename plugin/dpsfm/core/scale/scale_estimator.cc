@@ -219,17 +219,10 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   return summary;
 }
 
-void DPScaleEstimator::ReduceFrames(DPView* view) const {
-  // Reduced already, or frames AddView will refuse (naming the fault).
-  if (!view->frame_size.empty() || view->left.empty() ||
-      view->left.size() != view->right.size()) {
-    return;
-  }
-  const cv::Size frame = view->left.size();
-  const double rf = ViewPatchGeometry(frame, options_).resize_factor;
-  view->left = WorkingFrame(view->left, rf);
-  view->right = WorkingFrame(view->right, rf);
-  view->frame_size = frame;
+cv::Mat DPScaleEstimator::ReduceFrame(const cv::Mat& frame) const {
+  if (frame.empty()) return frame;  // AddView refuses it, naming the view
+  return WorkingFrame(frame,
+                      ViewPatchGeometry(frame.size(), options_).resize_factor);
 }
 
 bool DPScaleEstimator::LinearStage(

@@ -48,7 +48,7 @@ struct DPView {
   cv::Mat left, right;
   // Empty: left and right are the frames as captured. Otherwise their size
   // as captured, and left/right already reduced to the working resolution
-  // (DPScaleEstimator::ReduceFrames).
+  // (DPScaleEstimator::ReduceFrame).
   cv::Size frame_size;
   DPFrameInfo frames;
   DPLensData lens;
@@ -456,13 +456,14 @@ class DPScaleEstimator {
   // depth) are recorded, not thrown.
   DPViewSummary AddView(const DPView& view);
 
-  // Reduces the view's frames to the working resolution AddView searches
-  // them at (ViewPatchGeometry; frame_size records the size they had), as
-  // AddView would: AddView gives the same result for the view either way.
-  // A reader calls it on its own thread (it reads only the options) so that
-  // views waiting to be searched hold their working frames alone (a quarter
-  // of a 3000 x 2000 view's). Frames AddView would refuse stay as they are.
-  void ReduceFrames(DPView* view) const;
+  // A view's frame (left or right, as captured) reduced to the working
+  // resolution AddView searches it at (ViewPatchGeometry of its size), as
+  // AddView would reduce it: a view whose frames a reader reduced (with
+  // DPView::frame_size their size as captured) gives AddView's result for
+  // the view as captured. A reader calls it on its own thread (it reads only
+  // the options) so that views waiting hold their working frames alone (a
+  // quarter of a 3000 x 2000 view's).
+  cv::Mat ReduceFrame(const cv::Mat& frame) const;
 
   int NumViews() const;
 

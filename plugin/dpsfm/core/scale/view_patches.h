@@ -39,7 +39,7 @@ cv::Size FrameSize(const DPView& view);
 cv::Mat WorkingFrame(const cv::Mat& frame, double resize_factor);
 
 // The view on the working frame (WorkingFrame, or the view's frames when
-// DPScaleEstimator::ReduceFrames reduced them already) and its grey
+// a reader reduced them already: DPScaleEstimator::ReduceFrame) and its grey
 // versions; sx, sy: working / frame pixels per axis (exact for the rounded
 // size).
 struct WorkingView {
