@@ -15,8 +15,10 @@
 #    intensity stage), with auto, the translating disk and the camera's
 #    profile as `make real` calibrates it from the flat planes;
 #  - the 300-view workspace of `make large` (3000x2000, the view budget),
-#    with auto and the translating disk (its generated views have no
-#    calibration captures).
+#    with auto, the translating disk and the measured-kernel profile of
+#    tabletop_50f2.8 (the same generated camera and lens, 50 mm f/2.8, whose
+#    captures are 1200x800: the profile carries over to the 3000x2000
+#    frames of the same sensor), when that scene's profile has been made.
 # Each run's figures are the median of DPSFM_COST_RUNS runs (3): decode
 # (the report's `read`: reading and decoding the frames, in the read-ahead
 # thread), blur search, profile fit, linear, intensity, the estimate's
@@ -142,6 +144,11 @@ for ((i = 1; i <= runs; ++i)); do
   if [ -n "$large_ws" ]; then
     run "large300.auto.$i" "$large_ws"
     run "large300.translating_disk.$i" "$large_ws" --DPScaleEstimator.psf_model translating_disk
+    large_profile="$out/scenes/tabletop_50f2.8/camera.dpsf"
+    if [ -f "$large_profile" ]; then
+      run "large300.measured_kernels.$i" "$large_ws" --DPScaleEstimator.psf_model calibrated \
+        --DPScaleEstimator.psf_path "$large_profile"
+    fi
   fi
   log "round $i of $runs done ($((SECONDS - start)) s)"
 done
@@ -175,7 +182,7 @@ def median(values):
 
 print("\nMedians of %d runs (seconds; decode = reading and decoding the frames,"
       " overlapped with the blur search but for `wait`):\n" % runs)
-print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | total | after | wall | peak RSS (GB) | total / decode | scale |")
+print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | total | after | wall | peak RSS (GiB) | total / decode | scale |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 # Sums per group of scenes: the accuracy scenes, the real R6 II ones.
 sums = collections.defaultdict(lambda: collections.defaultdict(lambda: [0.0, 0.0]))
