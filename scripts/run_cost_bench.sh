@@ -21,10 +21,11 @@
 #    frames of the same sensor), when that scene's profile has been made.
 # Each run's figures are the median of DPSFM_COST_RUNS runs (3): decode
 # (the report's `read`: reading and decoding the frames, in the read-ahead
-# thread), blur search, profile fit, linear, intensity, the estimate's
-# total (the report's `total`), after it (wall minus total: plots, report,
-# start-up), wall, peak RSS, and total / decode. Prints tables; gates
-# nothing.
+# thread), blur search, profile fit, linear, intensity (the final
+# estimate's), the view budget's checkpoints (their estimates in sum), the
+# estimate's total (the report's `total`), after it (wall minus total:
+# plots, report, start-up), wall, peak RSS, and total / decode. Prints
+# tables; gates nothing.
 #
 # Environment: DPSFM_COST_SCENES (accuracy scene ids, default below),
 # DPSFM_COST_RUNS (3), DPSFM_COST_REAL=0 (skip the real scenes; they are
@@ -172,6 +173,11 @@ for name in sorted(os.listdir(runs_dir)):
     for key in ["read", "read_wait", "blur", "psf_fit", "linear", "intensity", "total"]:
         figures[key] = t.get(key, float("nan"))
     figures["after"] = figures["wall"] - figures["total"]
+    # The view budget's checkpoints (each a whole estimate: profile fit,
+    # linear, intensity); the profile fit and intensity columns are the
+    # final estimate's alone.
+    figures["checkpoints"] = sum(c.get("seconds", float("nan")) for c in
+                                 r.get("view_budget", {}).get("checkpoints", []))
     figures["views"] = r.get("view_budget", {}).get("views_visited") or len(r.get("views", []))
     figures["scale"] = r.get("scale") if r.get("success") else None
     rows.setdefault((scene, path), []).append(figures)
@@ -182,8 +188,8 @@ def median(values):
 
 print("\nMedians of %d runs (seconds; decode = reading and decoding the frames,"
       " overlapped with the blur search but for `wait`):\n" % runs)
-print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | total | after | wall | peak RSS (GiB) | total / decode | scale |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("| scene | path | views | decode | wait | blur search | profile fit | linear | intensity | checkpoints | total | after | wall | peak RSS (GiB) | total / decode | scale |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 # Sums per group of scenes: the accuracy scenes, the real R6 II ones.
 sums = collections.defaultdict(lambda: collections.defaultdict(lambda: [0.0, 0.0]))
 totals = collections.defaultdict(lambda: collections.defaultdict(dict))
@@ -194,17 +200,17 @@ for (scene, path), figures in rows.items():
     if len(scales) > 1:
         scale += " (runs differ)"
     ratio = m["total"] / m["read"] if m["read"] > 0 else float("nan")
-    print("| %s | %s | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s |" % (
+    print("| %s | %s | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s |" % (
         scene, path, m["views"], m["read"], m["read_wait"], m["blur"], m["psf_fit"],
-        m["linear"], m["intensity"], m["total"], m["after"], m["wall"], m["rss"],
-        ratio, scale))
+        m["linear"], m["intensity"], m["checkpoints"], m["total"], m["after"], m["wall"],
+        m["rss"], ratio, scale))
     if not scene.startswith("large"):
         group = "Real R6 II scenes" if scene.startswith("r6m2_") else "Accuracy scenes"
         sums[group][path][0] += m["total"]
         sums[group][path][1] += m["read"]
         totals[group][scene][path] = m["total"]
     else:
-        print("|  | per visited view | | | | | | | | | | %.2f | %.3f | | |" % (
+        print("|  | per visited view | | | | | | | | | | | %.2f | %.3f | | |" % (
             m["wall"] / max(m["views"], 1), m["rss"] / max(m["views"], 1)))
 for group, group_sums in sums.items():
     print("\n%s, in sum: " % group + "; ".join(

@@ -80,6 +80,14 @@ TEST(ViewBudgetCommand, StopsCapsOrVisitsAll) {
   EXPECT_EQ(visited + static_cast<int>(r.at("skipped").size()), 8);
   ASSERT_GE(r.at("checkpoints").size(), 1u);
   EXPECT_EQ(r.at("checkpoints")[0].at("views").get<int>(), 4);
+  // Each checkpoint's estimate is timed, within the run's total.
+  double checkpoint_seconds = 0;
+  for (const auto& c : r.at("checkpoints")) {
+    EXPECT_GT(c.at("seconds").get<double>(), 0) << c.dump();
+    checkpoint_seconds += c.at("seconds").get<double>();
+  }
+  EXPECT_LT(checkpoint_seconds,
+            rule.report.at("timings").at("total").get<double>());
   // Visited in the spread order: every image once, the first one first.
   std::set<std::string> names;
   for (const auto& n : r.at("visited")) names.insert(n.get<std::string>());

@@ -144,6 +144,7 @@ ScaleRun DPScaleController::Run() {
       checkpoint.scale = provisional.scale;
       checkpoint.ci_low = provisional.scale_ci_low;
       checkpoint.ci_high = provisional.scale_ci_high;
+      checkpoint.seconds = check_timer.ElapsedSeconds();
       std::string why;
       const bool stop = budget.Record(checkpoint, &why);
       if (provisional.success) {
@@ -151,11 +152,11 @@ ScaleRun DPScaleController::Run() {
                   << provisional.scale << " (95% interval "
                   << provisional.scale_ci_low << " .. "
                   << provisional.scale_ci_high << "; "
-                  << Seconds(check_timer.ElapsedSeconds()) << ")";
+                  << Seconds(checkpoint.seconds) << ")";
       } else {
         LOG(INFO) << "  after " << k + 1 << " views: no scale yet ("
                   << RefusalLine(provisional.refusal) << "; "
-                  << Seconds(check_timer.ElapsedSeconds()) << ")";
+                  << Seconds(checkpoint.seconds) << ")";
       }
       if (stop) {
         // The final estimate would repeat this one (the same views).
@@ -211,7 +212,8 @@ nlohmann::json ViewBudgetReport(const ScaleRun& run,
   out["stop_reason"] = run.stop_reason;
   nlohmann::json checkpoints = nlohmann::json::array();
   for (const Checkpoint& c : run.checkpoints) {
-    nlohmann::json entry = {{"views", c.views}, {"success", c.success}};
+    nlohmann::json entry = {
+        {"views", c.views}, {"success", c.success}, {"seconds", c.seconds}};
     if (c.success) {
       entry["scale"] = c.scale;
       entry["scale_ci"] = {c.ci_low, c.ci_high};

@@ -52,6 +52,7 @@ struct Checkpoint {
   int views = 0;
   bool success = false;
   double scale = 0, ci_low = 0, ci_high = 0;
+  double seconds = 0;  // the estimate's time (the caller's measurement)
 };
 
 class ViewBudget {
