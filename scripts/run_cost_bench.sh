@@ -84,23 +84,24 @@ if [ "${DPSFM_COST_REAL:-1}" = 1 ]; then
   else
     realdp="$realdp/canon_r6m2_rf50"
     real="$out/real"
-    key="$realdp; --recorded_focus_m 1.0"
+    focus_m=1.0  # the captures' recorded focus
+    for scene in "${real_scenes[@]}"; do real_names+=("r6m2_${scene//\//_}"); done
+    key="$realdp; --recorded_focus_m $focus_m"
     if [ "$(cat "$real.options" 2>/dev/null)" != "$key" ]; then
       rm -rf "$real" "$real.options"
       log "calibrating the R6 II profile from $realdp/flat ..."
       realdp_calibration_set "$realdp" "$out/bin/dpsfm_make_realdp_workspace" "$real/calibration" srgb8
       realdp_calibrate "$calibrator" "$real/calibration" \
         || die "calibration failed: $real/calibration/log"
-      for scene in "${real_scenes[@]}"; do
-        name="r6m2_${scene//\//_}"
+      for k in "${!real_scenes[@]}"; do
+        scene="${real_scenes[k]}" name="${real_names[k]}"
         "$out/bin/dpsfm_make_realdp_workspace" --capture_path "$realdp/$scene" \
-          --output_path "$real/$name" --name "${scene//\//_}" \
-          --recorded_focus_m 1.0 >"$real/$name.make.log" 2>&1 \
+          --output_path "$real/$name" --name "${name#r6m2_}" \
+          --recorded_focus_m "$focus_m" >"$real/$name.make.log" 2>&1 \
           || die "workspace failed: $real/$name.make.log"
       done
       echo "$key" >"$real.options"
     fi
-    for scene in "${real_scenes[@]}"; do real_names+=("r6m2_${scene//\//_}"); done
   fi
 fi
 large_ws=""
