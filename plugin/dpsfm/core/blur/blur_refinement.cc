@@ -57,6 +57,7 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
       offset_(offset),
       sigma2_hp_(sigma2_hp),
       inv_m_(1.0 / t.num_interior),
+      spectra_(t.grid->NumSpectrumClasses()),
       evals_(t.num_nodes) {
   left_positive_ = gl_ + offset_;
   right_positive_ = gr_ + offset_;
@@ -65,21 +66,23 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
 void BlurRefinement::Evaluate(int n) {
   NodeEval& e = evals_[n];
   if (e.done) return;
-  if (spectra_stale_) TransformViews();
-  cv::mulSpectrums(spec_left_, t_.grid->RightSpectrum(n), product_left_, 0);
-  cv::mulSpectrums(spec_right_, t_.grid->LeftSpectrum(n), product_right_, 0);
+  const DPKernelGrid& grid = *t_.grid;
+  const int c = grid.SpectrumClassOf(n);
+  const ViewSpectra& views = TransformedViews(c);
+  cv::mulSpectrums(views.left, grid.RightSpectrum(n), product_left_, 0);
+  cv::mulSpectrums(views.right, grid.LeftSpectrum(n), product_right_, 0);
   product_left_ -= product_right_;
+  const cv::Rect interior = grid.InteriorOf(c);
   cv::dft(product_left_,
           residual_image_,
           cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-          t_.interior.y + t_.interior.height);
+          interior.y + interior.height);
   e.residual.resize(t_.num_interior);
   float* out = e.residual.data();
-  for (int y = 0; y < t_.interior.height; ++y) {
-    const float* row =
-        residual_image_.ptr<float>(t_.interior.y + y) + t_.interior.x;
-    std::copy(row, row + t_.interior.width, out);
-    out += t_.interior.width;
+  for (int y = 0; y < interior.height; ++y) {
+    const float* row = residual_image_.ptr<float>(interior.y + y) + interior.x;
+    std::copy(row, row + interior.width, out);
+    out += interior.width;
   }
   e.energy = Dot(e.residual, e.residual);
   e.done = true;
@@ -201,18 +204,17 @@ void BlurRefinement::EqualiseGain(double radius) {
   right_positive_.convertTo(gr, CV_32FC1, 1.0, -offset_);
   gl_ = gl;
   gr_ = gr;
-  spectra_stale_ = true;
+  for (ViewSpectra& views : spectra_) views.fresh = false;
 }
 
-void BlurRefinement::TransformViews() {
-  const int width = t_.patch_size.width, height = t_.patch_size.height;
-  cv::Mat pl = cv::Mat::zeros(t_.dft_size, CV_32FC1);
-  cv::Mat pr = cv::Mat::zeros(t_.dft_size, CV_32FC1);
-  gl_.copyTo(pl(cv::Rect(0, 0, width, height)));
-  gr_.copyTo(pr(cv::Rect(0, 0, width, height)));
-  cv::dft(pl, spec_left_, 0, height);
-  cv::dft(pr, spec_right_, 0, height);
-  spectra_stale_ = false;
+const BlurRefinement::ViewSpectra& BlurRefinement::TransformedViews(int c) {
+  ViewSpectra& views = spectra_[c];
+  if (!views.fresh) {
+    views.left = t_.grid->TransformInput(gl_, t_.border, c);
+    views.right = t_.grid->TransformInput(gr_, t_.border, c);
+    views.fresh = true;
+  }
+  return views;
 }
 
 }  // namespace internal

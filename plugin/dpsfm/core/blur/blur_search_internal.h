@@ -145,10 +145,15 @@ class BlurRefinement {
     double next_dot = std::numeric_limits<double>::infinity();
   };
 
-  // The views' spectra, when an evaluation needs them: the search
-  // equalises the gain before its first evaluation, so transforming in the
-  // constructor would be wasted.
-  void TransformViews();
+  // The views' spectra for one class of the kernel grid's nodes, when an
+  // evaluation needs them: the search equalises the gain before its first
+  // evaluation, so transforming in the constructor would be wasted, and a
+  // search evaluates nodes of one or two classes.
+  struct ViewSpectra {
+    bool fresh = false;  // of gl_, gr_ as they are
+    cv::Mat left, right;
+  };
+  const ViewSpectra& TransformedViews(int c);
 
   const BlurTables& t_;
   const BlurEstimationOptions& options_;
@@ -157,8 +162,7 @@ class BlurRefinement {
   const double offset_;
   const double sigma2_hp_;
   const double inv_m_;
-  cv::Mat spec_left_, spec_right_;
-  bool spectra_stale_ = true;  // gl_, gr_ changed since TransformViews
+  std::vector<ViewSpectra> spectra_;  // per spectrum class of the grid
   std::vector<NodeEval> evals_;
   cv::Mat product_left_, product_right_, residual_image_;
 };

@@ -27,25 +27,18 @@ std::vector<float> TukeyWindow(int length, int taper) {
 
 using internal::BlurTables;
 
-// The kernel grid and the patch's interior. The grid's bound is
-// max_radius_px rounded up to a multiple of the step. Spectra need a DFT
-// size >= the patch only: every interior output reads inputs within
-// `border` of itself, inside the patch, so circular wrap-around never
-// reaches it.
+// The patch's interior and the kernel grid with its spectra for it. The
+// grid's bound is max_radius_px rounded up to a multiple of the step, the
+// border the reach of its kernels there. The coarse search transforms the
+// whole windowed patch: its DFT size is >= the patch.
 void SetGrid(const DPPsfModel& psf,
              const BlurEstimationOptions& options,
              const cv::Size& patch_size,
              BlurTables* t) {
   t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
                          cv::getOptimalDFTSize(patch_size.height));
-  t->grid.reset(new DPKernelGrid(
-      psf, options.grid_step_px, options.max_radius_px, t->dft_size));
-  const DPKernelGrid& grid = *t->grid;
-  t->step = grid.Step();
-  t->half_nodes = grid.HalfNodes();
-  t->num_nodes = grid.NumNodes();
-  t->bound = grid.Bound();
-  t->border = grid.Border();
+  t->bound = DPKernelGridBound(options.max_radius_px, options.grid_step_px);
+  t->border = psf.KernelRadius(t->bound);
   DPSFM_CHECK(patch_size.width >= 2 * t->border + 8 &&
               patch_size.height >= 2 * t->border + 8)
       << "patch " << patch_size.width << "x" << patch_size.height
@@ -56,6 +49,13 @@ void SetGrid(const DPPsfModel& psf,
                          patch_size.width - 2 * t->border,
                          patch_size.height - 2 * t->border);
   t->num_interior = t->interior.area();
+  t->grid.reset(new DPKernelGrid(
+      psf, options.grid_step_px, options.max_radius_px, t->interior.size()));
+  const DPKernelGrid& grid = *t->grid;
+  DPSFM_CHECK(grid.Bound() == t->bound && grid.Border() == t->border);
+  t->step = grid.Step();
+  t->half_nodes = grid.HalfNodes();
+  t->num_nodes = grid.NumNodes();
 }
 
 // Frequencies of the coarse band, on the half spectrum u = 0..nc/2.

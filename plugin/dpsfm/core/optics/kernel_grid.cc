@@ -34,11 +34,22 @@ double DPKernelGrid::BoundFor(double step_px, double max_radius_px) {
                   static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9)));
 }
 
+int FastDftSize(int n) {
+  DPSFM_CHECK_GT(n, 0);
+  int best = 0;
+  for (const int odd : {1, 3, 5, 9, 25}) {
+    int size = odd;
+    while (size < n) size *= 2;
+    if (best == 0 || size < best) best = size;
+  }
+  return best;
+}
+
 DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
                            double step_px,
                            double max_radius_px,
-                           const cv::Size& dft_size)
-    : step_(step_px), dft_size_(dft_size) {
+                           const cv::Size& interior_size)
+    : step_(step_px), interior_size_(interior_size) {
   DPSFM_CHECK(step_px > 0 && std::isfinite(step_px))
       << "kernel grid step must be positive, got " << step_px;
   DPSFM_CHECK(max_radius_px >= 0 && std::isfinite(max_radius_px))
@@ -53,10 +64,11 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   right_energy_.resize(num_nodes_);
   left_cross_.assign(num_nodes_, 0.0);
   right_cross_.assign(num_nodes_, 0.0);
-  const bool spectra = dft_size.area() > 0;
+  const bool spectra = interior_size.area() > 0;
   if (spectra) {
     left_spectra_.resize(num_nodes_);
     right_spectra_.resize(num_nodes_);
+    class_of_.resize(num_nodes_);
   }
   cv::Mat previous_left, previous_right;
   for (int n = 0; n < num_nodes_; ++n) {
@@ -82,14 +94,59 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
     }
     previous_left = left;
     previous_right = right;
-    if (spectra) {
-      DPSFM_CHECK(dft_size.width > 2 * border_ && dft_size.height > 2 * border_)
-          << "DFT size " << dft_size.width << "x" << dft_size.height
-          << " too small for kernels of radius " << border_;
-      cv::dft(WrapKernel(kernels.left, dft_size), left_spectra_[n]);
-      cv::dft(WrapKernel(kernels.right, dft_size), right_spectra_[n]);
-    }
   }
+  if (spectra) TabulateSpectra();
+}
+
+// Each node's class by the DFT size its interior and reach need (the reach
+// grows with |r|, so a class is a band of |r|), then the spectra at it.
+void DPKernelGrid::TabulateSpectra() {
+  for (int n = 0; n < num_nodes_; ++n) {
+    const int reach = Reach(n);
+    const cv::Size dft(FastDftSize(interior_size_.width + 2 * reach),
+                       FastDftSize(interior_size_.height + 2 * reach));
+    auto it = std::find_if(
+        classes_.begin(), classes_.end(), [&](const SpectrumClass& c) {
+          return c.dft_size == dft;
+        });
+    if (it == classes_.end()) {
+      classes_.push_back(SpectrumClass{dft, reach});
+      it = classes_.end() - 1;
+    }
+    it->reach = std::max(it->reach, reach);
+    class_of_[n] = static_cast<int>(it - classes_.begin());
+  }
+  for (int n = 0; n < num_nodes_; ++n) {
+    const cv::Size& dft = classes_[class_of_[n]].dft_size;
+    cv::dft(WrapKernel(left_kernels_[n], dft), left_spectra_[n]);
+    cv::dft(WrapKernel(right_kernels_[n], dft), right_spectra_[n]);
+  }
+}
+
+cv::Mat DPKernelGrid::TransformInput(const cv::Mat& patch,
+                                     int border,
+                                     int c) const {
+  const SpectrumClass& k = classes_[c];
+  DPSFM_CHECK(patch.type() == CV_32FC1 && border >= k.reach &&
+              patch.cols == interior_size_.width + 2 * border &&
+              patch.rows == interior_size_.height + 2 * border)
+      << "a " << patch.cols << "x" << patch.rows << " patch with border "
+      << border << " for an interior of " << interior_size_.width << "x"
+      << interior_size_.height << " and kernels reaching " << k.reach << " px";
+  const cv::Rect input(border - k.reach,
+                       border - k.reach,
+                       interior_size_.width + 2 * k.reach,
+                       interior_size_.height + 2 * k.reach);
+  cv::Mat padded = cv::Mat::zeros(k.dft_size, CV_32FC1);
+  patch(input).copyTo(padded(cv::Rect(cv::Point(0, 0), input.size())));
+  cv::Mat spectrum;
+  cv::dft(padded, spectrum, 0, input.height);
+  return spectrum;
+}
+
+cv::Rect DPKernelGrid::InteriorOf(int c) const {
+  const int reach = classes_[c].reach;
+  return cv::Rect(cv::Point(reach, reach), interior_size_);
 }
 
 double DPKernelGridBound(double max_radius_px, double step_px) {

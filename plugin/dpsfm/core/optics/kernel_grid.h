@@ -1,7 +1,7 @@
 // The DP kernels of one DPPsfModel on a grid of signed radii, with their
-// spectra at one DFT size: the shared precomputation of every stage that
-// evaluates many patches at many radii (the blur search, the intensity
-// search).
+// spectra for convolving a patch's interior: the shared precomputation of
+// every stage that evaluates many patches at many radii (the blur search,
+// the intensity search).
 //
 // Node n holds r_n = (n - HalfNodes()) * Step(). Between two nodes a kernel
 // is interpolated linearly in r: K(r) = (1 - t) K(r_n) + t K(r_n+1). Its
@@ -13,6 +13,7 @@
 // of r for the translating disk.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -23,13 +24,24 @@ namespace dpsfm {
 
 class DPKernelGrid {
  public:
+  // Spectra for one interior size: node n's kernels reach Reach(n) pixels,
+  // so its convolution on the interior reads the interior and that reach
+  // around it; its spectra are taken at the DFT size of its class, the
+  // fastest size that holds the interior and the largest reach of the
+  // class's nodes (a node near focus transforms a third of the pixels a
+  // node at the bound does).
+  struct SpectrumClass {
+    cv::Size dft_size;
+    int reach = 0;
+  };
+
   // Nodes cover [-bound, bound] with bound = max_radius_px rounded UP to a
-  // multiple of step_px. dft_size: the (zero-padded) size at which spectra
-  // are taken; empty = no spectra.
+  // multiple of step_px. interior_size: the part of a patch whose
+  // convolution the spectra give; empty = no spectra.
   DPKernelGrid(const DPPsfModel& psf,
                double step_px,
                double max_radius_px,
-               const cv::Size& dft_size);
+               const cv::Size& interior_size);
 
   // The grid's bound for a step and a search bound, without building it.
   static double BoundFor(double step_px, double max_radius_px);
@@ -41,7 +53,10 @@ class DPKernelGrid {
   double Radius(int node) const { return (node - half_nodes_) * step_; }
   // psf.KernelRadius(Bound()): the border a patch needs for every node.
   int Border() const { return border_; }
-  const cv::Size& DftSize() const { return dft_size_; }
+  // Half the size of node n's kernels: how far its convolution reaches.
+  int Reach(int node) const {
+    return std::max(left_kernels_[node].rows, left_kernels_[node].cols) / 2;
+  }
 
   // Interval of r (clamped to [-Bound(), Bound()]): r = (1 - *t) r_node +
   // *t r_(node+1) with node in [0, NumNodes() - 2] and t in [0, 1].
@@ -50,11 +65,22 @@ class DPKernelGrid {
   const cv::Mat& LeftKernel(int node) const { return left_kernels_[node]; }
   const cv::Mat& RightKernel(int node) const { return right_kernels_[node]; }
   // CCS-packed real DFTs (cv::dft default) of the kernels wrapped around the
-  // origin (WrapKernel): multiplying with the DFT of a patch zero-padded to
-  // DftSize() convolves it, exactly wherever the kernel's reach stays inside
-  // the patch.
+  // origin (WrapKernel), at the DFT size of the node's class: multiplied
+  // with TransformInput of a patch for that class, and transformed back,
+  // they give the true convolution on the interior (InteriorOf).
   const cv::Mat& LeftSpectrum(int node) const { return left_spectra_[node]; }
   const cv::Mat& RightSpectrum(int node) const { return right_spectra_[node]; }
+  int NumSpectrumClasses() const { return static_cast<int>(classes_.size()); }
+  int SpectrumClassOf(int node) const { return class_of_[node]; }
+  const SpectrumClass& SpectrumClassAt(int c) const { return classes_[c]; }
+  // The spectrum of class c's input: the interior of `patch` (at `border`
+  // from its edges, border >= the class's reach) and the class's reach
+  // around it, zero-padded to the class's DFT size.
+  cv::Mat TransformInput(const cv::Mat& patch, int border, int c) const;
+  // Where the interior lies in the inverse transform of a product with a
+  // class c spectrum; only the rows up to its last one are needed
+  // (cv::dft's nonzero_rows).
+  cv::Rect InteriorOf(int c) const;
 
   // |h_l(n)|^2, |h_r(n)|^2 and, for n < NumNodes() - 1, <h_l(n), h_l(n+1)>,
   // <h_r(n), h_r(n+1)>: white noise of variance sigma^2 convolved with an
@@ -66,11 +92,15 @@ class DPKernelGrid {
   double RightCross(int node) const { return right_cross_[node]; }
 
  private:
+  void TabulateSpectra();
+
   double step_ = 0;
   int half_nodes_ = 0;
   int num_nodes_ = 0;
   int border_ = 0;
-  cv::Size dft_size_;
+  cv::Size interior_size_;
+  std::vector<SpectrumClass> classes_;
+  std::vector<int> class_of_;
   std::vector<cv::Mat> left_kernels_, right_kernels_;
   std::vector<cv::Mat> left_spectra_, right_spectra_;
   std::vector<double> left_energy_, right_energy_;
@@ -80,6 +110,12 @@ class DPKernelGrid {
 // The bound of a DPKernelGrid(psf, step_px, max_radius_px, ...): max_radius_px
 // rounded up to a multiple of step_px.
 double DPKernelGridBound(double max_radius_px, double step_px);
+
+// The DFT size >= n that cv::dft transforms fastest in practice: 2^a times
+// 1, 3, 5, 9 or 25. cv::getOptimalDFTSize's 45, 75 or 81 (several odd
+// factors) cost 1.2-2.2x what the next such size does (measured with
+// OpenCV 4.6 on 40-160 px).
+int FastDftSize(int n);
 
 // (1 - t)^2 a + 2 t (1 - t) ab + t^2 b: the squared norm of
 // (1 - t) x + t y given |x|^2 = a, <x, y> = ab, |y|^2 = b.

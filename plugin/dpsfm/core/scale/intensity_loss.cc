@@ -250,10 +250,9 @@ std::vector<int> IntervalsOf(const DPKernelGrid& grid,
 }
 
 // Adds to p->stats the nodes of the given intervals that are not ready yet,
-// from the patch's crops: per channel one forward DFT of each view, then per
-// node one product and inverse DFT per view (only the interior is kept; the
-// grid's kernels fit the crop's border, so circular wrap-around never
-// reaches it).
+// from the patch's crops: per spectrum class of the nodes (kernel_grid.h)
+// and channel one forward DFT of each view, then per node one product and
+// inverse DFT per view (only the interior is kept).
 void AddIntervals(const IntensityPatch& patch,
                   const std::vector<int>& intervals,
                   Prepared* p) {
@@ -270,39 +269,35 @@ void AddIntervals(const IntensityPatch& patch,
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
 
   const DPKernelGrid& grid = *p->grid;
-  const cv::Size dft = grid.DftSize();
-  const cv::Mat left = ToFloat(patch.left), right = ToFloat(patch.right);
-  const int channels = left.channels();
-  const cv::Rect interior(p->border,
-                          p->border,
-                          left.cols - 2 * p->border,
-                          left.rows - 2 * p->border);
   std::vector<cv::Mat> left_channels, right_channels;
-  cv::split(left, left_channels);
-  cv::split(right, right_channels);
-  std::vector<cv::Mat> spec_left(channels), spec_right(channels);
-  cv::Mat padded = cv::Mat::zeros(dft, CV_32FC1);
-  const cv::Rect area(0, 0, left.cols, left.rows);
-  for (int c = 0; c < channels; ++c) {
-    left_channels[c].copyTo(padded(area));
-    cv::dft(padded, spec_left[c], 0, left.rows);
-    right_channels[c].copyTo(padded(area));
-    cv::dft(padded, spec_right[c], 0, left.rows);
-  }
-  // Rows of the inverse transforms that are needed (up to the interior's
-  // last one).
-  const int output_rows = interior.y + interior.height;
+  cv::split(ToFloat(patch.left), left_channels);
+  cv::split(ToFloat(patch.right), right_channels);
+  const int channels = static_cast<int>(left_channels.size());
+  // Per class, the views' spectra per channel, when a node needs them.
+  std::vector<std::vector<cv::Mat>> spec_left(grid.NumSpectrumClasses()),
+      spec_right(grid.NumSpectrumClasses());
+  auto transformed = [&](int c) {
+    if (spec_left[c].empty()) {
+      for (int k = 0; k < channels; ++k) {
+        spec_left[c].push_back(
+            grid.TransformInput(left_channels[k], p->border, c));
+        spec_right[c].push_back(
+            grid.TransformInput(right_channels[k], p->border, c));
+      }
+    }
+  };
   std::vector<cv::Mat> previous_a(channels), previous_b(channels);
   int previous_node = -2;
   cv::Mat product, image;
   // The interior of a view's spectrum times a kernel's, back in space.
   auto blurred = [&](const cv::Mat& view_spectrum,
-                     const cv::Mat& kernel_spectrum) {
+                     const cv::Mat& kernel_spectrum,
+                     const cv::Rect& interior) {
     cv::mulSpectrums(view_spectrum, kernel_spectrum, product, 0);
     cv::dft(product,
             image,
             cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-            output_rows);
+            interior.y + interior.height);
     return cv::Mat(image(interior).clone());
   };
   for (const int n : nodes) {
@@ -310,9 +305,14 @@ void AddIntervals(const IntensityPatch& patch,
     entry.channel.assign(channels, NodeChannelStats());
     Prepared::NodeEntry* before =
         previous_node == n - 1 ? &p->stats[n - 1] : nullptr;
+    const int k = grid.SpectrumClassOf(n);
+    transformed(k);
+    const cv::Rect interior = grid.InteriorOf(k);
     for (int c = 0; c < channels; ++c) {
-      const cv::Mat a = blurred(spec_left[c], grid.RightSpectrum(n));
-      const cv::Mat b = blurred(spec_right[c], grid.LeftSpectrum(n));
+      const cv::Mat a =
+          blurred(spec_left[k][c], grid.RightSpectrum(n), interior);
+      const cv::Mat b =
+          blurred(spec_right[k][c], grid.LeftSpectrum(n), interior);
       NodeChannelStats& s = entry.channel[c];
       s.sum_a = cv::sum(a)[0];
       s.sum_b = cv::sum(b)[0];

@@ -123,8 +123,8 @@ void BuildKernelGrids(const std::vector<IntensityPatch>& patches,
             new DPKernelGrid(patch_psf,
                              options.grid_step_px,
                              supported,
-                             cv::Size(cv::getOptimalDFTSize(patch.left.cols),
-                                      cv::getOptimalDFTSize(patch.left.rows))));
+                             cv::Size(patch.left.cols - 2 * patch.border,
+                                      patch.left.rows - 2 * patch.border)));
       }
       it = out->grids.emplace(key, std::move(grid)).first;
     }

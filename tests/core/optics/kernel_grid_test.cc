@@ -1,0 +1,129 @@
+#include "dpsfm/core/optics/kernel_grid.h"
+
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "dpsfm/core/optics/dp_psf.h"
+
+namespace dpsfm {
+namespace {
+
+// True convolution of `image` with `kernel` (centred) at the pixels of
+// `rect`, by the definition: sum_d kernel(d) image(x - d).
+cv::Mat DirectConvolution(const cv::Mat& image,
+                          const cv::Mat& kernel,
+                          const cv::Rect& rect) {
+  const int cy = kernel.rows / 2, cx = kernel.cols / 2;
+  cv::Mat out(rect.size(), CV_64FC1);
+  for (int y = 0; y < rect.height; ++y) {
+    for (int x = 0; x < rect.width; ++x) {
+      double sum = 0;
+      for (int i = 0; i < kernel.rows; ++i) {
+        for (int j = 0; j < kernel.cols; ++j) {
+          sum += kernel.at<float>(i, j) *
+                 image.at<float>(rect.y + y - (i - cy), rect.x + x - (j - cx));
+        }
+      }
+      out.at<double>(y, x) = sum;
+    }
+  }
+  return out;
+}
+
+// The grid's convolution of the patch's interior with node n's right
+// kernel: the class's input spectrum times the node's, transformed back.
+cv::Mat GridConvolution(const DPKernelGrid& grid,
+                        const cv::Mat& patch,
+                        int border,
+                        int n) {
+  const int c = grid.SpectrumClassOf(n);
+  cv::Mat product, image;
+  cv::mulSpectrums(
+      grid.TransformInput(patch, border, c), grid.RightSpectrum(n), product, 0);
+  const cv::Rect interior = grid.InteriorOf(c);
+  cv::dft(product,
+          image,
+          cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
+          interior.y + interior.height);
+  cv::Mat out;
+  image(interior).convertTo(out, CV_64FC1);
+  return out;
+}
+
+TEST(FastDftSize, PowersOfTwoTimesFewOddFactors) {
+  EXPECT_EQ(FastDftSize(1), 1);
+  EXPECT_EQ(FastDftSize(7), 8);
+  EXPECT_EQ(FastDftSize(26), 32);
+  EXPECT_EQ(FastDftSize(33), 36);
+  EXPECT_EQ(FastDftSize(45), 48);  // cv::getOptimalDFTSize: 45
+  EXPECT_EQ(FastDftSize(61), 64);  // 64, not 72 or 75
+  EXPECT_EQ(FastDftSize(73), 80);  // cv::getOptimalDFTSize: 75
+  EXPECT_EQ(FastDftSize(81), 96);  // cv::getOptimalDFTSize: 81
+  EXPECT_EQ(FastDftSize(97), 100);
+  for (int n = 1; n <= 300; ++n) {
+    const int size = FastDftSize(n);
+    ASSERT_GE(size, n);
+    int odd = size;
+    while (odd % 2 == 0) odd /= 2;
+    EXPECT_TRUE(odd == 1 || odd == 3 || odd == 5 || odd == 9 || odd == 25)
+        << n << " -> " << size;
+  }
+}
+
+// Every node's spectra convolve the interior exactly, whatever its class,
+// for a patch with the grid's own border and for one with a wider border
+// (the intensity stage's stored crops); nodes near focus use smaller
+// transforms than nodes at the bound.
+TEST(DPKernelGrid, EachClassConvolvesTheInteriorExactly) {
+  const TranslatingDiskPsf psf;
+  const cv::Size interior(33, 29);
+  const DPKernelGrid grid(psf, 0.25, 11, interior);
+  ASSERT_GT(grid.NumSpectrumClasses(), 2);
+  const int zero = grid.HalfNodes();
+  const int last = grid.NumNodes() - 1;
+  EXPECT_LT(grid.SpectrumClassAt(grid.SpectrumClassOf(zero)).dft_size.area(),
+            grid.SpectrumClassAt(grid.SpectrumClassOf(last)).dft_size.area());
+  for (int n = 0; n < grid.NumNodes(); ++n) {
+    const DPKernelGrid::SpectrumClass& c =
+        grid.SpectrumClassAt(grid.SpectrumClassOf(n));
+    EXPECT_GE(c.reach, grid.Reach(n));
+    EXPECT_LE(interior.width + 2 * c.reach, c.dft_size.width);
+    EXPECT_LE(interior.height + 2 * c.reach, c.dft_size.height);
+    EXPECT_EQ(grid.RightSpectrum(n).size(), c.dft_size);
+  }
+  cv::RNG rng(7);
+  for (const int border : {grid.Border(), grid.Border() + 9}) {
+    cv::Mat patch(
+        interior.height + 2 * border, interior.width + 2 * border, CV_32FC1);
+    rng.fill(patch, cv::RNG::UNIFORM, 0.0, 1.0);
+    const cv::Rect rect(border, border, interior.width, interior.height);
+    std::vector<int> nodes;
+    for (int n = 0; n < last; n += 5) nodes.push_back(n);
+    nodes.push_back(last);
+    for (const int n : nodes) {
+      const cv::Mat expected =
+          DirectConvolution(patch, grid.RightKernel(n), rect);
+      const cv::Mat got = GridConvolution(grid, patch, border, n);
+      ASSERT_EQ(got.size(), expected.size());
+      EXPECT_LT(cv::norm(got, expected, cv::NORM_INF), 1e-5)
+          << "node " << n << " (r = " << grid.Radius(n) << "), border "
+          << border;
+    }
+  }
+}
+
+TEST(DPKernelGrid, RefusesAPatchNarrowerThanTheKernelsReach) {
+  const DPKernelGrid grid(TranslatingDiskPsf(), 0.25, 6, cv::Size(20, 20));
+  const int last = grid.SpectrumClassOf(grid.NumNodes() - 1);
+  const int reach = grid.SpectrumClassAt(last).reach;
+  const cv::Mat patch =
+      cv::Mat::zeros(20 + 2 * (reach - 1), 20 + 2 * (reach - 1), CV_32FC1);
+  EXPECT_THROW(grid.TransformInput(patch, reach - 1, last),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dpsfm
