@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "dpsfm/core/optics/kernel_grid.h"
+#include "dpsfm/core/scale/intensity_loss.h"
 #include "tests/core/synthetic_dp.h"
 
 namespace dpsfm {
@@ -160,6 +162,47 @@ TEST(PairNoiseSigma, IgnoresSceneAndGain) {
       EXPECT_NEAR(s, 0.01, 0.0015) << "r=" << r;
     }
   }
+}
+
+// The kernel grid's node statistics give the loss to the exact path's
+// precision on a bright, low-contrast, slightly noisy patch, where the loss
+// is a small difference of large inner products: the exact path
+// (convolution at r, the difference squared and summed in double) is the
+// oracle. Inner products accumulated in float, or taken with the views'
+// mean in them, were off by percents here.
+TEST(IntensityGridLoss, MatchesTheExactLossOnABrightLowContrastPatch) {
+  const TranslatingDiskPsf psf;
+  IntensityPatch patch = RenderPatch(psf, 4.0, 0, 1.0, 77, 3);
+  cv::RNG rng(5);
+  for (cv::Mat* view : {&patch.left, &patch.right}) {
+    view->convertTo(*view, -1, 0.02, 0.84);  // mean ~0.85, contrast ~2 %
+    cv::Mat noise(view->size(), view->type());
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 2e-5);
+    *view += noise;
+  }
+  const intensity::Prepared exact = intensity::Prepare(patch, psf, kMaxRadius);
+  const DPKernelGrid grid(
+      psf, 0.25, kMaxRadius, cv::Size(kInterior, kInterior));
+  intensity::Prepared on_grid = exact;
+  on_grid.grid = &grid;
+  on_grid.max_abs_radius = grid.Bound();
+  const std::vector<double> radii = {-3.0, 1.5, 3.0, 3.75, 4.0, 4.25, 5.0, 7.0};
+  intensity::AddIntervals(patch, intensity::IntervalsOf(grid, radii), &on_grid);
+  const double far =
+      intensity::LossOfPrepared(exact, 7.0, psf, IntensityLoss::kL2);
+  for (const double r : radii) {
+    const double want =
+        intensity::LossOfPrepared(exact, r, psf, IntensityLoss::kL2);
+    const double got =
+        intensity::LossOfPrepared(on_grid, r, psf, IntensityLoss::kL2);
+    // Relative to the loss itself, and at the minimum (noise alone) to
+    // the loss away from it.
+    EXPECT_NEAR(got, want, 2e-3 * want + 1e-4 * far) << "r = " << r;
+  }
+  // The minimum is the noise floor, far below the misfit at 3 px.
+  EXPECT_LT(
+      intensity::LossOfPrepared(exact, 4.0, psf, IntensityLoss::kL2),
+      0.1 * intensity::LossOfPrepared(exact, 3.0, psf, IntensityLoss::kL2));
 }
 
 // Views with their own lens and focus; patches at several depths per view.

@@ -25,6 +25,24 @@ cv::Mat ToFloat(const cv::Mat& image) {
 
 double SumSquares(const cv::Mat& kernel) { return kernel.dot(kernel); }
 
+// Sum and inner product of continuous CV_32FC1 images accumulated in double
+// (cv::Mat::dot and cv::sum add floats in blocks: their 1e-6 relative error,
+// amplified by the cancellation in the loss, was percents of it).
+double SumD(const cv::Mat& a) {
+  const float* p = a.ptr<float>();
+  double sum = 0;
+  for (size_t i = 0; i < a.total(); ++i) sum += p[i];
+  return sum;
+}
+double DotD(const cv::Mat& a, const cv::Mat& b) {
+  const float* p = a.ptr<float>();
+  const float* q = b.ptr<float>();
+  double sum = 0;
+  for (size_t i = 0; i < a.total(); ++i)
+    sum += static_cast<double>(p[i]) * q[i];
+  return sum;
+}
+
 // What the L2-family losses need of one channel at one radius: the mean
 // squared difference of the cross-blurred patches normalised to mean 1,
 // their summed variance, and the normalisers al = n / sum(A), ar = n /
@@ -253,6 +271,14 @@ std::vector<int> IntervalsOf(const DPKernelGrid& grid,
 // from the patch's crops: per spectrum class of the nodes (kernel_grid.h)
 // and channel one forward DFT of each view, then per node one product and
 // inverse DFT per view (only the interior is kept).
+//
+// The loss is a small difference of these statistics (a patch's misfit
+// against its mean), so they are taken with the views' means removed: a
+// constant mu convolved with a kernel of sum s is mu s on the interior, so
+// A = mu_l s_r + a with a = (G_l - mu_l) * H_r, and every sum and inner
+// product of A and B follows in closed form from those of a and b, which
+// the float transforms give to their own precision rather than to that of
+// the mean.
 void AddIntervals(const IntensityPatch& patch,
                   const std::vector<int>& intervals,
                   Prepared* p) {
@@ -273,6 +299,13 @@ void AddIntervals(const IntensityPatch& patch,
   cv::split(ToFloat(patch.left), left_channels);
   cv::split(ToFloat(patch.right), right_channels);
   const int channels = static_cast<int>(left_channels.size());
+  std::vector<double> mean_left(channels), mean_right(channels);
+  for (int c = 0; c < channels; ++c) {
+    mean_left[c] = SumD(left_channels[c]) / left_channels[c].total();
+    mean_right[c] = SumD(right_channels[c]) / right_channels[c].total();
+    left_channels[c] -= mean_left[c];
+    right_channels[c] -= mean_right[c];
+  }
   // Per class, the views' spectra per channel, when a node needs them.
   std::vector<std::vector<cv::Mat>> spec_left(grid.NumSpectrumClasses()),
       spec_right(grid.NumSpectrumClasses());
@@ -286,8 +319,6 @@ void AddIntervals(const IntensityPatch& patch,
       }
     }
   };
-  std::vector<cv::Mat> previous_a(channels), previous_b(channels);
-  int previous_node = -2;
   cv::Mat product, image;
   // The interior of a view's spectrum times a kernel's, back in space.
   auto blurred = [&](const cv::Mat& view_spectrum,
@@ -300,6 +331,19 @@ void AddIntervals(const IntensityPatch& patch,
             interior.y + interior.height);
     return cv::Mat(image(interior).clone());
   };
+  // A view blurred at a node: the mean-removed part on the interior, its
+  // sum, and the constant the mean contributes.
+  struct BlurredView {
+    cv::Mat image;
+    double sum = 0, constant = 0;
+  };
+  const double count = p->num_interior;
+  auto inner = [count](const BlurredView& x, const BlurredView& y) {
+    return DotD(x.image, y.image) + x.constant * y.sum + y.constant * x.sum +
+           count * x.constant * y.constant;
+  };
+  std::vector<BlurredView> previous_a(channels), previous_b(channels);
+  int previous_node = -2;
   for (const int n : nodes) {
     Prepared::NodeEntry& entry = p->stats[n];
     entry.channel.assign(channels, NodeChannelStats());
@@ -308,23 +352,28 @@ void AddIntervals(const IntensityPatch& patch,
     const int k = grid.SpectrumClassOf(n);
     transformed(k);
     const cv::Rect interior = grid.InteriorOf(k);
+    const double sum_right_kernel = cv::sum(grid.RightKernel(n))[0];
+    const double sum_left_kernel = cv::sum(grid.LeftKernel(n))[0];
     for (int c = 0; c < channels; ++c) {
-      const cv::Mat a =
-          blurred(spec_left[k][c], grid.RightSpectrum(n), interior);
-      const cv::Mat b =
-          blurred(spec_right[k][c], grid.LeftSpectrum(n), interior);
+      BlurredView a, b;
+      a.image = blurred(spec_left[k][c], grid.RightSpectrum(n), interior);
+      b.image = blurred(spec_right[k][c], grid.LeftSpectrum(n), interior);
+      a.sum = SumD(a.image);
+      b.sum = SumD(b.image);
+      a.constant = mean_left[c] * sum_right_kernel;
+      b.constant = mean_right[c] * sum_left_kernel;
       NodeChannelStats& s = entry.channel[c];
-      s.sum_a = cv::sum(a)[0];
-      s.sum_b = cv::sum(b)[0];
-      s.aa = a.dot(a);
-      s.bb = b.dot(b);
-      s.ab = a.dot(b);
+      s.sum_a = a.sum + count * a.constant;
+      s.sum_b = b.sum + count * b.constant;
+      s.aa = inner(a, a);
+      s.bb = inner(b, b);
+      s.ab = inner(a, b);
       if (before != nullptr) {
         NodeChannelStats& prev = before->channel[c];
-        prev.aa_next = previous_a[c].dot(a);
-        prev.bb_next = previous_b[c].dot(b);
-        prev.ab_next = previous_a[c].dot(b);
-        prev.ba_next = previous_b[c].dot(a);
+        prev.aa_next = inner(previous_a[c], a);
+        prev.bb_next = inner(previous_b[c], b);
+        prev.ab_next = inner(previous_a[c], b);
+        prev.ba_next = inner(previous_b[c], a);
       }
       previous_a[c] = a;
       previous_b[c] = b;
