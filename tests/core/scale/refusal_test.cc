@@ -2,6 +2,7 @@
 // decide (the leading cause, a larger search bound and its size), and the
 // linear stage's view rejections. Their words are tested with
 // colmap/report/refusal_text (tests/colmap/report/refusal_text_test.cc).
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <utility>
@@ -200,6 +201,60 @@ TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
   // disk's kernels need a border of about 9 px: crops of ~49 px do not fit
   // twice into 90 px.
   EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur), 0);
+}
+
+// By hand, bound 5 px (cap 10), share 0.05: of 100 searched, two standard
+// errors above 5 % is 5 + 2 sqrt(0.05 x 0.95 / 100) x 100 = 9.36 patches.
+// The cap needs ceil(2 x 1.2 x E / 1.15) / 2 >= 10, E > 9.104 px.
+TEST(EarlyGrownSearchBound, OnlyWhenTheShareSettlesItAtTheCap) {
+  const DPPsfField field =
+      DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  BlurEstimationOptions blur;
+  const PatchGeometry g = PatchGeometryForRadius(5, 1);
+  const cv::Size frame(768, 512);
+  DPScaleOptions options;
+  auto early = [&](int searched, int at_bound, int growths, double blur_px) {
+    return EarlyGrownSearchBound(
+        searched, at_bound, growths, blur_px, g, frame, field, blur, options);
+  };
+  EXPECT_DOUBLE_EQ(early(100, 10, 0, 9.6), 10);
+  EXPECT_EQ(early(100, 9, 0, 9.6), 0);  // within two standard errors
+  EXPECT_DOUBLE_EQ(early(100, 10, 0, 9.2), 10);
+  EXPECT_EQ(early(100, 10, 0, 9.0), 0);  // 9.5 px: the cap not certain
+  EXPECT_EQ(early(100, 10, 0, 0), 0);    // no expected blur
+  EXPECT_EQ(early(100, 10, 1, 9.6), 0);  // growth spent
+  EXPECT_EQ(early(0, 0, 0, 9.6), 0);     // nothing searched
+  DPScaleOptions explicit_bound = options;
+  explicit_bound.max_radius_px = 5;
+  EXPECT_EQ(EarlyGrownSearchBound(
+                100, 50, 0, 20, g, frame, field, blur, explicit_bound),
+            0);
+  // The crops at 10 px do not fit twice into 90 px: the whole search
+  // decides (and keeps the bound).
+  EXPECT_EQ(EarlyGrownSearchBound(
+                100, 50, 0, 20, g, cv::Size(90, 90), field, blur, options),
+            0);
+}
+
+// Every fourth chosen patch, counted among the chosen ones; none when
+// fewer than 40 would be taken.
+TEST(GrowthSample, EveryFourthChosenPatch) {
+  ViewBlurSearch search;
+  search.chosen.assign(400, 0);
+  for (int k = 0; k < 400; k += 2) search.chosen[k] = 1;  // 200 chosen
+  const std::vector<char> sample = GrowthSample(search);
+  int taken = 0;
+  for (int k = 0; k < 400; ++k) {
+    EXPECT_EQ(sample[k], k % 8 == 0 ? 1 : 0) << k;
+    taken += sample[k];
+  }
+  EXPECT_EQ(taken, 50);
+  search.chosen.assign(159, 1);  // 40 taken
+  const std::vector<char> forty = GrowthSample(search);
+  EXPECT_EQ(std::count(forty.begin(), forty.end(), 1), 40);
+  search.chosen.assign(156, 1);  // 39: too few
+  const std::vector<char> none = GrowthSample(search);
+  EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
 }
 
 // The blur search's estimators are built once per (crop, bound) and kept

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "dpsfm/core/scale/view_patches.h"
 #include "tests/core/synthetic_dp.h"
 
 namespace dpsfm {
@@ -789,6 +790,68 @@ TEST(DPScaleEstimator, MalformedInputThrowsNamingTheView) {
 // depth maps give the truth it must reach), and the scale
 // that rests on all its patches holds the rendered truth. An explicit
 // bound is never grown.
+// A view's blur search in two parts (the growth sample, then the rest)
+// gives every patch the estimate one search of all gives: the early
+// growth decision costs nothing when the whole search decides.
+TEST(SearchChosenPatches, InPartsAsInOneSearch) {
+  const DPView view =
+      RenderCapture(TranslatingDiskPsf(),
+                    SixPositions(Lens(50, 4), Lens(50, 4), 40)[0],
+                    0.0731);
+  DPScaleOptions options;
+  options.resize_factor = 1;
+  const DPPsfField field =
+      DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  BlurEstimationOptions blur = options.blur;
+  PatchGeometry geometry = PatchGeometryForRadius(5, 1);
+  geometry.stride = 6;  // patches enough for a growth sample
+  blur.max_radius_px = geometry.max_radius_px;
+  const int border = BlurSearchBorder(field, blur, geometry.max_radius_px);
+  const WorkingView working = MakeWorkingView(view, 1);
+  const std::vector<PatchCandidate> candidates =
+      PatchesWithDepth(view, working, geometry, border, options);
+  BlurSearchEstimators cache(field);
+  auto search = [&](const std::vector<char>* which, ViewBlurSearch* out) {
+    SearchChosenPatches(working,
+                        candidates,
+                        field,
+                        blur,
+                        border,
+                        geometry.patch_size,
+                        options,
+                        &cache,
+                        which,
+                        out);
+  };
+  ViewBlurSearch whole =
+      ChooseViewSearch(working, candidates, border, true, options);
+  search(nullptr, &whole);
+  ViewBlurSearch parts =
+      ChooseViewSearch(working, candidates, border, true, options);
+  const std::vector<char> share = GrowthSample(parts);
+  const int num_share =
+      static_cast<int>(std::count(share.begin(), share.end(), 1));
+  ASSERT_GE(num_share, kMinGrowthSample);
+  search(&share, &parts);
+  EXPECT_EQ(parts.num_searched, num_share);
+  EXPECT_EQ(parts.chosen, whole.chosen);
+  search(nullptr, &parts);
+  search(nullptr, &parts);  // nothing left: searches nothing again
+  EXPECT_EQ(parts.num_searched, whole.num_searched);
+  EXPECT_EQ(parts.searched, whole.chosen);
+  int valid = 0;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const PatchBlurEstimate& a = whole.estimates[k];
+    const PatchBlurEstimate& b = parts.estimates[k];
+    EXPECT_EQ(a.valid, b.valid) << k;
+    EXPECT_EQ(a.reject_reason, b.reject_reason) << k;
+    EXPECT_EQ(a.radius_px, b.radius_px) << k;
+    EXPECT_EQ(a.fit_quality, b.fit_quality) << k;
+    valid += a.valid;
+  }
+  EXPECT_GT(valid, 20);
+}
+
 TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
   const double scale = 0.0731;
   std::vector<CaptureSpec> specs =

@@ -143,22 +143,61 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   // and the usable patches as samples (the others counted by reason). An
   // automatic bound that the view's blur reaches is grown to the blur its
   // depth range implies and the view searched again (SearchBoundReached,
-  // ExpectedMaxBlur, GrownSearchBound).
+  // ExpectedMaxBlur, GrownSearchBound), as soon as a share of its patches
+  // settles it (EarlyGrownSearchBound).
   for (;;) {
     blur.max_radius_px = geometry.max_radius_px;
     border = BlurSearchBorder(field_, blur, geometry.max_radius_px);
     candidates = PatchesWithDepth(view, working, geometry, border, options_);
     int with_depth = 0;
     for (const PatchCandidate& c : candidates) with_depth += c.reject.empty();
-    search = SearchViewBlur(working,
-                            candidates,
-                            field_,
-                            blur,
-                            border,
-                            geometry.patch_size,
-                            with_depth > 0,
-                            options_,
-                            blur_estimators_.get());
+    search =
+        ChooseViewSearch(working, candidates, border, with_depth > 0, options_);
+    auto search_patches = [&](const std::vector<char>* which) {
+      SearchChosenPatches(working,
+                          candidates,
+                          field_,
+                          blur,
+                          border,
+                          geometry.patch_size,
+                          options_,
+                          blur_estimators_.get(),
+                          which,
+                          &search);
+    };
+    if (SearchBoundMayGrow(summary.search_bound_growths, options_)) {
+      const std::vector<char> share = GrowthSample(search);
+      search_patches(&share);
+      if (search.num_searched > 0) {
+        std::map<std::string, int> unused_reasons;
+        std::vector<int> unused_index;
+        const double grown =
+            EarlyGrownSearchBound(search.num_searched,
+                                  PatchesAtSearchBound(search),
+                                  summary.search_bound_growths,
+                                  ExpectedMaxBlur(candidates,
+                                                  ViewSamples(candidates,
+                                                              search,
+                                                              working,
+                                                              field_,
+                                                              geometry,
+                                                              summary.index,
+                                                              options_,
+                                                              &unused_reasons,
+                                                              &unused_index)),
+                                  geometry,
+                                  working.left.size(),
+                                  field_,
+                                  blur,
+                                  options_);
+        if (grown > 0) {
+          geometry.max_radius_px = grown;
+          ++summary.search_bound_growths;
+          continue;
+        }
+      }
+    }
+    search_patches(nullptr);
     rejections.clear();
     sample_candidate.clear();
     data->samples = ViewSamples(candidates,

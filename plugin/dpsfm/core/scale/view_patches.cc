@@ -161,15 +161,11 @@ const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
   return *geometries_.back().second;
 }
 
-ViewBlurSearch SearchViewBlur(const WorkingView& working,
-                              const std::vector<PatchCandidate>& candidates,
-                              const DPPsfField& field,
-                              const BlurEstimationOptions& blur,
-                              int border,
-                              int patch_size,
-                              bool any_depth,
-                              const DPScaleOptions& options,
-                              BlurSearchEstimators* cache) {
+ViewBlurSearch ChooseViewSearch(const WorkingView& working,
+                                const std::vector<PatchCandidate>& candidates,
+                                int border,
+                                bool any_depth,
+                                const DPScaleOptions& options) {
   const int num = static_cast<int>(candidates.size());
   ViewBlurSearch out;
   out.estimates.resize(num);
@@ -187,36 +183,70 @@ ViewBlurSearch SearchViewBlur(const WorkingView& working,
   share.top_patch_fraction = options.top_patch_fraction;
   share.min_patches_per_view = options.min_patches_per_view;
   share.depth_strata = options.depth_strata;
-  const std::vector<char> search =
-      ChooseSearchedPatches(out.screened, num, share, &out.estimates);
-  out.num_searched =
-      static_cast<int>(std::count(search.begin(), search.end(), 1));
-  if (out.num_searched == 0) return out;
+  out.chosen = ChooseSearchedPatches(out.screened, num, share, &out.estimates);
+  out.searched.assign(num, 0);
+  return out;
+}
 
+void SearchChosenPatches(const WorkingView& working,
+                         const std::vector<PatchCandidate>& candidates,
+                         const DPPsfField& field,
+                         const BlurEstimationOptions& blur,
+                         int border,
+                         int patch_size,
+                         const DPScaleOptions& options,
+                         BlurSearchEstimators* cache,
+                         const std::vector<char>* which,
+                         ViewBlurSearch* search) {
+  const int num = static_cast<int>(candidates.size());
+  std::vector<int> todo;
+  for (int k = 0; k < num; ++k) {
+    if (search->chosen[k] && !search->searched[k] &&
+        (which == nullptr || (*which)[k])) {
+      todo.push_back(k);
+    }
+  }
+  if (todo.empty()) return;
   const BlurSearchEstimators::Estimators& estimators =
       cache->For(blur, patch_size + 2 * border);
   DPSFM_CHECK_EQ(estimators.size(), field.cells.size());
   for (const auto& estimator : estimators) {
     DPSFM_CHECK_LE(estimator->Border(), border);
   }
+  std::vector<PatchBlurEstimate>& estimates = search->estimates;
+  const int num_todo = static_cast<int>(todo.size());
 #ifdef _OPENMP
   const int threads = EffectiveNumThreads(options.num_threads);
 #pragma omp parallel for num_threads(threads) schedule(dynamic)
 #endif
-  for (int k = 0; k < num; ++k) {
-    if (!search[k]) continue;
+  for (int i = 0; i < num_todo; ++i) {
+    const int k = todo[i];
     const cv::Rect& interior = candidates[k].interior;
     const cv::Rect r = PatchCrop(interior, border);
     try {
-      out.estimates[k] =
+      estimates[k] =
           estimators[PatchCell(field, interior, working.left.size())]->Estimate(
               working.gray_left(r).clone(), working.gray_right(r).clone());
     } catch (const std::exception& e) {
-      out.estimates[k].valid = false;
-      out.estimates[k].reject_reason = e.what();
+      estimates[k].valid = false;
+      estimates[k].reject_reason = e.what();
     }
   }
-  return out;
+  for (const int k : todo) search->searched[k] = 1;
+  search->num_searched += num_todo;
+}
+
+std::vector<char> GrowthSample(const ViewBlurSearch& search) {
+  std::vector<char> sample(search.chosen.size(), 0);
+  int rank = 0, taken = 0;
+  for (size_t k = 0; k < search.chosen.size(); ++k) {
+    if (search.chosen[k] && rank++ % kGrowthSampleStep == 0) {
+      sample[k] = 1;
+      ++taken;
+    }
+  }
+  if (taken < kMinGrowthSample) sample.assign(sample.size(), 0);
+  return sample;
 }
 
 int PatchesAtSearchBound(const ViewBlurSearch& search) {
@@ -229,12 +259,16 @@ double LargerSearchBound(double bound_px) {
   return std::ceil(2 * std::max(1.6 * bound_px, bound_px + 2) - 1e-9) / 2;
 }
 
+bool SearchBoundMayGrow(int growths, const DPScaleOptions& options) {
+  return options.max_radius_px <= 0 &&
+         growths < options.max_search_bound_growths;
+}
+
 bool SearchBoundReached(int num_searched,
                         int num_at_bound,
                         int growths,
                         const DPScaleOptions& options) {
-  return options.max_radius_px <= 0 &&
-         growths < options.max_search_bound_growths && num_searched > 0 &&
+  return SearchBoundMayGrow(growths, options) && num_searched > 0 &&
          !(num_at_bound < options.search_bound_share * num_searched);
 }
 
@@ -287,6 +321,28 @@ double GrownSearchBound(const PatchGeometry& geometry,
       geometry.patch_size + 2 * BlurSearchBorder(field, blur, grown);
   if (2 * crop > std::min(working_size.width, working_size.height)) return 0;
   return grown;
+}
+
+double EarlyGrownSearchBound(int num_searched,
+                             int num_at_bound,
+                             int growths,
+                             double expected_max_blur_px,
+                             const PatchGeometry& geometry,
+                             const cv::Size& working_size,
+                             const DPPsfField& field,
+                             const BlurEstimationOptions& blur,
+                             const DPScaleOptions& options) {
+  if (!SearchBoundReached(num_searched, num_at_bound, growths, options) ||
+      !(expected_max_blur_px > 0)) {
+    return 0;
+  }
+  const double p = options.search_bound_share;
+  const double standard_error = std::sqrt(p * (1 - p) / num_searched);
+  if (num_at_bound < (p + 2 * standard_error) * num_searched) return 0;
+  const double cap = std::ceil(2 * 2 * geometry.max_radius_px - 1e-9) / 2;
+  const double grown = GrownSearchBound(
+      geometry, expected_max_blur_px / 1.15, working_size, field, blur);
+  return grown == cap ? cap : 0;
 }
 
 std::vector<PatchSample> ViewSamples(

@@ -72,9 +72,14 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
 // Steps 2 and 3: screening, the blur-search share, and the blur search on
 // the chosen patches (the expensive part, in parallel). A patch whose
 // search throws is recorded as invalid with the exception's message.
+// Searched in parts (ChooseViewSearch, then SearchChosenPatches on a share
+// and on the rest), the estimates are those of one search of all: each
+// patch's search is its own.
 struct ViewBlurSearch {
   std::vector<PatchBlurEstimate> estimates;  // per candidate
   ScreenedPatches screened;
+  std::vector<char> chosen;    // per candidate: to be searched
+  std::vector<char> searched;  // per candidate: searched so far
   int num_searched = 0;
 };
 
@@ -109,18 +114,34 @@ class BlurSearchEstimators {
   int num_built_ = 0;
 };
 
-// `cache`: the field's estimators (BlurSearchEstimators::For, asked only
-// when a patch is to be searched), for crops of `patch_size` plus `border`
-// on each side.
-ViewBlurSearch SearchViewBlur(const WorkingView& working,
-                              const std::vector<PatchCandidate>& candidates,
-                              const DPPsfField& field,
-                              const BlurEstimationOptions& blur,
-                              int border,
-                              int patch_size,
-                              bool any_depth,
-                              const DPScaleOptions& options,
-                              BlurSearchEstimators* cache);
+// Step 2: the screening and the blur-search share; nothing searched yet.
+ViewBlurSearch ChooseViewSearch(const WorkingView& working,
+                                const std::vector<PatchCandidate>& candidates,
+                                int border,
+                                bool any_depth,
+                                const DPScaleOptions& options);
+
+// Step 3: searches the chosen patches that `which` marks (all of them when
+// null) and that were not searched yet. `cache`: the field's estimators
+// (BlurSearchEstimators::For, asked only when a patch is to be searched),
+// for crops of `patch_size` plus `border` on each side.
+void SearchChosenPatches(const WorkingView& working,
+                         const std::vector<PatchCandidate>& candidates,
+                         const DPPsfField& field,
+                         const BlurEstimationOptions& blur,
+                         int border,
+                         int patch_size,
+                         const DPScaleOptions& options,
+                         BlurSearchEstimators* cache,
+                         const std::vector<char>* which,
+                         ViewBlurSearch* search);
+
+// Every kGrowthSampleStep-th chosen patch: the share whose search decides
+// early that the bound grows (EarlyGrownSearchBound), or none when it
+// would have fewer than kMinGrowthSample patches.
+constexpr int kGrowthSampleStep = 4;
+constexpr int kMinGrowthSample = 40;
+std::vector<char> GrowthSample(const ViewBlurSearch& search);
 
 // Searched patches whose blur sits at the search bound (their estimate is
 // the bound, not the blur).
@@ -131,6 +152,11 @@ int PatchesAtSearchBound(const ViewBlurSearch& search);
 // times larger reaches the blur of points about that much farther from the
 // focal plane in inverse depth.
 double LargerSearchBound(double bound_px);
+
+// Whether a view's search bound may still grow: an automatic bound
+// (DPScaleOptions::max_radius_px 0) grown fewer than
+// DPScaleOptions::max_search_bound_growths times.
+bool SearchBoundMayGrow(int growths, const DPScaleOptions& options);
 
 // Whether a view's search bound is to grow: only an automatic bound
 // (DPScaleOptions::max_radius_px 0), when at least
@@ -161,6 +187,25 @@ double GrownSearchBound(const PatchGeometry& geometry,
                         const cv::Size& working_size,
                         const DPPsfField& field,
                         const BlurEstimationOptions& blur);
+
+// The grown bound when the search of a share of the view's patches
+// (GrowthSample) settles it, else 0 and the whole search decides (as
+// SearchBoundReached and GrownSearchBound do): the share's patches at the
+// bound exceed search_bound_share of them by two standard errors, and the
+// bound grows to its cap (twice the bound) even with 15 % less blur
+// expected than the share's usable patches imply. A view whose blur runs
+// well past its bound then searches a quarter of its patches at that bound
+// instead of all before it is searched again; the answer is the same
+// whenever the whole search would have grown the bound to the cap too.
+double EarlyGrownSearchBound(int num_searched,
+                             int num_at_bound,
+                             int growths,
+                             double expected_max_blur_px,
+                             const PatchGeometry& geometry,
+                             const cv::Size& working_size,
+                             const DPPsfField& field,
+                             const BlurEstimationOptions& blur,
+                             const DPScaleOptions& options);
 
 // Step 4: usable patches become samples (of view `view_index`); the others
 // are counted by reason in *rejections. *sample_candidate receives each
