@@ -165,65 +165,57 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                           which,
                           &search);
     };
+    auto samples = [&](std::map<std::string, int>* reasons,
+                       std::vector<int>* index) {
+      return ViewSamples(candidates,
+                         search,
+                         working,
+                         field_,
+                         geometry,
+                         summary.index,
+                         options_,
+                         reasons,
+                         index);
+    };
+    double grown = 0;
     if (SearchBoundMayGrow(summary.search_bound_growths, options_)) {
       const std::vector<char> share = GrowthSample(search);
       search_patches(&share);
+      std::map<std::string, int> share_reasons;
+      std::vector<int> share_index;
       if (search.num_searched > 0) {
-        std::map<std::string, int> unused_reasons;
-        std::vector<int> unused_index;
-        const double grown =
-            EarlyGrownSearchBound(search.num_searched,
-                                  PatchesAtSearchBound(search),
-                                  summary.search_bound_growths,
-                                  ExpectedMaxBlur(candidates,
-                                                  ViewSamples(candidates,
-                                                              search,
-                                                              working,
-                                                              field_,
-                                                              geometry,
-                                                              summary.index,
-                                                              options_,
-                                                              &unused_reasons,
-                                                              &unused_index)),
-                                  geometry,
-                                  working.left.size(),
-                                  field_,
-                                  blur,
-                                  options_);
-        if (grown > 0) {
-          geometry.max_radius_px = grown;
-          ++summary.search_bound_growths;
-          continue;
-        }
+        grown = EarlyGrownSearchBound(
+            search.num_searched,
+            PatchesAtSearchBound(search),
+            summary.search_bound_growths,
+            ExpectedMaxBlur(candidates, samples(&share_reasons, &share_index)),
+            geometry,
+            working.left.size(),
+            field_,
+            blur,
+            options_);
       }
     }
-    search_patches(nullptr);
-    rejections.clear();
-    sample_candidate.clear();
-    data->samples = ViewSamples(candidates,
-                                search,
-                                working,
-                                field_,
-                                geometry,
-                                summary.index,
-                                options_,
-                                &rejections,
-                                &sample_candidate);
-    summary.patches_with_depth = with_depth;
-    summary.patches_at_bound = PatchesAtSearchBound(search);
-    if (!SearchBoundReached(search.num_searched,
-                            summary.patches_at_bound,
-                            summary.search_bound_growths,
-                            options_)) {
-      break;
+    if (!(grown > 0)) {
+      search_patches(nullptr);
+      rejections.clear();
+      sample_candidate.clear();
+      data->samples = samples(&rejections, &sample_candidate);
+      summary.patches_with_depth = with_depth;
+      summary.patches_at_bound = PatchesAtSearchBound(search);
+      if (!SearchBoundReached(search.num_searched,
+                              summary.patches_at_bound,
+                              summary.search_bound_growths,
+                              options_)) {
+        break;
+      }
+      grown = GrownSearchBound(geometry,
+                               ExpectedMaxBlur(candidates, data->samples),
+                               working.left.size(),
+                               field_,
+                               blur);
+      if (!(grown > 0)) break;
     }
-    const double grown =
-        GrownSearchBound(geometry,
-                         ExpectedMaxBlur(candidates, data->samples),
-                         working.left.size(),
-                         field_,
-                         blur);
-    if (!(grown > 0)) break;
     // The patches stay as they were (an explicit max_radius_px keeps them
     // too): larger ones straddle more depth edges and leave fewer patches
     // (on box/002, 13 px patches gave 57 searched and a DP cue 26 % low).
