@@ -1,6 +1,8 @@
 #include "dpsfm/core/optics/kernel_grid.h"
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -123,6 +125,49 @@ TEST(DPKernelGrid, RefusesAPatchNarrowerThanTheKernelsReach) {
       cv::Mat::zeros(20 + 2 * (reach - 1), 20 + 2 * (reach - 1), CV_32FC1);
   EXPECT_THROW(grid.TransformInput(patch, reach - 1, last),
                std::invalid_argument);
+}
+
+// Tabulated on two threads, the grid is the one thread's to the bit.
+TEST(DPKernelGrid, TheSameOnTwoThreads) {
+  const SplitProfilePsf psf(SplitProfileParams::ForCentroidOffset(0.2));
+  const DPKernelGrid one(psf, 0.25, 9, cv::Size(31, 31), 1);
+  const DPKernelGrid two(psf, 0.25, 9, cv::Size(31, 31), 2);
+  ASSERT_EQ(one.NumNodes(), two.NumNodes());
+  ASSERT_EQ(one.NumSpectrumClasses(), two.NumSpectrumClasses());
+  for (int n = 0; n < one.NumNodes(); ++n) {
+    EXPECT_EQ(cv::norm(one.LeftKernel(n), two.LeftKernel(n), cv::NORM_INF), 0);
+    EXPECT_EQ(
+        cv::norm(one.RightSpectrum(n), two.RightSpectrum(n), cv::NORM_INF), 0);
+    EXPECT_EQ(one.LeftEnergy(n), two.LeftEnergy(n));
+    EXPECT_EQ(one.SpectrumClassOf(n), two.SpectrumClassOf(n));
+    if (n + 1 < one.NumNodes()) {
+      EXPECT_EQ(one.RightCross(n), two.RightCross(n));
+    }
+  }
+}
+
+// A model whose kernels are even-sized beyond 3 px.
+class EvenBeyondThreePx : public DPPsfModel {
+ public:
+  std::string Name() const override { return "even_beyond_3px"; }
+  DPKernels Kernels(double r) const override {
+    const int size = std::abs(r) > 3 ? 4 : 2 * KernelRadius(r) + 1;
+    DPKernels k;
+    k.left = cv::Mat(size, size, CV_32FC1, cv::Scalar(0.5 / (size * size)));
+    k.right = k.left.clone();
+    return k;
+  }
+  int KernelRadius(double r) const override {
+    return static_cast<int>(std::ceil(std::abs(r)));
+  }
+};
+
+// A node's failure leaves the parallel tabulation as the exception it is.
+TEST(DPKernelGrid, ANodesFailureIsThrownAfterTheParallelLoop) {
+  EXPECT_THROW(DPKernelGrid(EvenBeyondThreePx(), 0.25, 6, cv::Size(20, 20), 2),
+               std::invalid_argument);
+  EXPECT_NO_THROW(
+      DPKernelGrid(EvenBeyondThreePx(), 0.25, 3, cv::Size(20, 20), 2));
 }
 
 }  // namespace

@@ -166,9 +166,11 @@ struct BlurTables;
 // Estimate is const and thread-safe, so one instance serves all threads.
 class PatchBlurEstimator {
  public:
+  // The tables are built on num_threads threads (-1: all).
   PatchBlurEstimator(const DPPsfModel& psf,
                      const BlurEstimationOptions& options,
-                     const cv::Size& patch_size);
+                     const cv::Size& patch_size,
+                     int num_threads = 1);
   ~PatchBlurEstimator();
 
   // left/right: CV_32FC1, patch_size, intensities roughly [0, 1], including a

@@ -6,6 +6,7 @@
 
 #include "dpsfm/core/blur/blur_search_internal.h"
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
 namespace {
@@ -34,6 +35,7 @@ using internal::BlurTables;
 void SetGrid(const DPPsfModel& psf,
              const BlurEstimationOptions& options,
              const cv::Size& patch_size,
+             int num_threads,
              BlurTables* t) {
   t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
                          cv::getOptimalDFTSize(patch_size.height));
@@ -49,8 +51,11 @@ void SetGrid(const DPPsfModel& psf,
                          patch_size.width - 2 * t->border,
                          patch_size.height - 2 * t->border);
   t->num_interior = t->interior.area();
-  t->grid.reset(new DPKernelGrid(
-      psf, options.grid_step_px, options.max_radius_px, t->interior.size()));
+  t->grid.reset(new DPKernelGrid(psf,
+                                 options.grid_step_px,
+                                 options.max_radius_px,
+                                 t->interior.size(),
+                                 num_threads));
   const DPKernelGrid& grid = *t->grid;
   DPSFM_CHECK(grid.Bound() == t->bound && grid.Border() == t->border);
   t->step = grid.Step();
@@ -80,8 +85,8 @@ std::vector<float> SelectBand(BlurTables* t) {
 }
 
 // The coarse search's nodes (every coarse_step_px through r = 0, and both
-// ends). Returns each grid node's row in the coarse table (-1: none).
-std::vector<int> SelectCoarseNodes(BlurTables* t) {
+// ends).
+void SelectCoarseNodes(BlurTables* t) {
   const BlurEstimationOptions& options = t->options;
   const int coarse_stride = static_cast<int>(
       std::round(options.coarse_step_px / options.grid_step_px));
@@ -95,16 +100,11 @@ std::vector<int> SelectCoarseNodes(BlurTables* t) {
   if (t->coarse_nodes.back() != t->num_nodes - 1) {
     t->coarse_nodes.push_back(t->num_nodes - 1);
   }
-  std::vector<int> coarse_row(t->num_nodes, -1);
-  for (size_t i = 0; i < t->coarse_nodes.size(); ++i) {
-    coarse_row[t->coarse_nodes[i]] = static_cast<int>(i);
-  }
-  return coarse_row;
 }
 
 // Per node the noise gains; per coarse node its row of the coarse table.
 void TabulateKernels(const std::vector<float>& multiplicity,
-                     const std::vector<int>& coarse_row,
+                     int num_threads,
                      BlurTables* t) {
   const DPKernelGrid& grid = *t->grid;
   const int num_band = static_cast<int>(t->band_rows.size());
@@ -117,26 +117,31 @@ void TabulateKernels(const std::vector<float>& multiplicity,
     if (n + 1 < t->num_nodes) {
       t->noise_cross[n] = grid.LeftCross(n) + grid.RightCross(n);
     }
-    if (coarse_row[n] >= 0) {
-      const cv::Mat wrapped_left = WrapKernel(grid.LeftKernel(n), t->dft_size);
-      const cv::Mat wrapped_right =
-          WrapKernel(grid.RightKernel(n), t->dft_size);
-      cv::Mat hl, hr;
-      cv::dft(wrapped_left, hl, cv::DFT_COMPLEX_OUTPUT);
-      cv::dft(wrapped_right, hr, cv::DFT_COMPLEX_OUTPUT);
-      float* row = t->coarse_table.row(coarse_row[n]).data();
-      for (int k = 0; k < num_band; ++k) {
-        const cv::Vec2f l = hl.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
-        const cv::Vec2f r = hr.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
-        const float w = multiplicity[k];
-        row[4 * k + 0] = w * (r[0] * r[0] + r[1] * r[1]);
-        row[4 * k + 1] = w * (l[0] * l[0] + l[1] * l[1]);
-        // K = H_r conj(H_l).
-        row[4 * k + 2] = w * (r[0] * l[0] + r[1] * l[1]);
-        row[4 * k + 3] = w * (r[1] * l[0] - r[0] * l[1]);
-      }
-    }
   }
+  ParallelFor(
+      static_cast<int>(t->coarse_nodes.size()), num_threads, [&](int i) {
+        const int n = t->coarse_nodes[i];
+        cv::Mat hl, hr;
+        cv::dft(WrapKernel(grid.LeftKernel(n), t->dft_size),
+                hl,
+                cv::DFT_COMPLEX_OUTPUT);
+        cv::dft(WrapKernel(grid.RightKernel(n), t->dft_size),
+                hr,
+                cv::DFT_COMPLEX_OUTPUT);
+        float* row = t->coarse_table.row(i).data();
+        for (int k = 0; k < num_band; ++k) {
+          const cv::Vec2f l =
+              hl.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+          const cv::Vec2f r =
+              hr.at<cv::Vec2f>(t->band_rows[k], t->band_cols[k]);
+          const float w = multiplicity[k];
+          row[4 * k + 0] = w * (r[0] * r[0] + r[1] * r[1]);
+          row[4 * k + 1] = w * (l[0] * l[0] + l[1] * l[1]);
+          // K = H_r conj(H_l).
+          row[4 * k + 2] = w * (r[0] * l[0] + r[1] * l[1]);
+          row[4 * k + 3] = w * (r[1] * l[0] - r[0] * l[1]);
+        }
+      });
 }
 
 // The coarse loss's noise gains, window and normaliser.
@@ -164,15 +169,16 @@ void SetCoarseNormalisation(BlurTables* t) {
 
 PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
                                        const BlurEstimationOptions& options,
-                                       const cv::Size& patch_size) {
+                                       const cv::Size& patch_size,
+                                       int num_threads) {
   DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
   std::unique_ptr<BlurTables> t(new BlurTables);
   t->options = options;
   t->patch_size = patch_size;
-  SetGrid(psf, options, patch_size, t.get());
+  SetGrid(psf, options, patch_size, num_threads, t.get());
   const std::vector<float> multiplicity = SelectBand(t.get());
-  const std::vector<int> coarse_row = SelectCoarseNodes(t.get());
-  TabulateKernels(multiplicity, coarse_row, t.get());
+  SelectCoarseNodes(t.get());
+  TabulateKernels(multiplicity, num_threads, t.get());
   SetCoarseNormalisation(t.get());
   tables_ = std::move(t);
 }

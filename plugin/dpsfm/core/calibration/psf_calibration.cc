@@ -642,7 +642,8 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
     std::vector<PreparedBlurPatch>* prepared) {
   std::vector<PatchBlurEstimate> estimates(patches.size());
   if (patches.empty()) return estimates;
-  const PatchBlurEstimator estimator(psf, blur, patches[0]->left.size());
+  const PatchBlurEstimator estimator(
+      psf, blur, patches[0]->left.size(), num_threads);
   const int n = static_cast<int>(patches.size());
   const bool prepare = prepared->empty();
   if (prepare) prepared->resize(n);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
 cv::Mat EmbedKernel(const cv::Mat& kernel, int half) {
@@ -48,7 +49,8 @@ int FastDftSize(int n) {
 DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
                            double step_px,
                            double max_radius_px,
-                           const cv::Size& interior_size)
+                           const cv::Size& interior_size,
+                           int num_threads)
     : step_(step_px), interior_size_(interior_size) {
   DPSFM_CHECK(step_px > 0 && std::isfinite(step_px))
       << "kernel grid step must be positive, got " << step_px;
@@ -64,14 +66,7 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   right_energy_.resize(num_nodes_);
   left_cross_.assign(num_nodes_, 0.0);
   right_cross_.assign(num_nodes_, 0.0);
-  const bool spectra = interior_size.area() > 0;
-  if (spectra) {
-    left_spectra_.resize(num_nodes_);
-    right_spectra_.resize(num_nodes_);
-    class_of_.resize(num_nodes_);
-  }
-  cv::Mat previous_left, previous_right;
-  for (int n = 0; n < num_nodes_; ++n) {
+  ParallelFor(num_nodes_, num_threads, [&](int n) {
     const DPKernels kernels = psf.Kernels(Radius(n));
     DPSFM_CHECK(kernels.left.type() == CV_32FC1 &&
                 kernels.right.type() == CV_32FC1 &&
@@ -88,19 +83,20 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
     const cv::Mat right = EmbedKernel(kernels.right, border_);
     left_energy_[n] = left.dot(left);
     right_energy_[n] = right.dot(right);
-    if (n > 0) {
-      left_cross_[n - 1] = left.dot(previous_left);
-      right_cross_[n - 1] = right.dot(previous_right);
-    }
-    previous_left = left;
-    previous_right = right;
-  }
-  if (spectra) TabulateSpectra();
+  });
+  ParallelFor(num_nodes_ - 1, num_threads, [&](int n) {
+    left_cross_[n] = EmbedKernel(left_kernels_[n], border_)
+                         .dot(EmbedKernel(left_kernels_[n + 1], border_));
+    right_cross_[n] = EmbedKernel(right_kernels_[n], border_)
+                          .dot(EmbedKernel(right_kernels_[n + 1], border_));
+  });
+  if (interior_size.area() > 0) TabulateSpectra(num_threads);
 }
 
 // Each node's class by the DFT size its interior and reach need (the reach
 // grows with |r|, so a class is a band of |r|), then the spectra at it.
-void DPKernelGrid::TabulateSpectra() {
+void DPKernelGrid::TabulateSpectra(int num_threads) {
+  class_of_.resize(num_nodes_);
   for (int n = 0; n < num_nodes_; ++n) {
     const int reach = Reach(n);
     const cv::Size dft(FastDftSize(interior_size_.width + 2 * reach),
@@ -116,11 +112,13 @@ void DPKernelGrid::TabulateSpectra() {
     it->reach = std::max(it->reach, reach);
     class_of_[n] = static_cast<int>(it - classes_.begin());
   }
-  for (int n = 0; n < num_nodes_; ++n) {
+  left_spectra_.resize(num_nodes_);
+  right_spectra_.resize(num_nodes_);
+  ParallelFor(num_nodes_, num_threads, [&](int n) {
     const cv::Size& dft = classes_[class_of_[n]].dft_size;
     cv::dft(WrapKernel(left_kernels_[n], dft), left_spectra_[n]);
     cv::dft(WrapKernel(right_kernels_[n], dft), right_spectra_[n]);
-  }
+  });
 }
 
 cv::Mat DPKernelGrid::TransformInput(const cv::Mat& patch,

@@ -37,11 +37,14 @@ class DPKernelGrid {
 
   // Nodes cover [-bound, bound] with bound = max_radius_px rounded UP to a
   // multiple of step_px. interior_size: the part of a patch whose
-  // convolution the spectra give; empty = no spectra.
+  // convolution the spectra give; empty = no spectra. The nodes are
+  // tabulated on num_threads threads (-1: all; psf.Kernels must be
+  // thread-safe, as the models' are).
   DPKernelGrid(const DPPsfModel& psf,
                double step_px,
                double max_radius_px,
-               const cv::Size& interior_size);
+               const cv::Size& interior_size,
+               int num_threads = 1);
 
   // The grid's bound for a step and a search bound, without building it.
   static double BoundFor(double step_px, double max_radius_px);
@@ -92,7 +95,7 @@ class DPKernelGrid {
   double RightCross(int node) const { return right_cross_[node]; }
 
  private:
-  void TabulateSpectra();
+  void TabulateSpectra(int num_threads);
 
   double step_ = 0;
   int half_nodes_ = 0;

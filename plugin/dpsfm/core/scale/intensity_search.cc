@@ -124,7 +124,8 @@ void BuildKernelGrids(const std::vector<IntensityPatch>& patches,
                              options.grid_step_px,
                              supported,
                              cv::Size(patch.left.cols - 2 * patch.border,
-                                      patch.left.rows - 2 * patch.border)));
+                                      patch.left.rows - 2 * patch.border),
+                             options.num_threads));
       }
       it = out->grids.emplace(key, std::move(grid)).first;
     }

@@ -126,8 +126,11 @@ int DPScaleEstimator::ReestimateStoredPatches(
     blur.max_radius_px = options_.psf_fit_radius_factor * g.first.second;
     std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
     for (const auto& band : fitted) {
-      estimators.emplace_back(new PatchBlurEstimator(
-          *band, blur, cv::Size(g.first.first, g.first.first)));
+      estimators.emplace_back(
+          new PatchBlurEstimator(*band,
+                                 blur,
+                                 cv::Size(g.first.first, g.first.first),
+                                 options_.num_threads));
     }
     const std::vector<StoredRef>& refs = g.second;
 #ifdef _OPENMP

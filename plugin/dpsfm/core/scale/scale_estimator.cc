@@ -105,7 +105,8 @@ DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
                   DPScaleOptions::SelfCalibration::kOff)
       << "self-calibration fits one profile for the whole frame";
   psf_ = field_.cells[0];
-  blur_estimators_.reset(new BlurSearchEstimators(field_));
+  blur_estimators_.reset(
+      new BlurSearchEstimators(field_, options_.num_threads));
 }
 
 DPScaleEstimator::~DPScaleEstimator() = default;

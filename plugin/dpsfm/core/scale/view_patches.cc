@@ -135,8 +135,9 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
   return candidates;
 }
 
-BlurSearchEstimators::BlurSearchEstimators(const DPPsfField& field)
-    : field_(field) {}
+BlurSearchEstimators::BlurSearchEstimators(const DPPsfField& field,
+                                           int num_threads)
+    : field_(field), num_threads_(num_threads) {}
 
 const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
     const BlurEstimationOptions& blur, int crop) {
@@ -154,7 +155,7 @@ const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
   std::unique_ptr<Estimators> estimators(new Estimators);
   for (const auto& psf : field_.cells) {
     estimators->emplace_back(
-        new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop)));
+        new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop), num_threads_));
     ++num_built_;
   }
   geometries_.emplace_back(key, std::move(estimators));

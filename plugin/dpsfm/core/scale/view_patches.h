@@ -95,8 +95,9 @@ class BlurSearchEstimators {
   using Estimators = std::vector<std::unique_ptr<PatchBlurEstimator>>;
   static constexpr int kMaxGeometries = 2;
 
-  // `field` must outlive this.
-  explicit BlurSearchEstimators(const DPPsfField& field);
+  // `field` must outlive this. Tables are built on num_threads threads
+  // (-1: all).
+  explicit BlurSearchEstimators(const DPPsfField& field, int num_threads = 1);
 
   // The field's estimators for square crops of side `crop` with the search
   // options `blur`. The key is (crop, blur.max_radius_px): the other options
@@ -108,6 +109,7 @@ class BlurSearchEstimators {
 
  private:
   const DPPsfField& field_;
+  const int num_threads_;
   // (crop, bound) -> the estimators; most recently used last.
   std::vector<std::pair<std::pair<int, double>, std::unique_ptr<Estimators>>>
       geometries_;
