@@ -2,8 +2,10 @@
 // against positions, counts and statistics computed by hand.
 #include "dpsfm/core/blur/patch_grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -64,6 +66,26 @@ TEST(DepthStatsOf, MedianSpreadAndVarianceByHand) {
   EXPECT_FALSE(DepthStatsOf(&none).ok);
   std::vector<float> zeros = {0, 0, 0};
   EXPECT_FALSE(DepthStatsOf(&zeros).ok);
+}
+
+// Against a full sort, for every size from 1 to 60 with repeated values:
+// the median and the ranks n / 10 and 9 n / 10 (the spread).
+TEST(DepthStatsOf, PercentilesAsASortGivesThem) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> value(1, 9);
+  for (size_t n = 1; n <= 60; ++n) {
+    std::vector<float> v(n);
+    for (float& x : v) x = static_cast<float>(value(rng));
+    std::vector<float> sorted = v;
+    std::sort(sorted.begin(), sorted.end());
+    const DepthStats s = DepthStatsOf(&v);
+    const double median = sorted[n / 2];
+    EXPECT_EQ(s.median, median) << n;
+    EXPECT_DOUBLE_EQ(
+        s.relative_spread,
+        (sorted[std::min(n - 1, 9 * n / 10)] - sorted[n / 10]) / median)
+        << n;
+  }
 }
 
 // A dense map at a quarter of an 80 x 60 frame (20 x 15) under a working

@@ -12,8 +12,20 @@ DepthStats DepthStatsOf(std::vector<float>* values) {
   std::vector<float>& v = *values;
   const size_t n = v.size();
   stats.median = UpperMedianInPlace(&v);
-  const double p10 = RankInPlace(&v, n / 10);
-  const double p90 = RankInPlace(&v, std::min(n - 1, (9 * n) / 10));
+  // The median's selection leaves the values below it before it and those
+  // above after it: the 10th and 90th percentiles are selected within the
+  // two halves (the same values, half the work).
+  const size_t m = n / 2;
+  auto rank = [&](size_t k) -> double {
+    if (k < m) {
+      std::nth_element(v.begin(), v.begin() + k, v.begin() + m);
+    } else if (k > m) {
+      std::nth_element(v.begin() + m + 1, v.begin() + k, v.end());
+    }
+    return v[k];
+  };
+  const double p10 = rank(n / 10);
+  const double p90 = rank(std::min(n - 1, (9 * n) / 10));
   double mean = 0, sq = 0;
   for (float z : v) mean += z;
   mean /= n;
