@@ -205,6 +205,31 @@ TEST(IntensityGridLoss, MatchesTheExactLossOnABrightLowContrastPatch) {
       0.1 * intensity::LossOfPrepared(exact, 3.0, psf, IntensityLoss::kL2));
 }
 
+// Intervals added in two passes (the refine pass adds the interval below
+// one the first prepared) give the losses one pass gives: a node computed
+// again for its new neighbour keeps its terms with the next node.
+TEST(IntensityGridLoss, IntervalsAddedLaterKeepTheEarlierOnes) {
+  const TranslatingDiskPsf psf;
+  const IntensityPatch patch = RenderPatch(psf, 4.0, 0, 1.0, 78, 3);
+  const DPKernelGrid grid(
+      psf, 0.25, kMaxRadius, cv::Size(kInterior, kInterior));
+  intensity::Prepared once = intensity::Prepare(patch, psf, kMaxRadius);
+  once.grid = &grid;
+  once.max_abs_radius = grid.Bound();
+  intensity::Prepared twice = once;
+  int node = 0;
+  double t = 0;
+  grid.Locate(4.1, &node, &t);
+  intensity::AddIntervals(patch, {node - 1, node}, &once);
+  intensity::AddIntervals(patch, {node}, &twice);
+  intensity::AddIntervals(patch, {node - 1}, &twice);
+  for (const double r : {3.9, 4.05, 4.1, 4.2}) {
+    EXPECT_EQ(intensity::LossOfPrepared(twice, r, psf, IntensityLoss::kL2),
+              intensity::LossOfPrepared(once, r, psf, IntensityLoss::kL2))
+        << "r = " << r;
+  }
+}
+
 // Views with their own lens and focus; patches at several depths per view.
 struct Scene {
   std::vector<IntensityView> views;

@@ -383,7 +383,10 @@ void AddIntervals(const IntensityPatch& patch,
   int previous_node = -2;
   for (const int n : nodes) {
     Prepared::NodeEntry& entry = p->stats[n];
-    entry.channel.assign(channels, NodeChannelStats());
+    // A node computed again (the first node of an interval below one
+    // prepared before) keeps its terms with the next node: they are the
+    // same, and the next node is not computed again.
+    entry.channel.resize(channels);
     Prepared::NodeEntry* before =
         previous_node == n - 1 ? &p->stats[n - 1] : nullptr;
     const int k = grid.SpectrumClassOf(n);
