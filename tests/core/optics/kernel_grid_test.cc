@@ -95,6 +95,9 @@ TEST(DPKernelGrid, EachClassConvolvesTheInteriorExactly) {
     EXPECT_LE(interior.width + 2 * c.reach, c.dft_size.width);
     EXPECT_LE(interior.height + 2 * c.reach, c.dft_size.height);
     EXPECT_EQ(grid.RightSpectrum(n).size(), c.dft_size);
+    // The disk's views take half the light each.
+    EXPECT_NEAR(grid.LeftSum(n), 0.5, 1e-5);
+    EXPECT_NEAR(grid.RightSum(n), 0.5, 1e-5);
   }
   cv::RNG rng(7);
   for (const int border : {grid.Border(), grid.Border() + 9}) {

@@ -182,6 +182,13 @@ TEST(ExpectedMaxBlur, TheLineThroughInverseDepthOverTheDepthRange) {
   EXPECT_EQ(ExpectedMaxBlur(candidates, usable), 0);
 }
 
+// Twice the bound, up to a half pixel: 2 x 4.3 = 8.6 -> 9.
+TEST(SearchBoundCap, TwiceTheBoundUpToAHalfPixel) {
+  EXPECT_DOUBLE_EQ(SearchBoundCap(5), 10);
+  EXPECT_DOUBLE_EQ(SearchBoundCap(4.3), 9);
+  EXPECT_DOUBLE_EQ(SearchBoundCap(8.5), 17);
+}
+
 TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
   const DPPsfField field =
       DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());

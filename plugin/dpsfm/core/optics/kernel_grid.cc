@@ -29,12 +29,6 @@ cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
   return wrapped;
 }
 
-double DPKernelGrid::BoundFor(double step_px, double max_radius_px) {
-  return step_px *
-         std::max(1,
-                  static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9)));
-}
-
 int FastDftSize(int n) {
   DPSFM_CHECK_GT(n, 0);
   int best = 0;
@@ -64,6 +58,8 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   right_kernels_.resize(num_nodes_);
   left_energy_.resize(num_nodes_);
   right_energy_.resize(num_nodes_);
+  left_sum_.resize(num_nodes_);
+  right_sum_.resize(num_nodes_);
   left_cross_.assign(num_nodes_, 0.0);
   right_cross_.assign(num_nodes_, 0.0);
   ParallelFor(num_nodes_, num_threads, [&](int n) {
@@ -83,6 +79,8 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
     const cv::Mat right = EmbedKernel(kernels.right, border_);
     left_energy_[n] = left.dot(left);
     right_energy_[n] = right.dot(right);
+    left_sum_[n] = cv::sum(kernels.left)[0];
+    right_sum_[n] = cv::sum(kernels.right)[0];
   });
   ParallelFor(num_nodes_ - 1, num_threads, [&](int n) {
     left_cross_[n] = EmbedKernel(left_kernels_[n], border_)

@@ -46,9 +46,6 @@ class DPKernelGrid {
                const cv::Size& interior_size,
                int num_threads = 1);
 
-  // The grid's bound for a step and a search bound, without building it.
-  static double BoundFor(double step_px, double max_radius_px);
-
   int NumNodes() const { return num_nodes_; }
   int HalfNodes() const { return half_nodes_; }
   double Step() const { return step_; }
@@ -92,6 +89,10 @@ class DPKernelGrid {
   double LeftEnergy(int node) const { return left_energy_[node]; }
   double RightEnergy(int node) const { return right_energy_[node]; }
   double LeftCross(int node) const { return left_cross_[node]; }
+  // The kernels' sums: a constant c convolved with node n's left kernel is
+  // c LeftSum(n) wherever the kernel's reach stays inside the patch.
+  double LeftSum(int node) const { return left_sum_[node]; }
+  double RightSum(int node) const { return right_sum_[node]; }
   double RightCross(int node) const { return right_cross_[node]; }
 
  private:
@@ -108,6 +109,7 @@ class DPKernelGrid {
   std::vector<cv::Mat> left_spectra_, right_spectra_;
   std::vector<double> left_energy_, right_energy_;
   std::vector<double> left_cross_, right_cross_;
+  std::vector<double> left_sum_, right_sum_;
 };
 
 // The bound of a DPKernelGrid(psf, step_px, max_radius_px, ...): max_radius_px

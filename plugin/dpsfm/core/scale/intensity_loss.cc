@@ -49,20 +49,12 @@ NodeMoments MomentsOf(const cv::Mat& a,
   NodeMoments m;
   const float* x = a.ptr<float>();
   const float* y = b.ptr<float>();
+  // Without a previous node the terms with it are taken against the node
+  // itself and dropped.
+  const bool previous = !pa.empty();
+  const float* px = previous ? pa.ptr<float>() : x;
+  const float* py = previous ? pb.ptr<float>() : y;
   const size_t count = a.total();
-  if (pa.empty()) {
-    for (size_t i = 0; i < count; ++i) {
-      const double u = x[i], v = y[i];
-      m.sum_a += u;
-      m.sum_b += v;
-      m.aa += u * u;
-      m.bb += v * v;
-      m.ab += u * v;
-    }
-    return m;
-  }
-  const float* px = pa.ptr<float>();
-  const float* py = pb.ptr<float>();
   for (size_t i = 0; i < count; ++i) {
     const double u = x[i], v = y[i], pu = px[i], pv = py[i];
     m.sum_a += u;
@@ -75,6 +67,7 @@ NodeMoments MomentsOf(const cv::Mat& a,
     m.pa_b += pu * v;
     m.pb_a += pv * u;
   }
+  if (!previous) m.pa_a = m.pb_b = m.pa_b = m.pb_a = 0;
   return m;
 }
 
@@ -392,8 +385,6 @@ void AddIntervals(const IntensityPatch& patch,
     const int k = grid.SpectrumClassOf(n);
     transformed(k);
     const cv::Rect interior = grid.InteriorOf(k);
-    const double sum_right_kernel = cv::sum(grid.RightKernel(n))[0];
-    const double sum_left_kernel = cv::sum(grid.LeftKernel(n))[0];
     for (int c = 0; c < channels; ++c) {
       BlurredView a, b;
       a.image = blurred(spec_left[k][c], grid.RightSpectrum(n), interior);
@@ -405,8 +396,8 @@ void AddIntervals(const IntensityPatch& patch,
                     before != nullptr ? previous_b[c].image : cv::Mat());
       a.sum = m.sum_a;
       b.sum = m.sum_b;
-      a.constant = mean_left[c] * sum_right_kernel;
-      b.constant = mean_right[c] * sum_left_kernel;
+      a.constant = mean_left[c] * grid.RightSum(n);
+      b.constant = mean_right[c] * grid.LeftSum(n);
       NodeChannelStats& s = entry.channel[c];
       s.sum_a = a.sum + count * a.constant;
       s.sum_b = b.sum + count * b.constant;

@@ -97,8 +97,7 @@ WorkingView MakeWorkingView(const DPView& view, double resize_factor) {
 int BlurSearchBorder(const DPPsfField& field,
                      const BlurEstimationOptions& blur,
                      double max_radius_px) {
-  const double grid_bound =
-      DPKernelGrid::BoundFor(blur.grid_step_px, max_radius_px);
+  const double grid_bound = DPKernelGridBound(max_radius_px, blur.grid_step_px);
   int border = 0;
   for (const auto& psf : field.cells) {
     border = std::max(border, psf->KernelRadius(grid_bound));
@@ -303,6 +302,10 @@ double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
                   std::abs(intercept + slope / far));
 }
 
+double SearchBoundCap(double bound_px) {
+  return std::ceil(2 * 2 * bound_px - 1e-9) / 2;
+}
+
 double GrownSearchBound(const PatchGeometry& geometry,
                         double expected_max_blur_px,
                         const cv::Size& working_size,
@@ -312,11 +315,11 @@ double GrownSearchBound(const PatchGeometry& geometry,
   // kernel grid and crops), and uncapped growth to 20-36 px on the
   // generated tabletops cost 3-4x the blur stage; patches beyond stay at
   // the bound, and the run says so.
-  const double grown = std::min(
-      expected_max_blur_px > 0
-          ? std::ceil(2 * 1.2 * expected_max_blur_px - 1e-9) / 2
-          : LargerSearchBound(geometry.max_radius_px),
-      std::ceil(2 * 2 * geometry.max_radius_px - 1e-9) / 2);
+  const double grown =
+      std::min(expected_max_blur_px > 0
+                   ? std::ceil(2 * 1.2 * expected_max_blur_px - 1e-9) / 2
+                   : LargerSearchBound(geometry.max_radius_px),
+               SearchBoundCap(geometry.max_radius_px));
   if (!(grown > geometry.max_radius_px)) return 0;
   const int crop =
       geometry.patch_size + 2 * BlurSearchBorder(field, blur, grown);
@@ -340,7 +343,7 @@ double EarlyGrownSearchBound(int num_searched,
   const double p = options.search_bound_share;
   const double standard_error = std::sqrt(p * (1 - p) / num_searched);
   if (num_at_bound < (p + 2 * standard_error) * num_searched) return 0;
-  const double cap = std::ceil(2 * 2 * geometry.max_radius_px - 1e-9) / 2;
+  const double cap = SearchBoundCap(geometry.max_radius_px);
   const double grown = GrownSearchBound(
       geometry, expected_max_blur_px / 1.15, working_size, field, blur);
   return grown == cap ? cap : 0;

@@ -178,6 +178,9 @@ bool SearchBoundReached(int num_searched,
 double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
                        const std::vector<PatchSample>& usable);
 
+// The most a bound of `bound_px` grows to: twice it, up to a half pixel.
+double SearchBoundCap(double bound_px);
+
 // The bound to search the view again with, or 0 to keep its search: 1.2
 // times the expected blur (ExpectedMaxBlur; LargerSearchBound when there is
 // none), at most twice the bound, up to a half pixel, if it exceeds the
