@@ -69,11 +69,13 @@ void BlurRefinement::Evaluate(int n) {
   const DPKernelGrid& grid = *t_.grid;
   const int c = grid.SpectrumClassOf(n);
   const ViewSpectra& views = TransformedViews(c);
-  cv::mulSpectrums(views.left, grid.RightSpectrum(n), product_left_, 0);
-  cv::mulSpectrums(views.right, grid.LeftSpectrum(n), product_right_, 0);
-  product_left_ -= product_right_;
+  SpectraProductDifference(views.left,
+                           grid.RightSpectrum(n),
+                           views.right,
+                           grid.LeftSpectrum(n),
+                           &product_);
   const cv::Rect interior = grid.InteriorOf(c);
-  cv::dft(product_left_,
+  cv::dft(product_,
           residual_image_,
           cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
           interior.y + interior.height);

@@ -164,7 +164,7 @@ class BlurRefinement {
   const double inv_m_;
   std::vector<ViewSpectra> spectra_;  // per spectrum class of the grid
   std::vector<NodeEval> evals_;
-  cv::Mat product_left_, product_right_, residual_image_;
+  cv::Mat product_, residual_image_;
 };
 
 }  // namespace internal

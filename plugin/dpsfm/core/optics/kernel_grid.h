@@ -128,6 +128,20 @@ inline double InterpolatedEnergy(double a, double ab, double b, double t) {
   return (1 - t) * (1 - t) * a + 2 * t * (1 - t) * ab + t * t * b;
 }
 
+// a * b - c * d for CCS-packed spectra of one size (cv::dft's default real
+// output; one channel), into *out: what two cv::mulSpectrums calls and a
+// subtraction give, to the bit (each complex product in double, rounded to
+// float as cv::mulSpectrums does; the real-only entries of the packed
+// columns multiplied in float as it does; the difference in float), in one
+// pass without the two temporaries. Written by hand because OpenCV has no
+// fused form and the blur refinement spends more on the three passes than
+// on anything but its inverse transforms.
+void SpectraProductDifference(const cv::Mat& a,
+                              const cv::Mat& b,
+                              const cv::Mat& c,
+                              const cv::Mat& d,
+                              cv::Mat* out);
+
 // Places a centred kernel into a zero matrix of `size` with its centre at
 // (0, 0) and negative offsets wrapped around, so that the DFT product with a
 // zero-padded image is the (circular) true convolution.
