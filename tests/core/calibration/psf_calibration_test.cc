@@ -235,6 +235,53 @@ TEST(CalibrateSplitProfile, EachBandFitsAsItsPatchesAlone) {
   }
 }
 
+// The view budget's checkpoints fit the profile again to more crops: with
+// the searches an earlier calibration left, a calibration fits what it fits
+// without them, to the bit, reading the shared crops' searches; with other
+// blur options it reads none.
+TEST(ProfileSearchCache, ALaterCalibrationFitsAsWithoutIt) {
+  SplitProfileParams sharp;
+  sharp.split_exponent = 0.6;
+  const SplitProfilePsf psf(sharp);
+  const std::vector<ProfilePatch> all =
+      RenderPatches(psf, 36, 0.004, false, 81);
+  // Copies of the pixels: crops are known by them, not by their buffers.
+  std::vector<ProfilePatch> first;
+  for (size_t k = 0; k < all.size(); k += 2) {
+    ProfilePatch copy = all[k];
+    copy.left = all[k].left.clone();
+    copy.right = all[k].right.clone();
+    first.push_back(copy);
+  }
+  ProfileSearchCache cache;
+  CalibrateSplitProfile(first, 1, FastOptions(), 0.02, true, &cache);
+  EXPECT_EQ(cache.SearchesReused(), 0);
+  EXPECT_GT(cache.SearchesRun(), 0);
+  const SplitProfileCalibration later =
+      CalibrateSplitProfile(all, 1, FastOptions(), 0.02, true, &cache);
+  EXPECT_GT(cache.SearchesReused(), 0);
+  EXPECT_GT(cache.SearchesRun(), 0);
+  EXPECT_EQ(cache.NumCrops(), static_cast<int>(all.size()));
+  const SplitProfileCalibration alone =
+      CalibrateSplitProfile(all, 1, FastOptions(), 0.02, true);
+  const SplitProfileFit& a = later.frame;
+  const SplitProfileFit& b = alone.frame;
+  Print("with the cache", a);
+  EXPECT_EQ(a.num_patches, b.num_patches);
+  EXPECT_EQ(a.centroid_offsets, b.centroid_offsets);
+  EXPECT_EQ(a.criterion, b.criterion);
+  EXPECT_EQ(a.centroid_offset, b.centroid_offset);
+  EXPECT_EQ(a.centroid_offset_ci_low, b.centroid_offset_ci_low);
+  EXPECT_EQ(a.centroid_offset_ci_high, b.centroid_offset_ci_high);
+  EXPECT_EQ(a.translating_disk_criterion, b.translating_disk_criterion);
+  EXPECT_EQ(a.reason, b.reason);
+  // Another search bound: other searches.
+  SplitProfileFitOptions wider = FastOptions();
+  wider.blur.max_radius_px += 1;
+  CalibrateSplitProfile(first, 1, wider, 0.02, true, &cache);
+  EXPECT_EQ(cache.SearchesReused(), 0);
+}
+
 // Nothing but near-focus patches: the profile cannot be seen, and the fit
 // says so instead of guessing.
 TEST(FitSplitProfile, SaysWhenTheDataCannotDetermineIt) {

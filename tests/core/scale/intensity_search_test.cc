@@ -337,6 +337,60 @@ TEST(SearchScaleByIntensity, KernelGridMatchesExactKernels) {
   }
 }
 
+void ExpectSameAnswer(const IntensitySearchResult& a,
+                      const IntensitySearchResult& b) {
+  ASSERT_TRUE(a.success && b.success);
+  EXPECT_EQ(a.scale, b.scale);
+  EXPECT_EQ(a.scale_ci_low, b.scale_ci_low);
+  EXPECT_EQ(a.scale_ci_high, b.scale_ci_high);
+  EXPECT_EQ(a.bootstrap_support, b.bootstrap_support);
+  EXPECT_EQ(a.candidate_scales, b.candidate_scales);
+  EXPECT_EQ(a.candidate_losses, b.candidate_losses);
+}
+
+// The view budget's checkpoints search the stored crops again, with more
+// views and another initial scale: with the statistics an earlier search
+// left, a search answers what it answers without them, to the bit (other
+// candidates: other nodes, new neighbours' cross terms), and takes those
+// of the crops it shares; another profile's kernels take none.
+TEST(IntensityStatsCache, ALaterSearchAnswersAsWithoutIt) {
+  const TranslatingDiskPsf psf;
+  const double scale = 0.25;
+  test::RenderOptions render;
+  render.noise_sigma = 0.01;
+  const Scene scene = MakeScene(psf, scale, 3, 4, render);
+  IntensitySearchOptions options;
+  options.num_bootstrap = 20;
+  std::vector<IntensityPatch> first;
+  for (const IntensityPatch& patch : scene.patches) {
+    if (patch.view < 2) first.push_back(patch);
+  }
+  IntensityStatsCache cache;
+  const IntensitySearchResult earlier = SearchScaleByIntensity(
+      scene.views, first, scale * 0.93, psf, options, &cache);
+  ASSERT_TRUE(earlier.success);
+  EXPECT_EQ(earlier.num_nodes_reused, 0);
+  EXPECT_GT(earlier.num_nodes_computed, 0);
+  EXPECT_EQ(cache.NumCrops(), static_cast<int>(first.size()));
+
+  const IntensitySearchResult later = SearchScaleByIntensity(
+      scene.views, scene.patches, scale * 0.97, psf, options, &cache);
+  const IntensitySearchResult alone = SearchScaleByIntensity(
+      scene.views, scene.patches, scale * 0.97, psf, options);
+  ExpectSameAnswer(later, alone);
+  EXPECT_GT(later.num_nodes_reused, 0);
+  EXPECT_GT(later.num_nodes_computed, 0);
+  EXPECT_EQ(cache.NumCrops(), static_cast<int>(scene.patches.size()));
+
+  const SplitProfilePsf other(SplitProfileParams::ForCentroidOffset(0.2));
+  const IntensitySearchResult other_later = SearchScaleByIntensity(
+      scene.views, scene.patches, scale * 0.97, other, options, &cache);
+  const IntensitySearchResult other_alone = SearchScaleByIntensity(
+      scene.views, scene.patches, scale * 0.97, other, options);
+  ExpectSameAnswer(other_later, other_alone);
+  EXPECT_EQ(other_later.num_nodes_reused, 0);
+}
+
 // Notes sec. 5: on noisy data the paper's loss drifts towards larger blur
 // (smaller s). Measure both losses on the same noisy scene; the noise-aware
 // loss must be within 2 % and no worse than the paper's.

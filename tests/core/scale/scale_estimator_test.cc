@@ -423,6 +423,58 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
 // fit and never replaced: data from a sharper split (which the disk reads
 // ~20 % small) refuse, naming the fix and how far off the disk would be;
 // data from the disk itself keep their answer, unchanged.
+// The view budget's checkpoints: an Estimate after some views leaves the
+// next one's answer as a single Estimate after all of them gives it, to the
+// bit, while the profile fit and the intensity stage read the statistics
+// of the stored crops the earlier one computed (the intensity stage's only
+// where the profile is the same: a profile fitted again to more views has
+// other kernels).
+TEST(DPScaleEstimator, AnEarlierEstimateLeavesTheAnswerAsItIs) {
+  const double scale = 0.0731;
+  SplitProfileParams sharp;
+  sharp.split_exponent = 0.3;
+  const std::vector<DPView> views =
+      RenderAll(SixPositions(Lens(50, 2.8), Lens(35, 2), 90),
+                scale,
+                SplitProfilePsf(sharp));
+  DPScaleOptions disk = SmallFrameOptions();
+  DPScaleOptions self = disk;
+  self.psf_self_calibration = DPScaleOptions::SelfCalibration::kFit;
+  self.self_calibration_shape_uncertainty = 0;
+  for (const bool fit : {false, true}) {
+    const DPScaleOptions& options = fit ? self : disk;
+    DPScaleEstimator checked(options, std::make_shared<TranslatingDiskPsf>());
+    for (int k = 0; k < 4; ++k) checked.AddView(views[k]);
+    const DPScaleResult early = checked.Estimate();
+    ASSERT_TRUE(early.success) << Why(early);
+    EXPECT_EQ(early.intensity_nodes_reused, 0);
+    EXPECT_EQ(early.psf_fit_searches_reused, 0);
+    for (int k = 4; k < 6; ++k) checked.AddView(views[k]);
+    const DPScaleResult later = checked.Estimate();
+    const DPScaleResult alone = RunPipeline(views, options).result;
+    ASSERT_TRUE(later.success && alone.success) << Why(later) << Why(alone);
+    EXPECT_TRUE(later.intensity_used) << later.intensity_status;
+    EXPECT_GT(later.intensity_nodes_computed, 0);
+    if (fit) {
+      EXPECT_TRUE(later.psf_self_calibrated) << later.psf_status;
+      EXPECT_GT(later.psf_fit_searches_reused, 0);
+      EXPECT_GT(later.psf_fit_searches_run, 0);
+    } else {
+      EXPECT_GT(later.intensity_nodes_reused, 0);
+    }
+    EXPECT_EQ(later.psf_status, alone.psf_status);
+    EXPECT_EQ(later.psf_fit.centroid_offset, alone.psf_fit.centroid_offset);
+    EXPECT_EQ(later.scale_initial, alone.scale_initial);
+    EXPECT_EQ(later.scale_intensity, alone.scale_intensity);
+    EXPECT_EQ(later.intensity_ci_low, alone.intensity_ci_low);
+    EXPECT_EQ(later.intensity_ci_high, alone.intensity_ci_high);
+    EXPECT_EQ(later.candidate_losses, alone.candidate_losses);
+    EXPECT_EQ(later.scale, alone.scale);
+    EXPECT_EQ(later.scale_ci_low, alone.scale_ci_low);
+    EXPECT_EQ(later.scale_ci_high, alone.scale_ci_high);
+  }
+}
+
 TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
   const double scale = 0.0731;
   const std::vector<CaptureSpec> specs =

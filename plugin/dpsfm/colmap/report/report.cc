@@ -49,6 +49,9 @@ nlohmann::json IntensitySection(const DPScaleResult& result) {
           : nullptr;
   intensity["loss"] = result.intensity_loss;
   intensity["failed_evaluations"] = result.intensity_failed_evaluations;
+  intensity["node_statistics"] = {
+      {"reused", result.intensity_nodes_reused},
+      {"computed", result.intensity_nodes_computed}};
   nlohmann::json curve = nlohmann::json::array();
   for (size_t i = 0;
        i < result.candidate_scales.size() && i < result.candidate_losses.size();
@@ -107,6 +110,8 @@ nlohmann::json PsfSection(const DPScaleResult& result) {
                             "(--DPScaleEstimator.psf_model calibrated)";
   if (!status.empty() && result.psf_fit_ran) {
     psf["fit"] = ProfileFit(result.psf_fit);
+    psf["fit"]["patch_searches"] = {{"reused", result.psf_fit_searches_reused},
+                                    {"run", result.psf_fit_searches_run}};
     // A profile that changes across the frame: each column band's fit.
     nlohmann::json bands = nlohmann::json::array();
     for (const SplitProfileFit& band : result.psf_band_fits) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -252,6 +253,23 @@ bool BlurEstimationOptions::Check(std::string* failure) const {
       fit_quality_offset_px);
   DPSFM_CHECK_OPTION_GE(max_refinement_evaluations, 3);
   return true;
+}
+
+bool operator==(const BlurEstimationOptions& a,
+                const BlurEstimationOptions& b) {
+  auto fields = [](const BlurEstimationOptions& o) {
+    return std::tie(o.max_radius_px,
+                    o.grid_step_px,
+                    o.coarse_step_px,
+                    o.coarse_band,
+                    o.normalize_gain,
+                    o.subtract_noise_floor,
+                    o.min_texture,
+                    o.min_fit_quality,
+                    o.fit_quality_offset_px,
+                    o.max_refinement_evaluations);
+  };
+  return fields(a) == fields(b);
 }
 
 PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,

@@ -102,6 +102,9 @@ struct BlurEstimationOptions {
   bool Check(std::string* failure = nullptr) const;
 };
 
+// Every field equal: the same search (a field added above belongs here too).
+bool operator==(const BlurEstimationOptions& a, const BlurEstimationOptions& b);
+
 struct PatchBlurEstimate {
   // True if radius_px is a usable estimate; otherwise reject_reason says why.
   bool valid = false;

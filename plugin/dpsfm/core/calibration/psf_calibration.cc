@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <numeric>
 #include <random>
+#include <set>
 #include <sstream>
+#include <unordered_map>
+#include <utility>
 
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
@@ -15,9 +19,60 @@
 #include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
+
+struct ProfileSearchCache::Impl {
+  // A crop's searches: per profile key (ProfileSearches), the radius (NaN:
+  // no estimate) and relative residual.
+  struct Crop {
+    cv::Mat left, right;  // the pixels it is known by
+    std::map<double, std::pair<double, double>> by_key;
+    int reused = 0, run = 0;  // in the current calibration
+  };
+  bool has_options = false;
+  BlurEstimationOptions blur;  // the options every held search used
+  std::unordered_multimap<uint64_t, Crop> crops;  // by PixelHash
+
+  // Starts a calibration with `blur`: what other options searched is
+  // dropped.
+  void Begin(const BlurEstimationOptions& options) {
+    if (!has_options || !(blur == options)) crops.clear();
+    blur = options;
+    has_options = true;
+  }
+  // The record of the crop of these pixels (created empty).
+  Crop* Find(const cv::Mat& left, const cv::Mat& right);
+  // Drops the crops the current calibration does not use.
+  void KeepOnly(const std::vector<Crop*>& used);
+};
+
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// FNV-1a over the rows of both crops.
+uint64_t PixelHash(const cv::Mat& left, const cv::Mat& right) {
+  uint64_t hash = 1469598103934665603ull;
+  for (const cv::Mat* m : {&left, &right}) {
+    const size_t row_bytes = m->cols * m->elemSize();
+    for (int y = 0; y < m->rows; ++y) {
+      const uchar* p = m->ptr(y);
+      for (size_t i = 0; i < row_bytes; ++i) {
+        hash = (hash ^ p[i]) * 1099511628211ull;
+      }
+    }
+  }
+  return hash;
+}
+
+bool SamePixels(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) return false;
+  for (int y = 0; y < a.rows; ++y) {
+    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
+      return false;
+    }
+  }
+  return true;
+}
 
 // Per-patch outcome of the blur search under one profile.
 struct Evaluation {
@@ -38,12 +93,25 @@ class ProfileSearches {
   static constexpr double kTranslatingDisk =
       std::numeric_limits<double>::infinity();
 
+  // `cache` (optional): searches kept from an earlier calibration, and
+  // where this one's go.
   ProfileSearches(const std::vector<ProfilePatch>& patches,
-                  const SplitProfileFitOptions& options)
+                  const SplitProfileFitOptions& options,
+                  ProfileSearchCache* cache)
       : patches_(patches),
         options_(options),
         prepared_(patches.size()),
-        is_prepared_(patches.size(), false) {}
+        is_prepared_(patches.size(), false),
+        records_(patches.size(), nullptr) {
+    if (cache == nullptr) return;
+    ProfileSearchCache::Impl& impl = cache->impl();
+    impl.Begin(options.blur);
+    for (size_t i = 0; i < patches.size(); ++i) {
+      records_[i] = impl.Find(patches[i].left, patches[i].right);
+      records_[i]->reused = records_[i]->run = 0;
+    }
+    impl.KeepOnly(records_);
+  }
 
   const std::vector<ProfilePatch>& Patches() const { return patches_; }
 
@@ -55,7 +123,9 @@ class ProfileSearches {
     if (known.empty()) known.resize(patches_.size());
     std::vector<int> todo;
     for (int i : members) {
-      if (!known[i].searched) todo.push_back(i);
+      if (!known[i].searched && !FromCache(key, &known[i], records_[i])) {
+        todo.push_back(i);
+      }
     }
     if (!todo.empty()) SearchPatches(key, todo, &known);
     Evaluation e;
@@ -109,13 +179,33 @@ class ProfileSearches {
         o.radius = estimates[k].radius_px;
         o.residual = estimates[k].relative_residual;
       }
+      if (records_[i] != nullptr) {
+        records_[i]->by_key[key] = {o.radius, o.residual};
+        ++records_[i]->run;
+      }
     }
+  }
+
+  // The outcome an earlier calibration's search of the same crop under
+  // the same profile gave, if any.
+  static bool FromCache(double key,
+                        Outcome* o,
+                        ProfileSearchCache::Impl::Crop* record) {
+    if (record == nullptr) return false;
+    const auto it = record->by_key.find(key);
+    if (it == record->by_key.end()) return false;
+    o->searched = true;
+    o->radius = it->second.first;
+    o->residual = it->second.second;
+    ++record->reused;
+    return true;
   }
 
   const std::vector<ProfilePatch>& patches_;
   const SplitProfileFitOptions& options_;
   std::vector<PreparedBlurPatch> prepared_;
   std::vector<bool> is_prepared_;
+  std::vector<ProfileSearchCache::Impl::Crop*> records_;  // null: no cache
   std::map<double, std::vector<Outcome>> outcomes_;  // by key
 };
 
@@ -627,10 +717,52 @@ SplitProfileFit FitProfile(ProfileSearches* searches,
 
 }  // namespace
 
+ProfileSearchCache::Impl::Crop* ProfileSearchCache::Impl::Find(
+    const cv::Mat& left, const cv::Mat& right) {
+  const uint64_t hash = PixelHash(left, right);
+  const auto range = crops.equal_range(hash);
+  for (auto it = range.first; it != range.second; ++it) {
+    if (SamePixels(it->second.left, left) &&
+        SamePixels(it->second.right, right)) {
+      return &it->second;
+    }
+  }
+  Crop& crop = crops.emplace(hash, Crop())->second;
+  crop.left = left;
+  crop.right = right;
+  return &crop;
+}
+
+void ProfileSearchCache::Impl::KeepOnly(const std::vector<Crop*>& used) {
+  const std::set<const Crop*> keep(used.begin(), used.end());
+  for (auto it = crops.begin(); it != crops.end();) {
+    it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
+  }
+}
+
+ProfileSearchCache::ProfileSearchCache() : impl_(new Impl) {}
+ProfileSearchCache::~ProfileSearchCache() = default;
+
+int ProfileSearchCache::NumCrops() const {
+  return static_cast<int>(impl_->crops.size());
+}
+
+int ProfileSearchCache::SearchesReused() const {
+  int total = 0;
+  for (const auto& entry : impl_->crops) total += entry.second.reused;
+  return total;
+}
+
+int ProfileSearchCache::SearchesRun() const {
+  int total = 0;
+  for (const auto& entry : impl_->crops) total += entry.second.run;
+  return total;
+}
+
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options) {
   DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
-  ProfileSearches searches(patches, options);
+  ProfileSearches searches(patches, options, nullptr);
   return FitProfile(&searches, Indices(patches.size()), options);
 }
 
@@ -702,12 +834,13 @@ SplitProfileCalibration CalibrateSplitProfile(
     int num_bands,
     const SplitProfileFitOptions& options,
     double min_band_difference,
-    bool bands_when_frame_fits) {
+    bool bands_when_frame_fits,
+    ProfileSearchCache* cache) {
   DPSFM_CHECK_GE(num_bands, 1);
   DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
   SplitProfileCalibration calibration;
   // The bands' fits read the frame's searches of their patches.
-  ProfileSearches searches(patches, options);
+  ProfileSearches searches(patches, options, cache);
   calibration.frame = FitProfile(&searches, Indices(patches.size()), options);
   std::ostringstream summary;
   summary << "whole frame: " << calibration.frame.reason;

@@ -31,6 +31,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -165,15 +166,44 @@ struct SplitProfileCalibration {
   bool banded = false;
   std::string summary;
 };
+// The blur searches of one CalibrateSplitProfile kept for the next (the
+// view budget's checkpoints fit the profile again to the stored crops of
+// the views they share): per crop, known by its pixels, and per profile,
+// the estimate's radius and residual. A search depends on nothing but the
+// crop, the profile and the blur options, so a later calibration with the
+// same options reads it where it would search and fits the same, to the
+// bit. Holds what the last calibration used; one calibration at a time.
+class ProfileSearchCache {
+ public:
+  ProfileSearchCache();
+  ~ProfileSearchCache();
+  ProfileSearchCache(const ProfileSearchCache&) = delete;
+  ProfileSearchCache& operator=(const ProfileSearchCache&) = delete;
+
+  // Crops held, and the last calibration's patch searches read from the
+  // cache and run.
+  int NumCrops() const;
+  int SearchesReused() const;
+  int SearchesRun() const;
+
+  struct Impl;  // psf_calibration.cc
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
 // bands_when_frame_fits = false fits the bands only when the whole frame's
 // profile is not determined (self-calibration: saves their cost when one
-// profile explains the data).
+// profile explains the data). `cache` (optional) carries the patch
+// searches from one calibration to the next.
 SplitProfileCalibration CalibrateSplitProfile(
     const std::vector<ProfilePatch>& patches,
     int num_bands,
     const SplitProfileFitOptions& options,
     double min_band_difference = 0.02,
-    bool bands_when_frame_fits = true);
+    bool bands_when_frame_fits = true,
+    ProfileSearchCache* cache = nullptr);
 
 // Calibration captures: the textured patches of a DP pair of a planar,
 // fronto-parallel target (one blur radius over the frame). Grey CV_32FC1

@@ -307,6 +307,64 @@ std::vector<int> IntervalsOf(const DPKernelGrid& grid,
 // product of A and B follows in closed form from those of a and b, which
 // the float transforms give to their own precision rather than to that of
 // the mean.
+namespace {
+
+// The statistics of a node that do not involve the next one.
+void CopyOwnStats(const NodeChannelStats& from, NodeChannelStats* to) {
+  to->sum_a = from.sum_a;
+  to->sum_b = from.sum_b;
+  to->aa = from.aa;
+  to->bb = from.bb;
+  to->ab = from.ab;
+}
+
+void CopyNextStats(const NodeChannelStats& from, NodeChannelStats* to) {
+  to->aa_next = from.aa_next;
+  to->bb_next = from.bb_next;
+  to->ab_next = from.ab_next;
+  to->ba_next = from.ba_next;
+}
+
+// Which of the (sorted) nodes must be computed from the crops: those the
+// cache lacks, and both ends of a pair of consecutive nodes whose cross
+// terms it lacks. All of them without a cache.
+std::vector<char> NodesToCompute(const std::vector<int>& nodes,
+                                 const CachedCrop* cached) {
+  std::vector<char> compute(nodes.size(), 1);
+  if (cached == nullptr) return compute;
+  auto pair_cached = [&](int n) {
+    const auto it = cached->nodes.find(n);
+    return it != cached->nodes.end() && it->second.has_next;
+  };
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const int n = nodes[i];
+    bool known = cached->nodes.count(n) > 0;
+    if (i + 1 < nodes.size() && nodes[i + 1] == n + 1) {
+      known = known && pair_cached(n);
+    }
+    if (i > 0 && nodes[i - 1] == n - 1) known = known && pair_cached(n - 1);
+    compute[i] = !known;
+  }
+  return compute;
+}
+
+// The nodes an AddIntervals call added, into the crop's cache record (a
+// node's own statistics are the same however often computed; cross terms
+// are added where the record lacks them).
+void CacheNodes(const std::vector<int>& nodes,
+                const Prepared& p,
+                CachedCrop* cached) {
+  for (const int n : nodes) {
+    const Prepared::NodeEntry& entry = p.stats.at(n);
+    const auto it = cached->nodes.find(n);
+    if (it == cached->nodes.end() || (entry.has_next && !it->second.has_next)) {
+      cached->nodes[n] = entry;
+    }
+  }
+}
+
+}  // namespace
+
 void AddIntervals(const IntensityPatch& patch,
                   const std::vector<int>& intervals,
                   Prepared* p) {
@@ -321,18 +379,25 @@ void AddIntervals(const IntensityPatch& patch,
   if (nodes.empty()) return;
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  CachedCrop* cached = p->cached;
+  const std::vector<char> compute = NodesToCompute(nodes, cached);
 
   const DPKernelGrid& grid = *p->grid;
   std::vector<cv::Mat> left_channels, right_channels;
-  cv::split(ToFloat(patch.left), left_channels);
-  cv::split(ToFloat(patch.right), right_channels);
-  const int channels = static_cast<int>(left_channels.size());
-  std::vector<double> mean_left(channels), mean_right(channels);
-  for (int c = 0; c < channels; ++c) {
-    mean_left[c] = SumD(left_channels[c]) / left_channels[c].total();
-    mean_right[c] = SumD(right_channels[c]) / right_channels[c].total();
-    left_channels[c] -= mean_left[c];
-    right_channels[c] -= mean_right[c];
+  int channels = p->channels;
+  std::vector<double> mean_left, mean_right;
+  if (std::find(compute.begin(), compute.end(), 1) != compute.end()) {
+    cv::split(ToFloat(patch.left), left_channels);
+    cv::split(ToFloat(patch.right), right_channels);
+    channels = static_cast<int>(left_channels.size());
+    mean_left.resize(channels);
+    mean_right.resize(channels);
+    for (int c = 0; c < channels; ++c) {
+      mean_left[c] = SumD(left_channels[c]) / left_channels[c].total();
+      mean_right[c] = SumD(right_channels[c]) / right_channels[c].total();
+      left_channels[c] -= mean_left[c];
+      right_channels[c] -= mean_right[c];
+    }
   }
   // Per class, the views' spectra per channel, when a node needs them.
   std::vector<std::vector<cv::Mat>> spec_left(grid.NumSpectrumClasses()),
@@ -373,15 +438,36 @@ void AddIntervals(const IntensityPatch& patch,
            count * x.constant * y.constant;
   };
   std::vector<BlurredView> previous_a(channels), previous_b(channels);
-  int previous_node = -2;
-  for (const int n : nodes) {
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const int n = nodes[i];
     Prepared::NodeEntry& entry = p->stats[n];
     // A node computed again (the first node of an interval below one
     // prepared before) keeps its terms with the next node: they are the
     // same, and the next node is not computed again.
     entry.channel.resize(channels);
-    Prepared::NodeEntry* before =
-        previous_node == n - 1 ? &p->stats[n - 1] : nullptr;
+    const bool after_previous = i > 0 && nodes[i - 1] == n - 1;
+    Prepared::NodeEntry* before = after_previous ? &p->stats[n - 1] : nullptr;
+    // The cross terms with the previous node from the cache unless both
+    // nodes are computed here.
+    const bool cached_pair =
+        before != nullptr && !(compute[i] && compute[i - 1]);
+    if (cached_pair) {
+      const Prepared::NodeEntry& from = cached->nodes.at(n - 1);
+      for (int c = 0; c < channels; ++c) {
+        CopyNextStats(from.channel[c], &before->channel[c]);
+      }
+      before->has_next = true;
+    }
+    if (!compute[i]) {
+      const Prepared::NodeEntry& from = cached->nodes.at(n);
+      for (int c = 0; c < channels; ++c) {
+        CopyOwnStats(from.channel[c], &entry.channel[c]);
+      }
+      ++cached->reused;
+      continue;
+    }
+    if (cached != nullptr) ++cached->computed;
+    const bool with_previous = before != nullptr && !cached_pair;
     const int k = grid.SpectrumClassOf(n);
     transformed(k);
     const cv::Rect interior = grid.InteriorOf(k);
@@ -392,8 +478,8 @@ void AddIntervals(const IntensityPatch& patch,
       const NodeMoments m =
           MomentsOf(a.image,
                     b.image,
-                    before != nullptr ? previous_a[c].image : cv::Mat(),
-                    before != nullptr ? previous_b[c].image : cv::Mat());
+                    with_previous ? previous_a[c].image : cv::Mat(),
+                    with_previous ? previous_b[c].image : cv::Mat());
       a.sum = m.sum_a;
       b.sum = m.sum_b;
       a.constant = mean_left[c] * grid.RightSum(n);
@@ -404,7 +490,7 @@ void AddIntervals(const IntensityPatch& patch,
       s.aa = inner(m.aa, a, a);
       s.bb = inner(m.bb, b, b);
       s.ab = inner(m.ab, a, b);
-      if (before != nullptr) {
+      if (with_previous) {
         NodeChannelStats& prev = before->channel[c];
         prev.aa_next = inner(m.pa_a, previous_a[c], a);
         prev.bb_next = inner(m.pb_b, previous_b[c], b);
@@ -414,9 +500,9 @@ void AddIntervals(const IntensityPatch& patch,
       previous_a[c] = a;
       previous_b[c] = b;
     }
-    if (before != nullptr) before->has_next = true;
-    previous_node = n;
+    if (with_previous) before->has_next = true;
   }
+  if (cached != nullptr) CacheNodes(nodes, *p, cached);
 }
 
 // Radii of a patch under the given scales (eq. (solution01) with s g_i' and

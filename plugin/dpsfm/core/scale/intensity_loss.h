@@ -6,6 +6,8 @@
 #pragma once
 
 #include <map>
+#include <memory>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -28,6 +30,8 @@ struct NodeChannelStats {
   // <A_n, A_n+1>, <B_n, B_n+1>, <A_n, B_n+1>, <B_n, A_n+1>.
   double aa_next = 0, bb_next = 0, ab_next = 0, ba_next = 0;
 };
+
+struct CachedCrop;
 
 // A patch converted once for the whole search.
 struct Prepared {
@@ -57,7 +61,43 @@ struct Prepared {
     std::vector<NodeChannelStats> channel;
   };
   std::map<int, NodeEntry> stats;
+  // The crop's record in an IntensityStatsCache (null: none): AddIntervals
+  // takes the statistics it holds and adds what it computes.
+  CachedCrop* cached = nullptr;
 };
+
+// A crop's statistics on one grid, kept across searches.
+struct CachedCrop {
+  cv::Mat left, right;  // the crop's buffers, alive while known by them
+  std::vector<double> noise_sigma;  // EstimatePairNoiseSigma (empty: not yet)
+  std::map<int, Prepared::NodeEntry> nodes;  // cross terms where has_next
+  int reused = 0, computed = 0;              // nodes, in the current search
+};
+
+}  // namespace intensity
+
+struct IntensityStatsCache::Impl {
+  // A crop on a grid: its two buffers, size, border and the grid.
+  using CropKey = std::
+      tuple<const uchar*, const uchar*, int, int, int, const DPKernelGrid*>;
+  std::vector<std::unique_ptr<DPKernelGrid>> grids;
+  std::map<CropKey, intensity::CachedCrop> crops;
+
+  // The cached grid whose kernels equal *grid's (then *grid is dropped),
+  // else *grid, now held here.
+  const DPKernelGrid* Share(std::unique_ptr<DPKernelGrid>* grid);
+  // The record of a crop on a grid (created empty).
+  intensity::CachedCrop* Crop(const cv::Mat& left,
+                              const cv::Mat& right,
+                              int border,
+                              const DPKernelGrid* grid);
+  // Drops the grids and crops the current search does not use: call once
+  // its records are taken, before the statistics are computed.
+  void KeepOnlyUsed(const std::vector<const DPKernelGrid*>& used_grids,
+                    const std::vector<intensity::CachedCrop*>& used_crops);
+};
+
+namespace intensity {
 
 // kRelativeL2 per channel: mean squared difference `acc` of the normalised
 // cross-blurred patches, its noise gain (noise = sigma^2 gain), the patches'
@@ -84,8 +124,10 @@ double LossOfPrepared(const Prepared& p,
 std::vector<int> IntervalsOf(const DPKernelGrid& grid,
                              const std::vector<double>& radii);
 
-// Adds to p->stats the nodes of the given intervals that are not ready yet,
-// from the patch's crops.
+// Adds to p->stats the nodes of the given intervals that are not ready yet:
+// from p->cached where it holds them (a node's own statistics, and its
+// cross terms with the next node where both are added), else from the
+// patch's crops (then added to p->cached).
 void AddIntervals(const IntensityPatch& patch,
                   const std::vector<int>& intervals,
                   Prepared* p);

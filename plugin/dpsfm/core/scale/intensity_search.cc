@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <memory>
 #include <random>
+#include <set>
 #include <tuple>
 #include <utility>
 
@@ -51,6 +53,100 @@ bool IntensitySearchOptions::Check(std::string* failure) const {
   return true;
 }
 
+// Two grids of the same kernels, step and interior give the same spectra
+// and statistics.
+bool SameKernels(const DPKernelGrid& a, const DPKernelGrid& b) {
+  if (a.NumNodes() != b.NumNodes() || a.Step() != b.Step() ||
+      a.NumSpectrumClasses() != b.NumSpectrumClasses()) {
+    return false;
+  }
+  auto same = [](const cv::Mat& x, const cv::Mat& y) {
+    if (x.size() != y.size() || x.type() != y.type()) return false;
+    for (int r = 0; r < x.rows; ++r) {
+      if (std::memcmp(x.ptr(r), y.ptr(r), x.cols * x.elemSize()) != 0) {
+        return false;
+      }
+    }
+    return true;
+  };
+  for (int c = 0; c < a.NumSpectrumClasses(); ++c) {
+    if (a.SpectrumClassAt(c).dft_size != b.SpectrumClassAt(c).dft_size ||
+        a.InteriorOf(c) != b.InteriorOf(c)) {
+      return false;
+    }
+  }
+  for (int n = 0; n < a.NumNodes(); ++n) {
+    if (!same(a.LeftKernel(n), b.LeftKernel(n)) ||
+        !same(a.RightKernel(n), b.RightKernel(n))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+const DPKernelGrid* IntensityStatsCache::Impl::Share(
+    std::unique_ptr<DPKernelGrid>* grid) {
+  for (const auto& held : grids) {
+    if (SameKernels(*held, **grid)) {
+      grid->reset();
+      return held.get();
+    }
+  }
+  grids.push_back(std::move(*grid));
+  return grids.back().get();
+}
+
+intensity::CachedCrop* IntensityStatsCache::Impl::Crop(
+    const cv::Mat& left,
+    const cv::Mat& right,
+    int border,
+    const DPKernelGrid* grid) {
+  const CropKey key(left.data, right.data, left.cols, left.rows, border, grid);
+  intensity::CachedCrop& record = crops[key];
+  if (record.left.empty()) {
+    record.left = left;
+    record.right = right;
+  }
+  return &record;
+}
+
+void IntensityStatsCache::Impl::KeepOnlyUsed(
+    const std::vector<const DPKernelGrid*>& used_grids,
+    const std::vector<intensity::CachedCrop*>& used_crops) {
+  const std::set<const intensity::CachedCrop*> keep(used_crops.begin(),
+                                                    used_crops.end());
+  for (auto it = crops.begin(); it != crops.end();) {
+    it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
+  }
+  grids.erase(std::remove_if(grids.begin(),
+                             grids.end(),
+                             [&](const std::unique_ptr<DPKernelGrid>& g) {
+                               return std::find(used_grids.begin(),
+                                                used_grids.end(),
+                                                g.get()) == used_grids.end();
+                             }),
+              grids.end());
+}
+
+IntensityStatsCache::IntensityStatsCache() : impl_(new Impl) {}
+IntensityStatsCache::~IntensityStatsCache() = default;
+
+int IntensityStatsCache::NumCrops() const {
+  return static_cast<int>(impl_->crops.size());
+}
+
+int IntensityStatsCache::NodesReused() const {
+  int total = 0;
+  for (const auto& entry : impl_->crops) total += entry.second.reused;
+  return total;
+}
+
+int IntensityStatsCache::NodesComputed() const {
+  int total = 0;
+  for (const auto& entry : impl_->crops) total += entry.second.computed;
+  return total;
+}
+
 namespace {
 
 using intensity::AddIntervals;
@@ -89,16 +185,18 @@ const DPPsfModel& PsfOf(const IntensityPatch& patch, const DPPsfModel& psf) {
 
 // Kernel grids, one per crop geometry and PSF (L2-family losses only; the
 // paper's L1 needs the pixels at every radius), built before the parallel
-// loops; per patch its grid (null: the exact path).
+// loops (or taken from the cache where its kernels are the same); per
+// patch its grid (null: the exact path).
 struct PatchGrids {
-  std::map<std::tuple<int, int, int, const DPPsfModel*>,
-           std::unique_ptr<DPKernelGrid>>
+  std::map<std::tuple<int, int, int, const DPPsfModel*>, const DPKernelGrid*>
       grids;
+  std::vector<std::unique_ptr<DPKernelGrid>> owned;  // without a cache
   std::vector<const DPKernelGrid*> of_patch;
 };
 void BuildKernelGrids(const std::vector<IntensityPatch>& patches,
                       const DPPsfModel& psf,
                       const IntensitySearchOptions& options,
+                      IntensityStatsCache* cache,
                       PatchGrids* out) {
   out->of_patch.assign(patches.size(), nullptr);
   const bool use_grid =
@@ -127,10 +225,43 @@ void BuildKernelGrids(const std::vector<IntensityPatch>& patches,
                                       patch.left.rows - 2 * patch.border),
                              options.num_threads));
       }
-      it = out->grids.emplace(key, std::move(grid)).first;
+      const DPKernelGrid* shared = grid.get();
+      if (grid != nullptr && cache != nullptr) {
+        shared = cache->impl().Share(&grid);
+      } else if (grid != nullptr) {
+        out->owned.push_back(std::move(grid));
+      }
+      it = out->grids.emplace(key, shared).first;
     }
-    out->of_patch[j] = it->second.get();
+    out->of_patch[j] = it->second;
   }
+}
+
+// Each patch's record in the cache (null without one, or without a grid),
+// the cache left holding only these.
+std::vector<intensity::CachedCrop*> CacheRecords(
+    const std::vector<IntensityPatch>& patches,
+    const PatchGrids& grids,
+    IntensityStatsCache* cache) {
+  std::vector<intensity::CachedCrop*> records(patches.size(), nullptr);
+  if (cache == nullptr) return records;
+  IntensityStatsCache::Impl& impl = cache->impl();
+  std::set<const intensity::CachedCrop*> taken;
+  for (size_t j = 0; j < patches.size(); ++j) {
+    if (grids.of_patch[j] == nullptr) continue;
+    intensity::CachedCrop* record = impl.Crop(patches[j].left,
+                                              patches[j].right,
+                                              patches[j].border,
+                                              grids.of_patch[j]);
+    // A crop listed twice is cached once (its patches run in parallel).
+    if (!taken.insert(record).second) continue;
+    record->reused = record->computed = 0;
+    records[j] = record;
+  }
+  std::vector<const DPKernelGrid*> used_grids;
+  for (const auto& entry : grids.grids) used_grids.push_back(entry.second);
+  impl.KeepOnlyUsed(used_grids, records);
+  return records;
 }
 
 bool UsesNoise(IntensityLoss loss) {
@@ -142,13 +273,15 @@ bool UsesNoise(IntensityLoss loss) {
 // node statistics over the radii its candidates reach: the first-pass
 // scales and the initial scale (the reference radius of kRelativeL2); the
 // refine pass adds its own.
-std::vector<Prepared> PreparePatches(const std::vector<IntensityView>& views,
-                                     const std::vector<IntensityPatch>& patches,
-                                     const DPPsfModel& psf,
-                                     const PatchGrids& grids,
-                                     const std::vector<double>& scales,
-                                     double initial_scale,
-                                     const IntensitySearchOptions& options) {
+std::vector<Prepared> PreparePatches(
+    const std::vector<IntensityView>& views,
+    const std::vector<IntensityPatch>& patches,
+    const DPPsfModel& psf,
+    const PatchGrids& grids,
+    const std::vector<intensity::CachedCrop*>& records,
+    const std::vector<double>& scales,
+    double initial_scale,
+    const IntensitySearchOptions& options) {
   const int num_patches = static_cast<int>(patches.size());
   std::vector<Prepared> prepared(num_patches);
 #ifdef _OPENMP
@@ -161,8 +294,14 @@ std::vector<Prepared> PreparePatches(const std::vector<IntensityView>& views,
     p = intensity::Prepare(
         patches[j], patch_psf, options.max_radius_px);  // checked
     p.psf = &patch_psf;
+    p.cached = records[j];
     if (UsesNoise(options.loss)) {
-      p.sigma_left = EstimatePairNoiseSigma(p.left, p.right);
+      if (p.cached != nullptr && !p.cached->noise_sigma.empty()) {
+        p.sigma_left = p.cached->noise_sigma;
+      } else {
+        p.sigma_left = EstimatePairNoiseSigma(p.left, p.right);
+        if (p.cached != nullptr) p.cached->noise_sigma = p.sigma_left;
+      }
       p.sigma_right = p.sigma_left;
     }
     const DPKernelGrid* grid = grids.of_patch[j];
@@ -479,7 +618,8 @@ IntensitySearchResult SearchScaleByIntensity(
     const std::vector<IntensityPatch>& patches,
     double initial_scale,
     const DPPsfModel& psf,
-    const IntensitySearchOptions& options) {
+    const IntensitySearchOptions& options,
+    IntensityStatsCache* cache) {
   DPSFM_CHECK_OPTIONS(options, "IntensitySearchOptions");
   IntensitySearchResult result;
   if (!(initial_scale > 0) || !std::isfinite(initial_scale)) {
@@ -504,9 +644,11 @@ IntensitySearchResult SearchScaleByIntensity(
   for (int k = 0; k < num; ++k) scales[k] = lo + step * k;
 
   PatchGrids grids;
-  BuildKernelGrids(patches, psf, options, &grids);
+  BuildKernelGrids(patches, psf, options, cache, &grids);
+  const std::vector<intensity::CachedCrop*> records =
+      CacheRecords(patches, grids, cache);
   std::vector<Prepared> prepared = PreparePatches(
-      views, patches, psf, grids, scales, initial_scale, options);
+      views, patches, psf, grids, records, scales, initial_scale, options);
   if (UsesNoise(options.loss)) {
     CapNoiseAtViewMedian(views.size(), patches, &prepared);
   }
@@ -555,6 +697,11 @@ IntensitySearchResult SearchScaleByIntensity(
   if (options.num_bootstrap > 0) {
     BootstrapInterval(
         views.size(), patches, scales, curves, step, options, &result);
+  }
+  for (const intensity::CachedCrop* record : records) {
+    if (record == nullptr) continue;
+    result.num_nodes_reused += record->reused;
+    result.num_nodes_computed += record->computed;
   }
   result.success = true;
   return result;

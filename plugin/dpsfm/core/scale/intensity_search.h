@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -119,6 +120,9 @@ struct IntensitySearchResult {
   // Loss evaluations that threw (a patch whose loss cannot be evaluated at
   // a radius contributes nothing there); the report shows the count.
   int num_failed_evaluations = 0;
+  // Node statistics (per patch and grid node) taken from the cache and
+  // computed from the crops.
+  int num_nodes_reused = 0, num_nodes_computed = 0;
 };
 
 // Loss of one patch at one signed blur radius (clamped as in the search).
@@ -146,13 +150,44 @@ std::vector<double> EstimateChannelNoiseSigma(const cv::Mat& image);
 std::vector<double> EstimatePairNoiseSigma(const cv::Mat& left,
                                            const cv::Mat& right);
 
+// What one SearchScaleByIntensity keeps for the next over the same crops
+// (the view budget's checkpoints search the stored crops of the views they
+// share again): each crop's noise estimate and kernel-grid node statistics,
+// with the grids they were taken on. A statistic depends on nothing but the
+// crop and its grid's kernels, so a later search takes it where it would
+// compute it and answers the same, to the bit. Crops are known by their
+// pixel buffers (kept alive here); a grid is reused only where its kernels
+// equal the new search's. Holds what the last search used; one search at a
+// time.
+class IntensityStatsCache {
+ public:
+  IntensityStatsCache();
+  ~IntensityStatsCache();
+  IntensityStatsCache(const IntensityStatsCache&) = delete;
+  IntensityStatsCache& operator=(const IntensityStatsCache&) = delete;
+
+  // Crops held, and the last search's node statistics taken from the cache
+  // and computed (per crop and node).
+  int NumCrops() const;
+  int NodesReused() const;
+  int NodesComputed() const;
+
+  struct Impl;  // intensity_loss.h
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
 // The search. `initial_scale` is s*; views carry g_i' from the linear stage.
-// Never throws on bad data: success = false with a reason.
+// Never throws on bad data: success = false with a reason. `cache`
+// (optional) carries statistics from one search to the next.
 IntensitySearchResult SearchScaleByIntensity(
     const std::vector<IntensityView>& views,
     const std::vector<IntensityPatch>& patches,
     double initial_scale,
     const DPPsfModel& psf,
-    const IntensitySearchOptions& options);
+    const IntensitySearchOptions& options,
+    IntensityStatsCache* cache = nullptr);
 
 }  // namespace dpsfm

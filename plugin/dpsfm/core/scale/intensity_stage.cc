@@ -140,8 +140,8 @@ void DPScaleEstimator::IntensityStage(
     search.max_radius_px = max_r;
     IntensitySearchResult intensity;
     try {
-      intensity =
-          SearchScaleByIntensity(iviews, ipatches, linear.scale, *psf, search);
+      intensity = SearchScaleByIntensity(
+          iviews, ipatches, linear.scale, *psf, search, &intensity_cache_);
     } catch (const std::exception& e) {
       intensity.success = false;
       intensity.failure_reason = e.what();
@@ -149,6 +149,8 @@ void DPScaleEstimator::IntensityStage(
     result->candidate_scales = intensity.candidate_scales;
     result->candidate_losses = intensity.candidate_losses;
     result->intensity_failed_evaluations = intensity.num_failed_evaluations;
+    result->intensity_nodes_reused = intensity.num_nodes_reused;
+    result->intensity_nodes_computed = intensity.num_nodes_computed;
     bool adopt = false;
     result->intensity_status =
         IntensityVerdict(intensity, search, options_, linear.scale, &adopt);

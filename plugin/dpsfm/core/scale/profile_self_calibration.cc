@@ -196,11 +196,14 @@ void DPScaleEstimator::CalibrateProfile(
                                         options_.psf_fit_bands,
                                         fit_options,
                                         0.02,
-                                        /*bands_when_frame_fits=*/false);
+                                        /*bands_when_frame_fits=*/false,
+                                        &profile_cache_);
   } catch (const std::exception& e) {
     calibration.summary = e.what();  // said in the status below
   }
   result->psf_fit = calibration.frame;
+  result->psf_fit_searches_reused = profile_cache_.SearchesReused();
+  result->psf_fit_searches_run = profile_cache_.SearchesRun();
   if (options_.psf_self_calibration ==
       DPScaleOptions::SelfCalibration::kCheck) {
     CheckTranslatingDisk(calibration, result);

@@ -377,6 +377,9 @@ struct DPScaleResult {
   std::string intensity_loss;
   // Patch loss evaluations of the search that threw and counted as nothing.
   int intensity_failed_evaluations = 0;
+  // Its node statistics taken from an earlier Estimate's (the view
+  // budget's checkpoints) and computed.
+  int intensity_nodes_reused = 0, intensity_nodes_computed = 0;
   std::vector<DPViewResult> views;
   std::vector<PatchSample> patches;
   // Intensity loss curve for the report plot.
@@ -401,6 +404,9 @@ struct DPScaleResult {
   double seconds_psf_fit = 0;
   // Whether self-calibration fitted a profile (psf_fit holds its fit).
   bool psf_fit_ran = false;
+  // Its patch searches read from an earlier Estimate's (the view budget's
+  // checkpoints) and run.
+  int psf_fit_searches_reused = 0, psf_fit_searches_run = 0;
   // The factors by which the profiles the data allow move the scale
   // against the one used (self-calibration: the fits' consistent centroid
   // offsets over the one used; 1 when the profile was given). The reported
@@ -592,6 +598,12 @@ class DPScaleEstimator {
   std::vector<std::unique_ptr<ViewData>> views_;
   // The blur search's tables, kept across views (view_patches.h).
   std::unique_ptr<BlurSearchEstimators> blur_estimators_;
+  // The intensity stage's statistics of the stored crops, kept from one
+  // Estimate to the next (the view budget's checkpoints; the same answers,
+  // intensity_search.h). Estimate is not called concurrently.
+  mutable IntensityStatsCache intensity_cache_;
+  // The profile fit's patch searches, likewise (psf_calibration.h).
+  mutable ProfileSearchCache profile_cache_;
 };
 
 }  // namespace dpsfm
