@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -15,6 +14,7 @@
 
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
+#include "dpsfm/core/util/matrices.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -24,25 +24,36 @@ struct ProfileSearchCache::Impl {
   // A crop's searches: per profile key (ProfileSearches), the radius (NaN:
   // no estimate) and relative residual.
   struct Crop {
-    cv::Mat left, right;  // the pixels it is known by
+    cv::Mat left, right;  // the pixels it is known by (or its origin)
     std::map<double, std::pair<double, double>> by_key;
     int reused = 0, run = 0;  // in the current calibration
   };
   bool has_options = false;
   BlurEstimationOptions blur;  // the options every held search used
   std::unordered_multimap<uint64_t, Crop> crops;  // by PixelHash
+  std::map<const uchar*, Crop> by_origin;         // ProfilePatch::origin's data
 
   // Starts a calibration with `blur`: what other options searched is
   // dropped.
   void Begin(const BlurEstimationOptions& options) {
-    if (!has_options || !(blur == options)) crops.clear();
+    if (!has_options || !(blur == options)) {
+      crops.clear();
+      by_origin.clear();
+    }
     blur = options;
     has_options = true;
   }
-  // The record of the crop of these pixels (created empty).
-  Crop* Find(const cv::Mat& left, const cv::Mat& right);
+  // The record of the patch's crop (created empty).
+  Crop* Find(const ProfilePatch& patch);
   // Drops the crops the current calibration does not use.
   void KeepOnly(const std::vector<Crop*>& used);
+  // A count summed over the crops held.
+  int Sum(int Crop::*count) const {
+    int total = 0;
+    for (const auto& entry : crops) total += entry.second.*count;
+    for (const auto& entry : by_origin) total += entry.second.*count;
+    return total;
+  }
 };
 
 namespace {
@@ -62,16 +73,6 @@ uint64_t PixelHash(const cv::Mat& left, const cv::Mat& right) {
     }
   }
   return hash;
-}
-
-bool SamePixels(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size() || a.type() != b.type()) return false;
-  for (int y = 0; y < a.rows; ++y) {
-    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
-      return false;
-    }
-  }
-  return true;
 }
 
 // Per-patch outcome of the blur search under one profile.
@@ -107,7 +108,7 @@ class ProfileSearches {
     ProfileSearchCache::Impl& impl = cache->impl();
     impl.Begin(options.blur);
     for (size_t i = 0; i < patches.size(); ++i) {
-      records_[i] = impl.Find(patches[i].left, patches[i].right);
+      records_[i] = impl.Find(patches[i]);
       records_[i]->reused = records_[i]->run = 0;
     }
     impl.KeepOnly(records_);
@@ -718,18 +719,23 @@ SplitProfileFit FitProfile(ProfileSearches* searches,
 }  // namespace
 
 ProfileSearchCache::Impl::Crop* ProfileSearchCache::Impl::Find(
-    const cv::Mat& left, const cv::Mat& right) {
-  const uint64_t hash = PixelHash(left, right);
+    const ProfilePatch& patch) {
+  if (!patch.origin.empty()) {
+    Crop& crop = by_origin[patch.origin.data];
+    if (crop.left.empty()) crop.left = patch.origin;  // held: never reused
+    return &crop;
+  }
+  const uint64_t hash = PixelHash(patch.left, patch.right);
   const auto range = crops.equal_range(hash);
   for (auto it = range.first; it != range.second; ++it) {
-    if (SamePixels(it->second.left, left) &&
-        SamePixels(it->second.right, right)) {
+    if (SameBytes(it->second.left, patch.left) &&
+        SameBytes(it->second.right, patch.right)) {
       return &it->second;
     }
   }
   Crop& crop = crops.emplace(hash, Crop())->second;
-  crop.left = left;
-  crop.right = right;
+  crop.left = patch.left;
+  crop.right = patch.right;
   return &crop;
 }
 
@@ -738,25 +744,24 @@ void ProfileSearchCache::Impl::KeepOnly(const std::vector<Crop*>& used) {
   for (auto it = crops.begin(); it != crops.end();) {
     it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
   }
+  for (auto it = by_origin.begin(); it != by_origin.end();) {
+    it = keep.count(&it->second) > 0 ? std::next(it) : by_origin.erase(it);
+  }
 }
 
 ProfileSearchCache::ProfileSearchCache() : impl_(new Impl) {}
 ProfileSearchCache::~ProfileSearchCache() = default;
 
 int ProfileSearchCache::NumCrops() const {
-  return static_cast<int>(impl_->crops.size());
+  return static_cast<int>(impl_->crops.size() + impl_->by_origin.size());
 }
 
 int ProfileSearchCache::SearchesReused() const {
-  int total = 0;
-  for (const auto& entry : impl_->crops) total += entry.second.reused;
-  return total;
+  return impl_->Sum(&Impl::Crop::reused);
 }
 
 int ProfileSearchCache::SearchesRun() const {
-  int total = 0;
-  for (const auto& entry : impl_->crops) total += entry.second.run;
-  return total;
+  return impl_->Sum(&Impl::Crop::run);
 }
 
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <memory>
@@ -17,6 +16,7 @@
 #include "dpsfm/core/scale/intensity_loss.h"
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
+#include "dpsfm/core/util/matrices.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -53,6 +53,8 @@ bool IntensitySearchOptions::Check(std::string* failure) const {
   return true;
 }
 
+namespace {
+
 // Two grids of the same kernels, step and interior give the same spectra
 // and statistics.
 bool SameKernels(const DPKernelGrid& a, const DPKernelGrid& b) {
@@ -60,15 +62,6 @@ bool SameKernels(const DPKernelGrid& a, const DPKernelGrid& b) {
       a.NumSpectrumClasses() != b.NumSpectrumClasses()) {
     return false;
   }
-  auto same = [](const cv::Mat& x, const cv::Mat& y) {
-    if (x.size() != y.size() || x.type() != y.type()) return false;
-    for (int r = 0; r < x.rows; ++r) {
-      if (std::memcmp(x.ptr(r), y.ptr(r), x.cols * x.elemSize()) != 0) {
-        return false;
-      }
-    }
-    return true;
-  };
   for (int c = 0; c < a.NumSpectrumClasses(); ++c) {
     if (a.SpectrumClassAt(c).dft_size != b.SpectrumClassAt(c).dft_size ||
         a.InteriorOf(c) != b.InteriorOf(c)) {
@@ -76,13 +69,15 @@ bool SameKernels(const DPKernelGrid& a, const DPKernelGrid& b) {
     }
   }
   for (int n = 0; n < a.NumNodes(); ++n) {
-    if (!same(a.LeftKernel(n), b.LeftKernel(n)) ||
-        !same(a.RightKernel(n), b.RightKernel(n))) {
+    if (!SameBytes(a.LeftKernel(n), b.LeftKernel(n)) ||
+        !SameBytes(a.RightKernel(n), b.RightKernel(n))) {
       return false;
     }
   }
   return true;
 }
+
+}  // namespace
 
 const DPKernelGrid* IntensityStatsCache::Impl::Share(
     std::unique_ptr<DPKernelGrid>* grid) {
@@ -133,18 +128,6 @@ IntensityStatsCache::~IntensityStatsCache() = default;
 
 int IntensityStatsCache::NumCrops() const {
   return static_cast<int>(impl_->crops.size());
-}
-
-int IntensityStatsCache::NodesReused() const {
-  int total = 0;
-  for (const auto& entry : impl_->crops) total += entry.second.reused;
-  return total;
-}
-
-int IntensityStatsCache::NodesComputed() const {
-  int total = 0;
-  for (const auto& entry : impl_->crops) total += entry.second.computed;
-  return total;
 }
 
 namespace {

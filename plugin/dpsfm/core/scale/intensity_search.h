@@ -166,11 +166,8 @@ class IntensityStatsCache {
   IntensityStatsCache(const IntensityStatsCache&) = delete;
   IntensityStatsCache& operator=(const IntensityStatsCache&) = delete;
 
-  // Crops held, and the last search's node statistics taken from the cache
-  // and computed (per crop and node).
+  // Crops held (the last search's counts are in its result).
   int NumCrops() const;
-  int NodesReused() const;
-  int NodesComputed() const;
 
   struct Impl;  // intensity_loss.h
   Impl& impl() { return *impl_; }

@@ -106,6 +106,7 @@ std::vector<ProfilePatch> DPScaleEstimator::ProfileFitPatches(
     ProfilePatch patch;
     patch.left = GreyOfStoredCrop(st.left);
     patch.right = GreyOfStoredCrop(st.right);
+    patch.origin = st.left;  // the view keeps it (the profile fit's cache)
     const ViewData& v = *views_[flat[k].view];
     patch.x_fraction =
         (v.samples[st.sample].x + 0.5) / v.summary.frame_size.width;
