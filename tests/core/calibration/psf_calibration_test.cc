@@ -254,13 +254,14 @@ TEST(ProfileSearchCache, ALaterCalibrationFitsAsWithoutIt) {
     first.push_back(copy);
   }
   ProfileSearchCache cache;
-  CalibrateSplitProfile(first, 1, FastOptions(), 0.02, true, &cache);
-  EXPECT_EQ(cache.SearchesReused(), 0);
-  EXPECT_GT(cache.SearchesRun(), 0);
+  const SplitProfileCalibration earlier =
+      CalibrateSplitProfile(first, 1, FastOptions(), 0.02, true, &cache);
+  EXPECT_EQ(earlier.searches_reused, 0);
+  EXPECT_GT(earlier.searches_run, 0);
   const SplitProfileCalibration later =
       CalibrateSplitProfile(all, 1, FastOptions(), 0.02, true, &cache);
-  EXPECT_GT(cache.SearchesReused(), 0);
-  EXPECT_GT(cache.SearchesRun(), 0);
+  EXPECT_GT(later.searches_reused, 0);
+  EXPECT_GT(later.searches_run, 0);
   EXPECT_EQ(cache.NumCrops(), static_cast<int>(all.size()));
   const SplitProfileCalibration alone =
       CalibrateSplitProfile(all, 1, FastOptions(), 0.02, true);
@@ -278,8 +279,9 @@ TEST(ProfileSearchCache, ALaterCalibrationFitsAsWithoutIt) {
   // Another search bound: other searches.
   SplitProfileFitOptions wider = FastOptions();
   wider.blur.max_radius_px += 1;
-  CalibrateSplitProfile(first, 1, wider, 0.02, true, &cache);
-  EXPECT_EQ(cache.SearchesReused(), 0);
+  EXPECT_EQ(CalibrateSplitProfile(first, 1, wider, 0.02, true, &cache)
+                .searches_reused,
+            0);
 }
 
 // Nothing but near-focus patches: the profile cannot be seen, and the fit

@@ -47,13 +47,6 @@ struct ProfileSearchCache::Impl {
   Crop* Find(const ProfilePatch& patch);
   // Drops the crops the current calibration does not use.
   void KeepOnly(const std::vector<Crop*>& used);
-  // A count summed over the crops held.
-  int Sum(int Crop::*count) const {
-    int total = 0;
-    for (const auto& entry : crops) total += entry.second.*count;
-    for (const auto& entry : by_origin) total += entry.second.*count;
-    return total;
-  }
 };
 
 namespace {
@@ -115,6 +108,17 @@ class ProfileSearches {
   }
 
   const std::vector<ProfilePatch>& Patches() const { return patches_; }
+
+  // The searches read from the cache and run, per patch and profile (0
+  // without a cache).
+  void CountSearches(SplitProfileCalibration* calibration) const {
+    std::set<const ProfileSearchCache::Impl::Crop*> counted;
+    for (const ProfileSearchCache::Impl::Crop* record : records_) {
+      if (record == nullptr || !counted.insert(record).second) continue;
+      calibration->searches_reused += record->reused;
+      calibration->searches_run += record->run;
+    }
+  }
 
   // The outcome for `members` (indices into the patches) under the profile
   // of log centroid offset `key` (or kTranslatingDisk): those not searched
@@ -756,14 +760,6 @@ int ProfileSearchCache::NumCrops() const {
   return static_cast<int>(impl_->crops.size() + impl_->by_origin.size());
 }
 
-int ProfileSearchCache::SearchesReused() const {
-  return impl_->Sum(&Impl::Crop::reused);
-}
-
-int ProfileSearchCache::SearchesRun() const {
-  return impl_->Sum(&Impl::Crop::run);
-}
-
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options) {
   DPSFM_CHECK_OPTIONS(options, "SplitProfileFitOptions");
@@ -852,6 +848,7 @@ SplitProfileCalibration CalibrateSplitProfile(
   if (num_bands == 1 ||
       (!bands_when_frame_fits && calibration.frame.determined)) {
     calibration.summary = summary.str();
+    searches.CountSearches(&calibration);
     return calibration;
   }
   std::vector<std::vector<int>> by_band(num_bands);
@@ -935,6 +932,7 @@ SplitProfileCalibration CalibrateSplitProfile(
           << "largest band difference in centroid offset "
           << std::lround(1000 * largest_difference) / 10.0 << " %)";
   calibration.summary = summary.str();
+  searches.CountSearches(&calibration);
   return calibration;
 }
 

@@ -170,6 +170,9 @@ struct SplitProfileCalibration {
   std::vector<SplitProfileFit> bands;
   bool banded = false;
   std::string summary;
+  // Patch searches read from a ProfileSearchCache and run (per patch and
+  // profile).
+  int searches_reused = 0, searches_run = 0;
 };
 // The blur searches of one CalibrateSplitProfile kept for the next (the
 // view budget's checkpoints fit the profile again to the stored crops of
@@ -186,11 +189,8 @@ class ProfileSearchCache {
   ProfileSearchCache(const ProfileSearchCache&) = delete;
   ProfileSearchCache& operator=(const ProfileSearchCache&) = delete;
 
-  // Crops held, and the last calibration's patch searches read from the
-  // cache and run.
+  // Crops held (a calibration's counts are in its result).
   int NumCrops() const;
-  int SearchesReused() const;
-  int SearchesRun() const;
 
   struct Impl;  // psf_calibration.cc
   Impl& impl() { return *impl_; }

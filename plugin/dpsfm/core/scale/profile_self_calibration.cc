@@ -203,8 +203,8 @@ void DPScaleEstimator::CalibrateProfile(
     calibration.summary = e.what();  // said in the status below
   }
   result->psf_fit = calibration.frame;
-  result->psf_fit_searches_reused = profile_cache_.SearchesReused();
-  result->psf_fit_searches_run = profile_cache_.SearchesRun();
+  result->psf_fit_searches_reused = calibration.searches_reused;
+  result->psf_fit_searches_run = calibration.searches_run;
   if (options_.psf_self_calibration ==
       DPScaleOptions::SelfCalibration::kCheck) {
     CheckTranslatingDisk(calibration, result);
