@@ -11,7 +11,7 @@ PACKAGES=(
   libeigen3-dev libgoogle-glog-dev libgflags-dev libceres-dev libflann-dev
   libfreeimage-dev libmetis-dev libsqlite3-dev libboost-program-options-dev
   libboost-filesystem-dev libboost-graph-dev libboost-system-dev
-  libsuitesparse-dev libglew-dev libopencv-dev libgtest-dev
+  libsuitesparse-dev libglew-dev libopencv-dev libgtest-dev libfftw3-dev
   nlohmann-json3-dev python3 python3-venv
   # COLMAP 4: OpenImageIO replaced FreeImage (its CMake package names
   # /usr/bin/iconvert, hence the tools), faiss for retrieval; CA certificates

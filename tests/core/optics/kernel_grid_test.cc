@@ -46,84 +46,10 @@ cv::Mat GridConvolution(const DPKernelGrid& grid,
   cv::mulSpectrums(
       grid.TransformInput(patch, border, c), grid.RightSpectrum(n), product, 0);
   const cv::Rect interior = grid.InteriorOf(c);
-  cv::dft(product,
-          image,
-          cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-          interior.y + interior.height);
+  grid.Transform(c).Inverse(&product, interior.y + interior.height, &image);
   cv::Mat out;
   image(interior).convertTo(out, CV_64FC1);
   return out;
-}
-
-// Circular convolution of x with y (same size), by the definition.
-cv::Mat CircularConvolution(const cv::Mat& x, const cv::Mat& y) {
-  cv::Mat out = cv::Mat::zeros(x.size(), CV_64FC1);
-  for (int v = 0; v < x.rows; ++v) {
-    for (int u = 0; u < x.cols; ++u) {
-      double sum = 0;
-      for (int i = 0; i < x.rows; ++i) {
-        for (int j = 0; j < x.cols; ++j) {
-          sum += x.at<float>(i, j) * y.at<float>((v - i + x.rows) % x.rows,
-                                                 (u - j + x.cols) % x.cols);
-        }
-      }
-      out.at<double>(v, u) = sum;
-    }
-  }
-  return out;
-}
-
-TEST(SpectraProductDifference, TwoMulSpectrumsAndASubtractionToTheBit) {
-  cv::RNG rng(7);
-  // Every parity of the packed layout: even and odd heights and widths.
-  for (const cv::Size size : {cv::Size(8, 8),
-                              cv::Size(9, 8),
-                              cv::Size(8, 9),
-                              cv::Size(9, 7),
-                              cv::Size(48, 36),
-                              cv::Size(25, 50)}) {
-    std::vector<cv::Mat> space(4), spectra(4);
-    for (int k = 0; k < 4; ++k) {
-      space[k].create(size, CV_32FC1);
-      rng.fill(space[k], cv::RNG::UNIFORM, -1.0, 1.0);
-      cv::dft(space[k], spectra[k]);
-    }
-    cv::Mat fused;
-    SpectraProductDifference(
-        spectra[0], spectra[1], spectra[2], spectra[3], &fused);
-    cv::Mat ab, cd;
-    cv::mulSpectrums(spectra[0], spectra[1], ab, 0);
-    cv::mulSpectrums(spectra[2], spectra[3], cd, 0);
-    ab -= cd;
-    ASSERT_EQ(fused.size(), size);
-    ASSERT_EQ(fused.type(), CV_32FC1);
-    for (int y = 0; y < size.height; ++y) {
-      for (int x = 0; x < size.width; ++x) {
-        ASSERT_EQ(fused.at<float>(y, x), ab.at<float>(y, x))
-            << size << " at (" << x << ", " << y << ")";
-      }
-    }
-    // And what it stands for: x0 (*) x1 - x2 (*) x3, circularly.
-    cv::Mat back;
-    cv::dft(fused, back, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
-    const cv::Mat expected = CircularConvolution(space[0], space[1]) -
-                             CircularConvolution(space[2], space[3]);
-    for (int y = 0; y < size.height; ++y) {
-      for (int x = 0; x < size.width; ++x) {
-        EXPECT_NEAR(back.at<float>(y, x), expected.at<double>(y, x), 1e-4)
-            << size << " at (" << x << ", " << y << ")";
-      }
-    }
-  }
-}
-
-TEST(SpectraProductDifference, RefusesSpectraOfDifferentSizes) {
-  const cv::Mat a = cv::Mat::zeros(8, 8, CV_32FC1);
-  const cv::Mat b = cv::Mat::zeros(8, 9, CV_32FC1);
-  cv::Mat out;
-  EXPECT_THROW(SpectraProductDifference(a, a, a, b, &out), std::exception);
-  EXPECT_THROW(SpectraProductDifference(a, a, a, a, const_cast<cv::Mat*>(&a)),
-               std::exception);
 }
 
 TEST(FastDftSize, PowersOfTwoTimesFewOddFactors) {
@@ -165,7 +91,9 @@ TEST(DPKernelGrid, EachClassConvolvesTheInteriorExactly) {
     EXPECT_GE(c.reach, grid.Reach(n));
     EXPECT_LE(interior.width + 2 * c.reach, c.dft_size.width);
     EXPECT_LE(interior.height + 2 * c.reach, c.dft_size.height);
-    EXPECT_EQ(grid.RightSpectrum(n).size(), c.dft_size);
+    EXPECT_EQ(grid.RightSpectrum(n).size(),
+              grid.Transform(grid.SpectrumClassOf(n)).SpectrumSize());
+    EXPECT_EQ(grid.Transform(grid.SpectrumClassOf(n)).size(), c.dft_size);
     // The disk's views take half the light each.
     EXPECT_NEAR(grid.LeftSum(n), 0.5, 1e-5);
     EXPECT_NEAR(grid.RightSum(n), 0.5, 1e-5);

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/optics/real_dft.h"
 #include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
@@ -29,9 +30,12 @@ std::vector<float> CoarseBandTerms(const BlurTables& t,
       orr[x] = w * r[x];
     }
   }
+  // The band lies in the half spectrum (u <= nc / 2). Plans are shared:
+  // a RealDft is a lookup.
+  const RealDft dft(t.dft_size);
   cv::Mat fl, fr;
-  cv::dft(wl, fl, cv::DFT_COMPLEX_OUTPUT, height);
-  cv::dft(wr, fr, cv::DFT_COMPLEX_OUTPUT, height);
+  dft.Forward(wl, height, &fl);
+  dft.Forward(wr, height, &fr);
   for (int k = 0; k < num_band; ++k) {
     const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
     const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);

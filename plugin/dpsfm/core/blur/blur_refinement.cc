@@ -75,10 +75,8 @@ void BlurRefinement::Evaluate(int n) {
                            grid.LeftSpectrum(n),
                            &product_);
   const cv::Rect interior = grid.InteriorOf(c);
-  cv::dft(product_,
-          residual_image_,
-          cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-          interior.y + interior.height);
+  grid.Transform(c).Inverse(
+      &product_, interior.y + interior.height, &residual_image_);
   e.residual.resize(t_.num_interior);
   float* out = e.residual.data();
   for (int y = 0; y < interior.height; ++y) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/optics/real_dft.h"
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -118,16 +119,14 @@ void TabulateKernels(const std::vector<float>& multiplicity,
       t->noise_cross[n] = grid.LeftCross(n) + grid.RightCross(n);
     }
   }
+  const RealDft dft(t->dft_size);
+  const int rows = t->dft_size.height;
   ParallelFor(
       static_cast<int>(t->coarse_nodes.size()), num_threads, [&](int i) {
         const int n = t->coarse_nodes[i];
         cv::Mat hl, hr;
-        cv::dft(WrapKernel(grid.LeftKernel(n), t->dft_size),
-                hl,
-                cv::DFT_COMPLEX_OUTPUT);
-        cv::dft(WrapKernel(grid.RightKernel(n), t->dft_size),
-                hr,
-                cv::DFT_COMPLEX_OUTPUT);
+        dft.Forward(WrapKernel(grid.LeftKernel(n), t->dft_size), rows, &hl);
+        dft.Forward(WrapKernel(grid.RightKernel(n), t->dft_size), rows, &hr);
         float* row = t->coarse_table.row(i).data();
         for (int k = 0; k < num_band; ++k) {
           const cv::Vec2f l =

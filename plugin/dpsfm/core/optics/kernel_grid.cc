@@ -29,88 +29,6 @@ cv::Mat WrapKernel(const cv::Mat& kernel, const cv::Size& size) {
   return wrapped;
 }
 
-namespace {
-
-// Entry i of column x (a CCS column is read down its rows).
-struct Column {
-  const cv::Mat& m;
-  int x;
-  float operator[](int y) const { return m.ptr<float>(y)[x]; }
-};
-
-// The complex product (re, im) of packed pairs, as cv::mulSpectrums
-// computes it.
-inline void ComplexProduct(
-    double ar, double ai, double br, double bi, float* re, float* im) {
-  *re = static_cast<float>(ar * br - ai * bi);
-  *im = static_cast<float>(ar * bi + ai * br);
-}
-
-// One of the packed columns (0, and cols - 1 for an even width): real at
-// row 0 (and the last row for an even height), complex pairs down the rows
-// in between.
-void ColumnProductDifference(const cv::Mat& a,
-                             const cv::Mat& b,
-                             const cv::Mat& c,
-                             const cv::Mat& d,
-                             int x,
-                             cv::Mat* out) {
-  const Column ca{a, x}, cb{b, x}, cc{c, x}, cd{d, x};
-  const int rows = a.rows;
-  out->ptr<float>(0)[x] = ca[0] * cb[0] - cc[0] * cd[0];
-  for (int y = 1; y + 1 < rows; y += 2) {
-    float ab_re, ab_im, cd_re, cd_im;
-    ComplexProduct(ca[y], ca[y + 1], cb[y], cb[y + 1], &ab_re, &ab_im);
-    ComplexProduct(cc[y], cc[y + 1], cd[y], cd[y + 1], &cd_re, &cd_im);
-    out->ptr<float>(y)[x] = ab_re - cd_re;
-    out->ptr<float>(y + 1)[x] = ab_im - cd_im;
-  }
-  if (rows % 2 == 0) {
-    const int y = rows - 1;
-    out->ptr<float>(y)[x] = ca[y] * cb[y] - cc[y] * cd[y];
-  }
-}
-
-}  // namespace
-
-void SpectraProductDifference(const cv::Mat& a,
-                              const cv::Mat& b,
-                              const cv::Mat& c,
-                              const cv::Mat& d,
-                              cv::Mat* out) {
-  DPSFM_CHECK(a.type() == CV_32FC1 && b.type() == CV_32FC1 &&
-              c.type() == CV_32FC1 && d.type() == CV_32FC1)
-      << "SpectraProductDifference takes CCS-packed CV_32FC1 spectra";
-  DPSFM_CHECK(a.size() == b.size() && a.size() == c.size() &&
-              a.size() == d.size())
-      << "SpectraProductDifference takes spectra of one size";
-  DPSFM_CHECK(a.rows > 1 && a.cols > 1)
-      << "SpectraProductDifference takes 2-D spectra";
-  DPSFM_CHECK(out->data != a.data && out->data != b.data &&
-              out->data != c.data && out->data != d.data)
-      << "SpectraProductDifference writes to a matrix of its own";
-  out->create(a.size(), CV_32FC1);
-  const int cols = a.cols;
-  ColumnProductDifference(a, b, c, d, 0, out);
-  if (cols % 2 == 0) ColumnProductDifference(a, b, c, d, cols - 1, out);
-  // The rows' complex pairs: columns 1 .. last before a packed column.
-  const int end = cols % 2 == 0 ? cols - 1 : cols;
-  for (int y = 0; y < a.rows; ++y) {
-    const float* pa = a.ptr<float>(y);
-    const float* pb = b.ptr<float>(y);
-    const float* pc = c.ptr<float>(y);
-    const float* pd = d.ptr<float>(y);
-    float* po = out->ptr<float>(y);
-    for (int j = 1; j < end; j += 2) {
-      float ab_re, ab_im, cd_re, cd_im;
-      ComplexProduct(pa[j], pa[j + 1], pb[j], pb[j + 1], &ab_re, &ab_im);
-      ComplexProduct(pc[j], pc[j + 1], pd[j], pd[j + 1], &cd_re, &cd_im);
-      po[j] = ab_re - cd_re;
-      po[j + 1] = ab_im - cd_im;
-    }
-  }
-}
-
 int FastDftSize(int n) {
   DPSFM_CHECK_GT(n, 0);
   int best = 0;
@@ -192,12 +110,17 @@ void DPKernelGrid::TabulateSpectra(int num_threads) {
     it->reach = std::max(it->reach, reach);
     class_of_[n] = static_cast<int>(it - classes_.begin());
   }
+  for (const SpectrumClass& c : classes_) transforms_.emplace_back(c.dft_size);
   left_spectra_.resize(num_nodes_);
   right_spectra_.resize(num_nodes_);
   ParallelFor(num_nodes_, num_threads, [&](int n) {
-    const cv::Size& dft = classes_[class_of_[n]].dft_size;
-    cv::dft(WrapKernel(left_kernels_[n], dft), left_spectra_[n]);
-    cv::dft(WrapKernel(right_kernels_[n], dft), right_spectra_[n]);
+    const RealDft& dft = transforms_[class_of_[n]];
+    dft.Forward(WrapKernel(left_kernels_[n], dft.size()),
+                dft.size().height,
+                &left_spectra_[n]);
+    dft.Forward(WrapKernel(right_kernels_[n], dft.size()),
+                dft.size().height,
+                &right_spectra_[n]);
   });
 }
 
@@ -218,7 +141,7 @@ cv::Mat DPKernelGrid::TransformInput(const cv::Mat& patch,
   cv::Mat padded = cv::Mat::zeros(k.dft_size, CV_32FC1);
   patch(input).copyTo(padded(cv::Rect(cv::Point(0, 0), input.size())));
   cv::Mat spectrum;
-  cv::dft(padded, spectrum, 0, input.height);
+  transforms_[c].Forward(padded, input.height, &spectrum);
   return spectrum;
 }
 

@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "dpsfm/core/optics/dp_psf.h"
+#include "dpsfm/core/optics/real_dft.h"
 
 namespace dpsfm {
 
@@ -64,22 +65,25 @@ class DPKernelGrid {
 
   const cv::Mat& LeftKernel(int node) const { return left_kernels_[node]; }
   const cv::Mat& RightKernel(int node) const { return right_kernels_[node]; }
-  // CCS-packed real DFTs (cv::dft default) of the kernels wrapped around the
-  // origin (WrapKernel), at the DFT size of the node's class: multiplied
-  // with TransformInput of a patch for that class, and transformed back,
-  // they give the true convolution on the interior (InteriorOf).
+  // Half spectra (RealDft) of the kernels wrapped around the origin
+  // (WrapKernel), at the DFT size of the node's class: multiplied with
+  // TransformInput of a patch for that class, and transformed back
+  // (Transform(c).Inverse), they give the true convolution on the interior
+  // (InteriorOf).
   const cv::Mat& LeftSpectrum(int node) const { return left_spectra_[node]; }
   const cv::Mat& RightSpectrum(int node) const { return right_spectra_[node]; }
   int NumSpectrumClasses() const { return static_cast<int>(classes_.size()); }
   int SpectrumClassOf(int node) const { return class_of_[node]; }
   const SpectrumClass& SpectrumClassAt(int c) const { return classes_[c]; }
+  // The transforms of class c's DFT size.
+  const RealDft& Transform(int c) const { return transforms_[c]; }
   // The spectrum of class c's input: the interior of `patch` (at `border`
   // from its edges, border >= the class's reach) and the class's reach
   // around it, zero-padded to the class's DFT size.
   cv::Mat TransformInput(const cv::Mat& patch, int border, int c) const;
   // Where the interior lies in the inverse transform of a product with a
   // class c spectrum; only the rows up to its last one are needed
-  // (cv::dft's nonzero_rows).
+  // (RealDft::Inverse's rows).
   cv::Rect InteriorOf(int c) const;
 
   // |h_l(n)|^2, |h_r(n)|^2 and, for n < NumNodes() - 1, <h_l(n), h_l(n+1)>,
@@ -104,6 +108,7 @@ class DPKernelGrid {
   int border_ = 0;
   cv::Size interior_size_;
   std::vector<SpectrumClass> classes_;
+  std::vector<RealDft> transforms_;  // per class
   std::vector<int> class_of_;
   std::vector<cv::Mat> left_kernels_, right_kernels_;
   std::vector<cv::Mat> left_spectra_, right_spectra_;
@@ -127,20 +132,6 @@ int FastDftSize(int n);
 inline double InterpolatedEnergy(double a, double ab, double b, double t) {
   return (1 - t) * (1 - t) * a + 2 * t * (1 - t) * ab + t * t * b;
 }
-
-// a * b - c * d for CCS-packed spectra of one size (cv::dft's default real
-// output; one channel), into *out: what two cv::mulSpectrums calls and a
-// subtraction give, to the bit (each complex product in double, rounded to
-// float as cv::mulSpectrums does; the real-only entries of the packed
-// columns multiplied in float as it does; the difference in float), in one
-// pass without the two temporaries. Written by hand because OpenCV has no
-// fused form and the blur refinement spends more on the three passes than
-// on anything but its inverse transforms.
-void SpectraProductDifference(const cv::Mat& a,
-                              const cv::Mat& b,
-                              const cv::Mat& c,
-                              const cv::Mat& d,
-                              cv::Mat* out);
 
 // Places a centred kernel into a zero matrix of `size` with its centre at
 // (0, 0) and negative offsets wrapped around, so that the DFT product with a

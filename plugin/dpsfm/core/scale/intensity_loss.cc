@@ -416,12 +416,10 @@ void AddIntervals(const IntensityPatch& patch,
   // The interior of a view's spectrum times a kernel's, back in space.
   auto blurred = [&](const cv::Mat& view_spectrum,
                      const cv::Mat& kernel_spectrum,
-                     const cv::Rect& interior) {
+                     int c) {
+    const cv::Rect interior = grid.InteriorOf(c);
     cv::mulSpectrums(view_spectrum, kernel_spectrum, product, 0);
-    cv::dft(product,
-            image,
-            cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT,
-            interior.y + interior.height);
+    grid.Transform(c).Inverse(&product, interior.y + interior.height, &image);
     return cv::Mat(image(interior).clone());
   };
   // A view blurred at a node: the mean-removed part on the interior, its
@@ -470,11 +468,10 @@ void AddIntervals(const IntensityPatch& patch,
     const bool with_previous = before != nullptr && !cached_pair;
     const int k = grid.SpectrumClassOf(n);
     transformed(k);
-    const cv::Rect interior = grid.InteriorOf(k);
     for (int c = 0; c < channels; ++c) {
       BlurredView a, b;
-      a.image = blurred(spec_left[k][c], grid.RightSpectrum(n), interior);
-      b.image = blurred(spec_right[k][c], grid.LeftSpectrum(n), interior);
+      a.image = blurred(spec_left[k][c], grid.RightSpectrum(n), k);
+      b.image = blurred(spec_right[k][c], grid.LeftSpectrum(n), k);
       const NodeMoments m =
           MomentsOf(a.image,
                     b.image,

@@ -1,0 +1,188 @@
+#include "dpsfm/core/optics/real_dft.h"
+
+#include <atomic>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
+
+#include <fftw3.h>
+
+#include "dpsfm/core/util/check.h"
+
+namespace dpsfm {
+namespace {
+
+// FFTW's planner is not thread-safe (its execute functions are): every plan
+// is made under this lock.
+std::mutex& PlannerMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+// Plans made on scratch arrays from fftwf_malloc run on any arrays of the
+// same alignment (FFTW's new-array execute); cv::Mat's allocations are
+// aligned at least as well (cv::fastMalloc), and views into them are
+// refused here rather than run with the wrong alignment.
+void CheckAligned(const void* data, const char* what) {
+  DPSFM_CHECK(fftwf_alignment_of(
+                  const_cast<float*>(static_cast<const float*>(data))) == 0)
+      << "RealDft: the " << what << " is not aligned for FFTW";
+}
+
+}  // namespace
+
+struct RealDft::Plans {
+  Plans(int rows, int cols) : rows(rows), cols(cols), half(cols / 2 + 1) {
+    forward_rows = std::make_unique<std::atomic<fftwf_plan>[]>(rows + 1);
+    inverse_rows = std::make_unique<std::atomic<fftwf_plan>[]>(rows + 1);
+    for (int k = 0; k <= rows; ++k) {
+      forward_rows[k].store(nullptr);
+      inverse_rows[k].store(nullptr);
+    }
+    fftwf_complex* spectrum = fftwf_alloc_complex(rows * half);
+    // The columns in place: `half` of them, `rows` long, `half` apart.
+    forward_columns = fftwf_plan_many_dft(1, &this->rows, half, spectrum,
+                                          nullptr, half, 1, spectrum, nullptr,
+                                          half, 1, FFTW_FORWARD, FFTW_ESTIMATE);
+    inverse_columns = fftwf_plan_many_dft(1, &this->rows, half, spectrum,
+                                          nullptr, half, 1, spectrum, nullptr,
+                                          half, 1, FFTW_BACKWARD,
+                                          FFTW_ESTIMATE);
+    fftwf_free(spectrum);
+    DPSFM_CHECK(forward_columns != nullptr && inverse_columns != nullptr)
+        << "FFTW made no plan for " << cols << "x" << rows;
+  }
+
+  // The plan of `count` rows (real <-> half spectrum), made on first use.
+  fftwf_plan Rows(bool forward, int count) const {
+    std::atomic<fftwf_plan>& slot =
+        forward ? forward_rows[count] : inverse_rows[count];
+    fftwf_plan plan = slot.load(std::memory_order_acquire);
+    if (plan != nullptr) return plan;
+    std::lock_guard<std::mutex> lock(PlannerMutex());
+    plan = slot.load(std::memory_order_relaxed);
+    if (plan != nullptr) return plan;
+    float* image = fftwf_alloc_real(count * cols);
+    fftwf_complex* spectrum = fftwf_alloc_complex(count * half);
+    int n = cols;
+    plan = forward ? fftwf_plan_many_dft_r2c(1, &n, count, image, nullptr, 1,
+                                             cols, spectrum, nullptr, 1, half,
+                                             FFTW_ESTIMATE)
+                   : fftwf_plan_many_dft_c2r(1, &n, count, spectrum, nullptr,
+                                             1, half, image, nullptr, 1, cols,
+                                             FFTW_ESTIMATE);
+    fftwf_free(image);
+    fftwf_free(spectrum);
+    DPSFM_CHECK(plan != nullptr)
+        << "FFTW made no plan for " << count << " rows of " << cols;
+    slot.store(plan, std::memory_order_release);
+    return plan;
+  }
+
+  int rows, cols, half;
+  fftwf_plan forward_columns = nullptr, inverse_columns = nullptr;
+  std::unique_ptr<std::atomic<fftwf_plan>[]> forward_rows, inverse_rows;
+};
+
+RealDft::RealDft(const cv::Size& size) : size_(size) {
+  DPSFM_CHECK(size.width >= 1 && size.height >= 1)
+      << "RealDft: a " << size.width << "x" << size.height << " transform";
+  // Kept for the process: a handful of sizes, each a few plans.
+  static std::map<std::pair<int, int>, std::unique_ptr<Plans>> registry;
+  std::lock_guard<std::mutex> lock(PlannerMutex());
+  std::unique_ptr<Plans>& plans = registry[{size.height, size.width}];
+  if (plans == nullptr) {
+    plans = std::make_unique<Plans>(size.height, size.width);
+  }
+  plans_ = plans.get();
+}
+
+cv::Mat RealDft::NewSpectrum() const {
+  return cv::Mat(SpectrumSize(), CV_32FC2);
+}
+
+void RealDft::Forward(const cv::Mat& image,
+                      int nonzero_rows,
+                      cv::Mat* spectrum) const {
+  DPSFM_CHECK(image.type() == CV_32FC1 && image.size() == size_ &&
+              image.isContinuous())
+      << "RealDft::Forward takes a continuous CV_32FC1 image of " << size_
+      << ", got " << image.size();
+  DPSFM_CHECK(nonzero_rows >= 0 && nonzero_rows <= size_.height)
+      << "RealDft::Forward: " << nonzero_rows << " nonzero rows of "
+      << size_.height;
+  if (spectrum->type() != CV_32FC2 || spectrum->size() != SpectrumSize() ||
+      !spectrum->isContinuous()) {
+    *spectrum = NewSpectrum();
+  }
+  CheckAligned(image.data, "image");
+  CheckAligned(spectrum->data, "spectrum");
+  auto* out = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
+  // Rows known to be zero transform to zero.
+  spectrum->rowRange(nonzero_rows, size_.height).setTo(0);
+  if (nonzero_rows > 0) {
+    fftwf_execute_dft_r2c(plans_->Rows(true, nonzero_rows),
+                          const_cast<float*>(image.ptr<float>()),
+                          out);
+  }
+  fftwf_execute_dft(plans_->forward_columns, out, out);
+}
+
+void RealDft::Inverse(cv::Mat* spectrum, int rows, cv::Mat* image) const {
+  DPSFM_CHECK(spectrum->type() == CV_32FC2 &&
+              spectrum->size() == SpectrumSize() && spectrum->isContinuous())
+      << "RealDft::Inverse takes a continuous CV_32FC2 half spectrum of "
+      << SpectrumSize() << ", got " << spectrum->size();
+  DPSFM_CHECK(rows >= 0 && rows <= size_.height)
+      << "RealDft::Inverse: " << rows << " rows of " << size_.height;
+  if (image->type() != CV_32FC1 || image->size() != size_ ||
+      !image->isContinuous()) {
+    *image = cv::Mat(size_, CV_32FC1);
+  }
+  CheckAligned(spectrum->data, "spectrum");
+  CheckAligned(image->data, "image");
+  if (rows == 0) return;
+  auto* in = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
+  fftwf_execute_dft(plans_->inverse_columns, in, in);
+  fftwf_execute_dft_c2r(plans_->Rows(false, rows), in, image->ptr<float>());
+  cv::Mat computed = image->rowRange(0, rows);
+  computed *= 1.0 / size_.area();
+}
+
+void SpectraProductDifference(const cv::Mat& a,
+                              const cv::Mat& b,
+                              const cv::Mat& c,
+                              const cv::Mat& d,
+                              cv::Mat* out) {
+  DPSFM_CHECK(a.type() == CV_32FC2 && b.type() == CV_32FC2 &&
+              c.type() == CV_32FC2 && d.type() == CV_32FC2)
+      << "SpectraProductDifference takes CV_32FC2 half spectra";
+  DPSFM_CHECK(a.size() == b.size() && a.size() == c.size() &&
+              a.size() == d.size())
+      << "SpectraProductDifference takes spectra of one size";
+  DPSFM_CHECK(a.isContinuous() && b.isContinuous() && c.isContinuous() &&
+              d.isContinuous())
+      << "SpectraProductDifference takes continuous spectra";
+  DPSFM_CHECK(out->data != a.data && out->data != b.data &&
+              out->data != c.data && out->data != d.data)
+      << "SpectraProductDifference writes to a matrix of its own";
+  if (out->type() != CV_32FC2 || out->size() != a.size() ||
+      !out->isContinuous()) {
+    *out = cv::Mat(a.size(), CV_32FC2);
+  }
+  const float* pa = a.ptr<float>();
+  const float* pb = b.ptr<float>();
+  const float* pc = c.ptr<float>();
+  const float* pd = d.ptr<float>();
+  float* po = out->ptr<float>();
+  const size_t n = 2 * a.total();
+  for (size_t i = 0; i < n; i += 2) {
+    po[i] = (pa[i] * pb[i] - pa[i + 1] * pb[i + 1]) -
+            (pc[i] * pd[i] - pc[i + 1] * pd[i + 1]);
+    po[i + 1] = (pa[i] * pb[i + 1] + pa[i + 1] * pb[i]) -
+                (pc[i] * pd[i + 1] + pc[i + 1] * pd[i]);
+  }
+}
+
+}  // namespace dpsfm

@@ -1,0 +1,65 @@
+// Real 2-D DFTs of one size, the one home of the searches' transforms.
+//
+// FFTW's single-precision plans rather than cv::dft: at the searches' sizes
+// (48-144 px) cv::dft (OpenCV 4.6, as Debian 12 builds it, without IPP)
+// takes 2-3x FFTW's time (docs/benchmark.md), and the blur and intensity
+// searches spend about half their time in transforms. The plans are made
+// with FFTW_ESTIMATE: a transform's arithmetic then depends on its size and
+// nothing else (FFTW_MEASURE's choice depends on timings), so answers are
+// the same run to run and at any thread count.
+//
+// A 2-D transform is done in two passes, rows then columns (forward) and
+// columns then rows (inverse), so that rows known to be zero are not
+// transformed and rows not needed are not computed back (what cv::dft's
+// nonzero_rows does).
+//
+// Spectra are half spectra: CV_32FC2, rows x (cols / 2 + 1), the columns
+// u = 0 .. cols / 2 of the full spectrum (the others are their conjugate
+// mirror), as cv::dft's DFT_COMPLEX_OUTPUT gives them; products of half
+// spectra are element-wise complex products.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+namespace dpsfm {
+
+class RealDft {
+ public:
+  // Transforms of `size` (both sides >= 1). Plans are shared by every
+  // RealDft of the same size and made at most once per process.
+  explicit RealDft(const cv::Size& size);
+
+  const cv::Size& size() const { return size_; }
+  cv::Size SpectrumSize() const {
+    return cv::Size(size_.width / 2 + 1, size_.height);
+  }
+
+  // The half spectrum of `image` (CV_32FC1 of size(), continuous), whose
+  // rows from `nonzero_rows` on are zero (and not read), into *spectrum
+  // (reallocated unless it is a continuous CV_32FC2 of SpectrumSize()).
+  void Forward(const cv::Mat& image, int nonzero_rows, cv::Mat* spectrum) const;
+
+  // The real inverse of the half spectrum *spectrum divided by the area
+  // (cv::DFT_SCALE), rows [0, rows) of it into *image (CV_32FC1 of size();
+  // rows below are left as they are). *spectrum is the work space: it holds
+  // no spectrum afterwards.
+  void Inverse(cv::Mat* spectrum, int rows, cv::Mat* image) const;
+
+  // A half spectrum of SpectrumSize(), continuous, as the transforms need.
+  cv::Mat NewSpectrum() const;
+
+ private:
+  struct Plans;
+  cv::Size size_;
+  const Plans* plans_ = nullptr;
+};
+
+// a * b - c * d, element-wise complex, for half spectra of one size (RealDft),
+// into *out: the residual spectrum of the blur refinement in one pass.
+void SpectraProductDifference(const cv::Mat& a,
+                              const cv::Mat& b,
+                              const cv::Mat& c,
+                              const cv::Mat& d,
+                              cv::Mat* out);
+
+}  // namespace dpsfm

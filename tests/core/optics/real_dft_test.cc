@@ -1,0 +1,179 @@
+#include "dpsfm/core/optics/real_dft.h"
+
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+namespace dpsfm {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// An image whose rows from `nonzero_rows` on are zero.
+cv::Mat RandomImage(const cv::Size& size, int nonzero_rows, uint64_t seed) {
+  cv::Mat image = cv::Mat::zeros(size, CV_32FC1);
+  cv::RNG rng(seed);
+  rng.fill(image.rowRange(0, nonzero_rows), cv::RNG::UNIFORM, -1.0, 1.0);
+  return image;
+}
+
+// X(v, u) = sum_y,x x(y, x) exp(-2 pi i (v y / rows + u x / cols)), by the
+// definition, in double.
+std::complex<double> DftByDefinition(const cv::Mat& image, int v, int u) {
+  std::complex<double> sum = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const double phase = -2 * kPi *
+                           (static_cast<double>(v) * y / image.rows +
+                            static_cast<double>(u) * x / image.cols);
+      sum += static_cast<double>(image.at<float>(y, x)) *
+             std::complex<double>(std::cos(phase), std::sin(phase));
+    }
+  }
+  return sum;
+}
+
+// Circular convolution of x with y (same size), by the definition.
+cv::Mat CircularConvolution(const cv::Mat& x, const cv::Mat& y) {
+  cv::Mat out = cv::Mat::zeros(x.size(), CV_64FC1);
+  for (int v = 0; v < x.rows; ++v) {
+    for (int u = 0; u < x.cols; ++u) {
+      double sum = 0;
+      for (int i = 0; i < x.rows; ++i) {
+        for (int j = 0; j < x.cols; ++j) {
+          sum += x.at<float>(i, j) * y.at<float>((v - i + x.rows) % x.rows,
+                                                 (u - j + x.cols) % x.cols);
+        }
+      }
+      out.at<double>(v, u) = sum;
+    }
+  }
+  return out;
+}
+
+// Every parity of rows and columns, a 1-D row, and partial rows.
+const std::vector<cv::Size> kSizes = {
+    {8, 6}, {9, 6}, {8, 7}, {9, 5}, {12, 1}, {1, 6}, {48, 48}, {25, 36}};
+
+TEST(RealDft, TheHalfSpectrumByTheDefinition) {
+  for (const cv::Size& size : kSizes) {
+    const RealDft dft(size);
+    ASSERT_EQ(dft.SpectrumSize(), cv::Size(size.width / 2 + 1, size.height));
+    for (const int nonzero_rows : {size.height, (size.height + 1) / 2}) {
+      const cv::Mat image = RandomImage(size, nonzero_rows, 7 + nonzero_rows);
+      // Garbage where the rows are declared zero must not be read.
+      cv::Mat declared = image.clone();
+      declared.rowRange(nonzero_rows, size.height).setTo(1e6);
+      cv::Mat spectrum;
+      dft.Forward(declared, nonzero_rows, &spectrum);
+      ASSERT_EQ(spectrum.type(), CV_32FC2);
+      ASSERT_EQ(spectrum.size(), dft.SpectrumSize());
+      for (int v = 0; v < size.height; ++v) {
+        for (int u = 0; u <= size.width / 2; ++u) {
+          const std::complex<double> expected = DftByDefinition(image, v, u);
+          const cv::Vec2f got = spectrum.at<cv::Vec2f>(v, u);
+          EXPECT_NEAR(got[0], expected.real(), 1e-4 * size.area())
+              << size << " (" << v << ", " << u << ")";
+          EXPECT_NEAR(got[1], expected.imag(), 1e-4 * size.area())
+              << size << " (" << v << ", " << u << ")";
+        }
+      }
+    }
+  }
+}
+
+TEST(RealDft, TheInverseGivesTheImageBackOnTheRowsAsked) {
+  for (const cv::Size& size : kSizes) {
+    const RealDft dft(size);
+    const cv::Mat image = RandomImage(size, size.height, 3);
+    for (const int rows : {size.height, (size.height + 1) / 2}) {
+      cv::Mat spectrum;
+      dft.Forward(image, size.height, &spectrum);
+      cv::Mat back(size, CV_32FC1, cv::Scalar(-7));
+      dft.Inverse(&spectrum, rows, &back);
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
+          if (y < rows) {
+            EXPECT_NEAR(back.at<float>(y, x), image.at<float>(y, x), 1e-5)
+                << size << " (" << y << ", " << x << ")";
+          } else {
+            EXPECT_EQ(back.at<float>(y, x), -7) << "a row not asked for";
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(RealDft, TheSameBitsEveryTime) {
+  const cv::Size size(72, 48);
+  const cv::Mat image = RandomImage(size, 40, 5);
+  cv::Mat first, second;
+  RealDft(size).Forward(image, 40, &first);
+  RealDft(size).Forward(image, 40, &second);
+  ASSERT_EQ(first.size(), second.size());
+  EXPECT_EQ(0, std::memcmp(first.data, second.data,
+                           first.total() * first.elemSize()));
+}
+
+TEST(RealDft, RefusesWhatItCannotTransform) {
+  EXPECT_THROW(RealDft(cv::Size(0, 4)), std::invalid_argument);
+  const RealDft dft(cv::Size(8, 8));
+  cv::Mat spectrum;
+  const cv::Mat wider = cv::Mat::zeros(8, 12, CV_32FC1);
+  EXPECT_THROW(dft.Forward(wider(cv::Rect(0, 0, 8, 8)), 8, &spectrum),
+               std::invalid_argument)
+      << "a view that is not continuous";
+  EXPECT_THROW(dft.Forward(cv::Mat::zeros(8, 8, CV_64FC1), 8, &spectrum),
+               std::invalid_argument);
+  EXPECT_THROW(dft.Forward(cv::Mat::zeros(8, 8, CV_32FC1), 9, &spectrum),
+               std::invalid_argument);
+  // A continuous view that starts off FFTW's alignment.
+  const cv::Mat rows = cv::Mat::zeros(9, 8, CV_32FC1);
+  const cv::Mat shifted(8, 8, CV_32FC1, const_cast<float*>(rows.ptr<float>()) + 1);
+  EXPECT_THROW(dft.Forward(shifted, 8, &spectrum), std::invalid_argument);
+  cv::Mat image;
+  cv::Mat wrong = cv::Mat::zeros(8, 4, CV_32FC2);
+  EXPECT_THROW(dft.Inverse(&wrong, 8, &image), std::invalid_argument);
+}
+
+// The product difference, transformed back, is the difference of the
+// circular convolutions by the definition.
+TEST(SpectraProductDifference, TheDifferenceOfTwoCircularConvolutions) {
+  for (const cv::Size& size : {cv::Size(8, 6), cv::Size(9, 5)}) {
+    const RealDft dft(size);
+    std::vector<cv::Mat> space(4), spectra(4);
+    for (int k = 0; k < 4; ++k) {
+      space[k] = RandomImage(size, size.height, 11 + k);
+      dft.Forward(space[k], size.height, &spectra[k]);
+    }
+    cv::Mat product, back;
+    SpectraProductDifference(
+        spectra[0], spectra[1], spectra[2], spectra[3], &product);
+    dft.Inverse(&product, size.height, &back);
+    const cv::Mat expected = CircularConvolution(space[0], space[1]) -
+                             CircularConvolution(space[2], space[3]);
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
+        EXPECT_NEAR(back.at<float>(y, x), expected.at<double>(y, x), 1e-4)
+            << size << " (" << y << ", " << x << ")";
+      }
+    }
+  }
+}
+
+TEST(SpectraProductDifference, RefusesSpectraOfDifferentSizes) {
+  const cv::Mat a = cv::Mat::zeros(6, 5, CV_32FC2);
+  const cv::Mat b = cv::Mat::zeros(6, 4, CV_32FC2);
+  cv::Mat out;
+  EXPECT_THROW(SpectraProductDifference(a, a, a, b, &out), std::exception);
+  EXPECT_THROW(SpectraProductDifference(a, a, a, a, const_cast<cv::Mat*>(&a)),
+               std::exception);
+}
+
+}  // namespace
+}  // namespace dpsfm
