@@ -3,7 +3,6 @@
 #include <vector>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
-#include "dpsfm/core/optics/real_dft.h"
 #include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
@@ -30,12 +29,10 @@ std::vector<float> CoarseBandTerms(const BlurTables& t,
       orr[x] = w * r[x];
     }
   }
-  // The band lies in the half spectrum (u <= nc / 2). Plans are shared:
-  // a RealDft is a lookup.
-  const RealDft dft(t.dft_size);
+  // The band lies in the half spectrum (u <= nc / 2).
   cv::Mat fl, fr;
-  dft.Forward(wl, height, &fl);
-  dft.Forward(wr, height, &fr);
+  t.dft->Forward(wl, height, &fl);
+  t.dft->Forward(wr, height, &fr);
   for (int k = 0; k < num_band; ++k) {
     const cv::Vec2f a = fl.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);
     const cv::Vec2f b = fr.at<cv::Vec2f>(t.band_rows[k], t.band_cols[k]);

@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -15,6 +16,7 @@
 
 #include "dpsfm/core/blur/blur_estimation.h"
 #include "dpsfm/core/optics/kernel_grid.h"
+#include "dpsfm/core/optics/real_dft.h"
 
 namespace dpsfm {
 namespace internal {
@@ -24,6 +26,7 @@ struct BlurTables {
   BlurEstimationOptions options;
   cv::Size patch_size;
   cv::Size dft_size;
+  std::optional<RealDft> dft;  // the coarse search's transforms, of dft_size
   int border = 0;
   cv::Rect interior;
   int num_interior = 0;

@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
-#include "dpsfm/core/optics/real_dft.h"
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -40,6 +39,7 @@ void SetGrid(const DPPsfModel& psf,
              BlurTables* t) {
   t->dft_size = cv::Size(cv::getOptimalDFTSize(patch_size.width),
                          cv::getOptimalDFTSize(patch_size.height));
+  t->dft.emplace(t->dft_size);
   t->bound = DPKernelGridBound(options.max_radius_px, options.grid_step_px);
   t->border = psf.KernelRadius(t->bound);
   DPSFM_CHECK(patch_size.width >= 2 * t->border + 8 &&
@@ -119,7 +119,7 @@ void TabulateKernels(const std::vector<float>& multiplicity,
       t->noise_cross[n] = grid.LeftCross(n) + grid.RightCross(n);
     }
   }
-  const RealDft dft(t->dft_size);
+  const RealDft& dft = *t->dft;
   const int rows = t->dft_size.height;
   ParallelFor(
       static_cast<int>(t->coarse_nodes.size()), num_threads, [&](int i) {
