@@ -168,5 +168,42 @@ TEST(MeasurePatchDepths, SparsePointsByHand) {
   EXPECT_EQ(dropped[0].reject, "without depth");
 }
 
+// Candidates measured in parallel come out as one thread measures them: a
+// depth map of random planes with holes, every kind of outcome present.
+TEST(MeasurePatchDepths, AnyNumberOfThreadsGivesTheSameStatistics) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(0, 1);
+  cv::Mat map(240, 320, CV_32FC1);
+  for (int y = 0; y < map.rows; ++y) {
+    for (int x = 0; x < map.cols; ++x) {
+      const float plane = (x / 37 + y / 29) % 3 == 0 ? 1.5f : 2.5f;
+      map.at<float>(y, x) = unit(rng) < 0.2f ? kNaN : plane + 0.01f * x;
+    }
+  }
+  map(cv::Rect(200, 100, 90, 90)).setTo(0);
+  const std::vector<PatchCandidate> grid =
+      MakePatchGrid(cv::Size(160, 120), 12, 5, 2);
+  PatchDepthOptions options;
+  std::vector<PatchCandidate> one = grid, two = grid;
+  MeasurePatchDepths(map, {}, map.size(), 0.5, 0.5, options, &one);
+  options.num_threads = 2;
+  MeasurePatchDepths(map, {}, map.size(), 0.5, 0.5, options, &two);
+  ASSERT_EQ(one.size(), two.size());
+  int kept = 0, without = 0, across = 0;
+  for (size_t k = 0; k < one.size(); ++k) {
+    EXPECT_EQ(one[k].reject, two[k].reject) << k;
+    EXPECT_EQ(one[k].depth.median, two[k].depth.median) << k;
+    EXPECT_EQ(one[k].depth.relative_spread, two[k].depth.relative_spread) << k;
+    EXPECT_EQ(one[k].depth.relative_variance, two[k].depth.relative_variance)
+        << k;
+    kept += one[k].reject.empty();
+    without += one[k].reject == "without depth";
+    across += one[k].reject == "across a depth edge";
+  }
+  EXPECT_GT(kept, 0);
+  EXPECT_GT(without, 0);
+  EXPECT_GT(across, 0);
+}
+
 }  // namespace
 }  // namespace dpsfm

@@ -1,5 +1,6 @@
 #include "dpsfm/core/blur/patch_grid.h"
 #include "dpsfm/core/util/statistics.h"
+#include "dpsfm/core/util/threads.h"
 
 #include <algorithm>
 #include <cmath>
@@ -51,6 +52,79 @@ std::vector<PatchCandidate> MakePatchGrid(const cv::Size& size,
   return candidates;
 }
 
+namespace {
+
+// Where MeasurePatchDepths reads depth: a dense map or points, over a DP
+// frame of `frame_size`, and the working / frame scale per axis.
+struct DepthSource {
+  const cv::Mat& map;
+  const std::vector<DepthPoint>& points;
+  cv::Size frame_size;
+  double sx, sy;
+};
+
+// MeasurePatchDepths for one candidate.
+void MeasurePatchDepth(const DepthSource& source,
+                       const PatchDepthOptions& options,
+                       PatchCandidate* candidate) {
+  const cv::Mat& depth = source.map;
+  const double sx = source.sx, sy = source.sy;
+  PatchCandidate& c = *candidate;
+  // Interior edges in frame pixels: [x / sx, (x + p) / sx).
+  const bool dense = !depth.empty();
+  const double dw = dense ? depth.cols : 0, dh = dense ? depth.rows : 0;
+  std::vector<float> values;
+  const double fx0 = c.interior.x / sx,
+               fx1 = (c.interior.x + c.interior.width) / sx;
+  const double fy0 = c.interior.y / sy,
+               fy1 = (c.interior.y + c.interior.height) / sy;
+  int total = 0;
+  if (dense) {
+    const double kx = dw / source.frame_size.width,
+                 ky = dh / source.frame_size.height;
+    // Depth pixels whose centres fall inside the patch's frame area.
+    const int i0 = std::max(0, static_cast<int>(std::ceil(fx0 * kx - 0.5)));
+    const int i1 = std::min(static_cast<int>(dw) - 1,
+                            static_cast<int>(std::ceil(fx1 * kx - 0.5)) - 1);
+    const int j0 = std::max(0, static_cast<int>(std::ceil(fy0 * ky - 0.5)));
+    const int j1 = std::min(static_cast<int>(dh) - 1,
+                            static_cast<int>(std::ceil(fy1 * ky - 0.5)) - 1);
+    for (int j = j0; j <= j1; ++j) {
+      const float* row = depth.ptr<float>(j);
+      for (int i = i0; i <= i1; ++i) {
+        ++total;
+        if (std::isfinite(row[i]) && row[i] > 0) values.push_back(row[i]);
+      }
+    }
+    if (total == 0 || values.size() < options.min_coverage * total) {
+      c.reject = "without depth";
+      return;
+    }
+  } else {
+    // Pixel centres at integer frame coordinates: the area
+    // [fx0, fx1) in edge coordinates holds centres x + 0.5 in it.
+    for (const DepthPoint& point : source.points) {
+      const double ex = point.x + 0.5, ey = point.y + 0.5;
+      if (ex >= fx0 && ex < fx1 && ey >= fy0 && ey < fy1 &&
+          std::isfinite(point.depth) && point.depth > 0) {
+        values.push_back(static_cast<float>(point.depth));
+      }
+    }
+    if (static_cast<int>(values.size()) < options.min_points) {
+      c.reject = "without depth";
+      return;
+    }
+  }
+  c.depth = DepthStatsOf(&values);
+  if (!c.depth.ok) {
+    c.reject = "without depth";
+  } else if (c.depth.relative_spread > options.max_relative_spread) {
+    c.reject = "across a depth edge";
+  }
+}
+
+}  // namespace
+
 void MeasurePatchDepths(const cv::Mat& depth,
                         const std::vector<DepthPoint>& points,
                         const cv::Size& frame_size,
@@ -58,58 +132,11 @@ void MeasurePatchDepths(const cv::Mat& depth,
                         double sy,
                         const PatchDepthOptions& options,
                         std::vector<PatchCandidate>* candidates) {
-  // Interior edges in frame pixels: [x / sx, (x + p) / sx).
-  const bool dense = !depth.empty();
-  const double dw = dense ? depth.cols : 0, dh = dense ? depth.rows : 0;
-  for (PatchCandidate& c : *candidates) {
-    std::vector<float> values;
-    const double fx0 = c.interior.x / sx,
-                 fx1 = (c.interior.x + c.interior.width) / sx;
-    const double fy0 = c.interior.y / sy,
-                 fy1 = (c.interior.y + c.interior.height) / sy;
-    int total = 0;
-    if (dense) {
-      const double kx = dw / frame_size.width, ky = dh / frame_size.height;
-      // Depth pixels whose centres fall inside the patch's frame area.
-      const int i0 = std::max(0, static_cast<int>(std::ceil(fx0 * kx - 0.5)));
-      const int i1 = std::min(static_cast<int>(dw) - 1,
-                              static_cast<int>(std::ceil(fx1 * kx - 0.5)) - 1);
-      const int j0 = std::max(0, static_cast<int>(std::ceil(fy0 * ky - 0.5)));
-      const int j1 = std::min(static_cast<int>(dh) - 1,
-                              static_cast<int>(std::ceil(fy1 * ky - 0.5)) - 1);
-      for (int j = j0; j <= j1; ++j) {
-        const float* row = depth.ptr<float>(j);
-        for (int i = i0; i <= i1; ++i) {
-          ++total;
-          if (std::isfinite(row[i]) && row[i] > 0) values.push_back(row[i]);
-        }
-      }
-      if (total == 0 || values.size() < options.min_coverage * total) {
-        c.reject = "without depth";
-        continue;
-      }
-    } else {
-      // Pixel centres at integer frame coordinates: the area
-      // [fx0, fx1) in edge coordinates holds centres x + 0.5 in it.
-      for (const DepthPoint& point : points) {
-        const double ex = point.x + 0.5, ey = point.y + 0.5;
-        if (ex >= fx0 && ex < fx1 && ey >= fy0 && ey < fy1 &&
-            std::isfinite(point.depth) && point.depth > 0) {
-          values.push_back(static_cast<float>(point.depth));
-        }
-      }
-      if (static_cast<int>(values.size()) < options.min_points) {
-        c.reject = "without depth";
-        continue;
-      }
-    }
-    c.depth = DepthStatsOf(&values);
-    if (!c.depth.ok) {
-      c.reject = "without depth";
-    } else if (c.depth.relative_spread > options.max_relative_spread) {
-      c.reject = "across a depth edge";
-    }
-  }
+  const DepthSource source{depth, points, frame_size, sx, sy};
+  ParallelFor(
+      static_cast<int>(candidates->size()), options.num_threads, [&](int k) {
+        MeasurePatchDepth(source, options, &(*candidates)[k]);
+      });
 }
 
 }  // namespace dpsfm

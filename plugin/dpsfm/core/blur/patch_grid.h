@@ -59,6 +59,9 @@ struct PatchDepthOptions {
   int min_points = 3;
   // Patches whose relative depth spread exceeds this are across an edge.
   double max_relative_spread = 0.1;
+  // Candidates measured in parallel (-1: all OpenMP offers); each
+  // candidate's statistics are the same on any number.
+  int num_threads = 1;
 };
 
 // Fills each candidate's depth from a dense map (CV_32FC1 of any size over

@@ -124,6 +124,7 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
   depth_options.min_coverage = options.min_depth_coverage;
   depth_options.min_points = options.min_depth_points_per_patch;
   depth_options.max_relative_spread = options.max_relative_depth_spread;
+  depth_options.num_threads = options.num_threads;
   MeasurePatchDepths(view.depth,
                      view.depth_points,
                      FrameSize(view),
