@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -41,6 +42,37 @@ TEST(TranslatingDiskPsf, MirrorSymmetryAndEnergy) {
     cv::flip(k.left, flipped_y, 0);
     EXPECT_EQ(cv::norm(flipped_y, k.left, cv::NORM_INF), 0.0);
   }
+}
+
+// The models that say so (SwapsViewsWithSign) give at -r the kernels of r
+// with the views swapped, to the bit: a kernel grid renders only r >= 0 and
+// takes the rest from them. The measured-kernel profile (rotated kernels at
+// the other side) does not say so.
+TEST(DPPsfModel, SwapsViewsWithSignToTheBit) {
+  SplitProfileParams rim = SplitProfileParams::ForCentroidOffset(0.2);
+  rim.rim_brightness = 0.7;
+  rim.rim_softness = 0.1;
+  rim.crosstalk = 0.05;
+  const TranslatingDiskPsf disk;
+  const SplitProfilePsf split(SplitProfileParams::ForCentroidOffset(0.35));
+  const SplitProfilePsf soft(rim);
+  for (const DPPsfModel* psf :
+       std::vector<const DPPsfModel*>{&disk, &split, &soft}) {
+    ASSERT_TRUE(psf->SwapsViewsWithSign()) << psf->Name();
+    for (const double r : {0.25, 0.5, 0.75, 1.0, 2.25, 7.5, 16.75}) {
+      const DPKernels far = psf->Kernels(r), near = psf->Kernels(-r);
+      ASSERT_EQ(near.left.size(), far.right.size()) << psf->Name() << " " << r;
+      EXPECT_EQ(cv::norm(near.left, far.right, cv::NORM_INF), 0)
+          << psf->Name() << " " << r;
+      EXPECT_EQ(cv::norm(near.right, far.left, cv::NORM_INF), 0)
+          << psf->Name() << " " << r;
+      // Not the same kernels on both sides (the sign matters at all).
+      if (r > 0.5) EXPECT_GT(cv::norm(near.left, far.left, cv::NORM_INF), 0);
+    }
+  }
+  cv::Mat left = cv::Mat::zeros(5, 5, CV_32FC1), right = left.clone();
+  left.at<float>(2, 1) = right.at<float>(2, 3) = 0.5f;
+  EXPECT_FALSE(MeasuredKernelPsf(left, right, 2.0, true).SwapsViewsWithSign());
 }
 
 TEST(TranslatingDiskPsf, CentroidSignAndMagnitude) {

@@ -148,6 +148,71 @@ TEST(DPKernelGrid, TheSameOnTwoThreads) {
   }
 }
 
+// A model's kernels, rendered at every r: the same profile without
+// DPPsfModel::SwapsViewsWithSign.
+class EveryRadiusRendered : public DPPsfModel {
+ public:
+  explicit EveryRadiusRendered(const DPPsfModel& psf) : psf_(psf) {}
+  std::string Name() const override { return psf_.Name(); }
+  DPKernels Kernels(double r) const override { return psf_.Kernels(r); }
+  int KernelRadius(double r) const override { return psf_.KernelRadius(r); }
+
+ private:
+  const DPPsfModel& psf_;
+};
+
+// A grid that takes the nodes below r = 0 from their mirrors is the grid
+// that renders and transforms every node, to the bit.
+TEST(DPKernelGrid, MirroredNodesAreTheRenderedOnes) {
+  SplitProfileParams params = SplitProfileParams::ForCentroidOffset(0.25);
+  params.crosstalk = 0.1;
+  const SplitProfilePsf split(params);
+  const TranslatingDiskPsf disk;
+  for (const DPPsfModel* psf : std::vector<const DPPsfModel*>{&split, &disk}) {
+    const EveryRadiusRendered plain(*psf);
+    ASSERT_TRUE(psf->SwapsViewsWithSign());
+    ASSERT_FALSE(plain.SwapsViewsWithSign());
+    const DPKernelGrid mirrored(*psf, 0.25, 6.1, cv::Size(17, 17), 2);
+    const DPKernelGrid rendered(plain, 0.25, 6.1, cv::Size(17, 17), 2);
+    ASSERT_EQ(mirrored.NumNodes(), rendered.NumNodes());
+    ASSERT_EQ(mirrored.NumSpectrumClasses(), rendered.NumSpectrumClasses());
+    for (int n = 0; n < mirrored.NumNodes(); ++n) {
+      const std::string at = psf->Name() + " node " + std::to_string(n);
+      ASSERT_EQ(mirrored.LeftKernel(n).size(), rendered.LeftKernel(n).size())
+          << at;
+      EXPECT_EQ(
+          cv::norm(
+              mirrored.LeftKernel(n), rendered.LeftKernel(n), cv::NORM_INF),
+          0)
+          << at;
+      EXPECT_EQ(
+          cv::norm(
+              mirrored.RightKernel(n), rendered.RightKernel(n), cv::NORM_INF),
+          0)
+          << at;
+      EXPECT_EQ(
+          cv::norm(
+              mirrored.LeftSpectrum(n), rendered.LeftSpectrum(n), cv::NORM_INF),
+          0)
+          << at;
+      EXPECT_EQ(cv::norm(mirrored.RightSpectrum(n),
+                         rendered.RightSpectrum(n),
+                         cv::NORM_INF),
+                0)
+          << at;
+      EXPECT_EQ(mirrored.SpectrumClassOf(n), rendered.SpectrumClassOf(n)) << at;
+      EXPECT_EQ(mirrored.LeftEnergy(n), rendered.LeftEnergy(n)) << at;
+      EXPECT_EQ(mirrored.RightEnergy(n), rendered.RightEnergy(n)) << at;
+      EXPECT_EQ(mirrored.LeftSum(n), rendered.LeftSum(n)) << at;
+      EXPECT_EQ(mirrored.RightSum(n), rendered.RightSum(n)) << at;
+      if (n + 1 < mirrored.NumNodes()) {
+        EXPECT_EQ(mirrored.LeftCross(n), rendered.LeftCross(n)) << at;
+        EXPECT_EQ(mirrored.RightCross(n), rendered.RightCross(n)) << at;
+      }
+    }
+  }
+}
+
 // A model whose kernels are even-sized beyond 3 px.
 class EvenBeyondThreePx : public DPPsfModel {
  public:

@@ -56,6 +56,11 @@ class DPPsfModel {
   // Half-size of the kernels for |r| (kernel side = 2 * KernelRadius + 1), so
   // callers can size borders. Non-decreasing in |r|.
   virtual int KernelRadius(double signed_radius_px) const = 0;
+
+  // True when Kernels(-r) is Kernels(r) with the views swapped, to the bit,
+  // for every r (a profile the same nearer and farther than focus): a kernel
+  // grid then renders and transforms each |r| once.
+  virtual bool SwapsViewsWithSign() const { return false; }
 };
 
 // The ICCP 2020 / paper "translating disk", in its continuous form: a disk of
@@ -86,6 +91,8 @@ class TranslatingDiskPsf : public DPPsfModel {
   std::string Name() const override;
   DPKernels Kernels(double signed_radius_px) const override;
   int KernelRadius(double signed_radius_px) const override;
+  // Kernels of |r|, assigned to the views by the sign of r.
+  bool SwapsViewsWithSign() const override { return true; }
 
   // 3 pi / 32: centroid offset of each view's continuous profile from the
   // origin, in units of R (the pixel kernels approach it from R ~ 4 on).
@@ -157,6 +164,8 @@ class SplitProfilePsf : public DPPsfModel {
   std::string Name() const override;
   DPKernels Kernels(double signed_radius_px) const override;
   int KernelRadius(double signed_radius_px) const override;
+  // Kernels of |r|, assigned to the views by the sign of r.
+  bool SwapsViewsWithSign() const override { return true; }
 
   const SplitProfileParams& Params() const { return params_; }
 

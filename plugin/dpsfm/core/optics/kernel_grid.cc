@@ -62,7 +62,13 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   right_sum_.resize(num_nodes_);
   left_cross_.assign(num_nodes_, 0.0);
   right_cross_.assign(num_nodes_, 0.0);
-  ParallelFor(num_nodes_, num_threads, [&](int n) {
+  // A profile the same on both sides of focus gives node n < HalfNodes()
+  // the kernels of its mirror node (Radius of one is exactly minus the
+  // other's) with the views swapped: only r >= 0 is rendered.
+  mirrored_ = psf.SwapsViewsWithSign();
+  const int first = mirrored_ ? half_nodes_ : 0;
+  ParallelFor(num_nodes_ - first, num_threads, [&](int k) {
+    const int n = first + k;
     const DPKernels kernels = psf.Kernels(Radius(n));
     DPSFM_CHECK(kernels.left.type() == CV_32FC1 &&
                 kernels.right.type() == CV_32FC1 &&
@@ -82,6 +88,15 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
     left_sum_[n] = cv::sum(kernels.left)[0];
     right_sum_[n] = cv::sum(kernels.right)[0];
   });
+  for (int n = 0; n < first; ++n) {
+    const int m = MirrorNode(n);
+    left_kernels_[n] = right_kernels_[m];
+    right_kernels_[n] = left_kernels_[m];
+    left_energy_[n] = right_energy_[m];
+    right_energy_[n] = left_energy_[m];
+    left_sum_[n] = right_sum_[m];
+    right_sum_[n] = left_sum_[m];
+  }
   ParallelFor(num_nodes_ - 1, num_threads, [&](int n) {
     left_cross_[n] = EmbedKernel(left_kernels_[n], border_)
                          .dot(EmbedKernel(left_kernels_[n + 1], border_));
@@ -113,7 +128,11 @@ void DPKernelGrid::TabulateSpectra(int num_threads) {
   for (const SpectrumClass& c : classes_) transforms_.emplace_back(c.dft_size);
   left_spectra_.resize(num_nodes_);
   right_spectra_.resize(num_nodes_);
-  ParallelFor(num_nodes_, num_threads, [&](int n) {
+  // Mirrored nodes hold their mirror's kernels, so their spectra too (a
+  // node's class follows from its kernels' size).
+  const int first = mirrored_ ? half_nodes_ : 0;
+  ParallelFor(num_nodes_ - first, num_threads, [&](int k) {
+    const int n = first + k;
     const RealDft& dft = transforms_[class_of_[n]];
     dft.Forward(WrapKernel(left_kernels_[n], dft.size()),
                 dft.size().height,
@@ -122,6 +141,10 @@ void DPKernelGrid::TabulateSpectra(int num_threads) {
                 dft.size().height,
                 &right_spectra_[n]);
   });
+  for (int n = 0; n < first; ++n) {
+    left_spectra_[n] = right_spectra_[MirrorNode(n)];
+    right_spectra_[n] = left_spectra_[MirrorNode(n)];
+  }
 }
 
 cv::Mat DPKernelGrid::TransformInput(const cv::Mat& patch,

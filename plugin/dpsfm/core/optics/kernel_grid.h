@@ -101,11 +101,16 @@ class DPKernelGrid {
 
  private:
   void TabulateSpectra(int num_threads);
+  // The node at minus node n's radius.
+  int MirrorNode(int n) const { return num_nodes_ - 1 - n; }
 
   double step_ = 0;
   int half_nodes_ = 0;
   int num_nodes_ = 0;
   int border_ = 0;
+  // DPPsfModel::SwapsViewsWithSign: the nodes below r = 0 share the
+  // kernels and spectra of those above.
+  bool mirrored_ = false;
   cv::Size interior_size_;
   std::vector<SpectrumClass> classes_;
   std::vector<RealDft> transforms_;  // per class
