@@ -2,10 +2,16 @@
 // depth, against hand-made rankings.
 #include "dpsfm/core/blur/patch_selection.h"
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/blur/blur_estimation.h"
+#include "dpsfm/core/blur/patch_grid.h"
 
 namespace dpsfm {
 namespace {
@@ -51,6 +57,65 @@ TEST(PatchConfidence, TextureTimesFitOverFlooredDepthVariance) {
   // Negative texture or fit quality count as nothing.
   EXPECT_EQ(PatchConfidence(-1.0, 0.5, 0.01), 0.0);
   EXPECT_EQ(PatchConfidence(1.0, -0.5, 0.01), 0.0);
+}
+
+// The noise bound screening settles most patches with is an upper bound of
+// the noise, and the screening's decisions are those of the full noise
+// estimate: views whose texture and noise vary over the frame (so both
+// sides of the threshold occur), every decision checked against
+// TextureSnr(Texture, NoiseSigma) by PatchScreening itself.
+TEST(ScreenPatches, TheNoiseBoundDecidesAsTheNoiseWould) {
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0, 1);
+  cv::Mat scene(240, 320, CV_32FC1);
+  cv::randu(scene, 0, 1);
+  cv::GaussianBlur(scene, scene, cv::Size(0, 0), 3);
+  cv::Mat left(scene.size(), CV_32FC1), right(scene.size(), CV_32FC1);
+  for (int y = 0; y < scene.rows; ++y) {
+    for (int x = 0; x < scene.cols; ++x) {
+      // Texture fading to the right, noise growing downwards.
+      const float texture = 1.0f - x / 320.0f;
+      const float sigma = 0.002f + 0.02f * y / 240.0f;
+      const float v = 0.5f + texture * (scene.at<float>(y, x) - 0.5f);
+      left.at<float>(y, x) = v + sigma * noise(rng);
+      right.at<float>(y, x) = v + sigma * noise(rng) + (y % 7 == 0 ? 0.01f : 0);
+    }
+  }
+  const int border = 6;
+  const std::vector<PatchCandidate> candidates =
+      MakePatchGrid(left.size(), 16, 8, border);
+  const PatchScreening screening(left, right);
+  // Thresholds at the quartiles of the patches' SNR.
+  std::vector<double> snr;
+  for (const PatchCandidate& c : candidates) {
+    const cv::Rect r = PatchCrop(c.interior, border);
+    snr.push_back(screening.TextureSnr(r));
+  }
+  std::sort(snr.begin(), snr.end());
+  for (const double quantile : {0.25, 0.5, 0.75}) {
+    const double min_snr = snr[quantile * snr.size()] / 0.9;
+    std::vector<PatchBlurEstimate> estimates(candidates.size());
+    const ScreenedPatches screened =
+        ScreenPatches(left, right, candidates, border, min_snr, 2, &estimates);
+    std::vector<char> passed(candidates.size(), 0);
+    for (const int k : screened.index) passed[k] = 1;
+    int num_passed = 0, num_failed = 0;
+    for (size_t k = 0; k < candidates.size(); ++k) {
+      const cv::Rect r = PatchCrop(candidates[k].interior, border);
+      const double sigma = screening.NoiseSigma(r);
+      EXPECT_LE(sigma, screening.NoiseSigmaBound(r)) << k;
+      const bool passes =
+          TextureSnr(screening.Texture(r), sigma) >= 0.9 * min_snr;
+      EXPECT_EQ(passed[k], passes) << "min SNR " << min_snr << ", patch " << k;
+      if (!passes) {
+        EXPECT_EQ(estimates[k].reject_reason, kTextureTooWeak);
+        EXPECT_EQ(estimates[k].noise_sigma, sigma);
+      }
+      (passes ? num_passed : num_failed)++;
+    }
+    EXPECT_GT(num_passed, 0) << min_snr;
+    EXPECT_GT(num_failed, 0) << min_snr;
+  }
 }
 
 }  // namespace

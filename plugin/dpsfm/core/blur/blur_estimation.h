@@ -240,10 +240,17 @@ class PatchScreening {
   double Texture(const cv::Rect& rect) const;
   // Noise std of one view over `rect` (without its outer ring).
   double NoiseSigma(const cv::Rect& rect) const;
+  // An upper bound of NoiseSigma(rect), to the bit (NoiseSigma is the
+  // smaller of the views' estimate and this one, the difference view's),
+  // at a third of its cost.
+  double NoiseSigmaBound(const cv::Rect& rect) const;
   // TextureSnr of Texture(rect) and NoiseSigma(rect).
   double TextureSnr(const cv::Rect& rect) const;
 
  private:
+  // The difference view's estimate, squared.
+  double DifferenceVariance(const cv::Rect& rect) const;
+
   cv::Mat texture_integral_;                       // CV_64FC1
   cv::Mat noise_left_, noise_right_, noise_diff_;  // |responses|, CV_32FC1
 };

@@ -93,8 +93,17 @@ double PatchScreening::Texture(const cv::Rect& r) const {
 double PatchScreening::NoiseSigma(const cv::Rect& rect) const {
   const double sl = SubsampledNoiseSigma(noise_left_, rect);
   const double sr = SubsampledNoiseSigma(noise_right_, rect);
+  const double sd = DifferenceVariance(rect);
+  return std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd));
+}
+
+double PatchScreening::NoiseSigmaBound(const cv::Rect& rect) const {
+  return std::sqrt(DifferenceVariance(rect));
+}
+
+double PatchScreening::DifferenceVariance(const cv::Rect& rect) const {
   const double sd = SubsampledNoiseSigma(noise_diff_, rect) / std::sqrt(2.0);
-  return std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd * sd));
+  return sd * sd;
 }
 
 double TextureSnr(double texture, double noise_sigma) {

@@ -132,11 +132,18 @@ ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
     const cv::Rect r = PatchCrop(candidates[k].interior, crop_border);
     PatchBlurEstimate& e = (*estimates)[k];
     e.texture = screening.Texture(r);
-    e.noise_sigma = screening.NoiseSigma(r);
+    // TextureSnr falls as the noise grows, so a texture that clears the
+    // threshold over the noise's upper bound clears it over the noise: the
+    // views' own noise estimates (two of three medians) are needed only
+    // where the bound does not settle it.
+    const double threshold = 0.9 * min_texture_snr;
     if (min_texture_snr > 0 &&
-        TextureSnr(e.texture, e.noise_sigma) < 0.9 * min_texture_snr) {
-      e.reject_reason = kTextureTooWeak;
-      continue;
+        !(TextureSnr(e.texture, screening.NoiseSigmaBound(r)) >= threshold)) {
+      e.noise_sigma = screening.NoiseSigma(r);
+      if (TextureSnr(e.texture, e.noise_sigma) < threshold) {
+        e.reject_reason = kTextureTooWeak;
+        continue;
+      }
     }
     pass[k] = 1;
   }

@@ -60,11 +60,13 @@ struct ScreenedPatches {
   std::vector<double> inverse_depth;
 };
 
-// Screening, cheap and on every candidate with depth: the texture and noise
-// of its crop (`crop_border` px around the interior) go into (*estimates)[k];
-// a patch whose texture SNR falls below 0.9 min_texture_snr (what the
-// search would drop anyway, with a margin for its gain equalisation) gets
-// kTextureTooWeak. threads: OpenMP threads (-1: all).
+// Screening, cheap and on every candidate with depth: the texture of its
+// crop (`crop_border` px around the interior) goes into (*estimates)[k]; a
+// patch whose texture SNR falls below 0.9 min_texture_snr (what the search
+// would drop anyway, with a margin for its gain equalisation) gets
+// kTextureTooWeak and its noise. A patch that passes gets its noise from
+// its search (PatchScreening::NoiseSigmaBound settles most without it).
+// threads: OpenMP threads (-1: all).
 ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
                               const cv::Mat& gray_right,
                               const std::vector<PatchCandidate>& candidates,
