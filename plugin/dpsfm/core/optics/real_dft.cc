@@ -1,6 +1,7 @@
 #include "dpsfm/core/optics/real_dft.h"
 
 #include <atomic>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -28,6 +29,42 @@ void CheckAligned(const void* data, const char* what) {
   DPSFM_CHECK(fftwf_alignment_of(
                   const_cast<float*>(static_cast<const float*>(data))) == 0)
       << "RealDft: the " << what << " is not aligned for FFTW";
+}
+
+// po = pa pb over n / 2 interleaved complex numbers, as cv::mulSpectrums
+// computes it; unaliased, as below.
+void ComplexProduct(const float* __restrict__ pa,
+                    const float* __restrict__ pb,
+                    float* __restrict__ po,
+                    size_t n) {
+  for (size_t i = 0; i < n; i += 2) {
+    const double re = static_cast<double>(pa[i]) * pb[i] -
+                      static_cast<double>(pa[i + 1]) * pb[i + 1];
+    const double im = static_cast<double>(pa[i + 1]) * pb[i] +
+                      static_cast<double>(pa[i]) * pb[i + 1];
+    po[i] = static_cast<float>(re);
+    po[i + 1] = static_cast<float>(im);
+  }
+}
+
+// The spectra of a product: CV_32FC2 half spectra of one size, continuous;
+// *out made one of them unless it is already, and never one of the inputs.
+void PrepareProduct(std::initializer_list<const cv::Mat*> spectra,
+                    const char* what,
+                    cv::Mat* out) {
+  const cv::Mat& a = **spectra.begin();
+  for (const cv::Mat* m : spectra) {
+    DPSFM_CHECK(m->type() == CV_32FC2)
+        << what << " takes CV_32FC2 half spectra";
+    DPSFM_CHECK(m->size() == a.size()) << what << " takes spectra of one size";
+    DPSFM_CHECK(m->isContinuous()) << what << " takes continuous spectra";
+    DPSFM_CHECK(out->data != m->data)
+        << what << " writes to a matrix of its own";
+  }
+  if (out->type() != CV_32FC2 || out->size() != a.size() ||
+      !out->isContinuous()) {
+    *out = cv::Mat(a.size(), CV_32FC2);
+  }
 }
 
 // po = pa pb - pc pd over n / 2 interleaved complex numbers. The pointers
@@ -167,27 +204,18 @@ void RealDft::Inverse(cv::Mat* spectrum, int rows, cv::Mat* image) const {
   computed *= 1.0 / size_.area();
 }
 
+void SpectraProduct(const cv::Mat& a, const cv::Mat& b, cv::Mat* out) {
+  PrepareProduct({&a, &b}, "SpectraProduct", out);
+  ComplexProduct(
+      a.ptr<float>(), b.ptr<float>(), out->ptr<float>(), 2 * a.total());
+}
+
 void SpectraProductDifference(const cv::Mat& a,
                               const cv::Mat& b,
                               const cv::Mat& c,
                               const cv::Mat& d,
                               cv::Mat* out) {
-  DPSFM_CHECK(a.type() == CV_32FC2 && b.type() == CV_32FC2 &&
-              c.type() == CV_32FC2 && d.type() == CV_32FC2)
-      << "SpectraProductDifference takes CV_32FC2 half spectra";
-  DPSFM_CHECK(a.size() == b.size() && a.size() == c.size() &&
-              a.size() == d.size())
-      << "SpectraProductDifference takes spectra of one size";
-  DPSFM_CHECK(a.isContinuous() && b.isContinuous() && c.isContinuous() &&
-              d.isContinuous())
-      << "SpectraProductDifference takes continuous spectra";
-  DPSFM_CHECK(out->data != a.data && out->data != b.data &&
-              out->data != c.data && out->data != d.data)
-      << "SpectraProductDifference writes to a matrix of its own";
-  if (out->type() != CV_32FC2 || out->size() != a.size() ||
-      !out->isContinuous()) {
-    *out = cv::Mat(a.size(), CV_32FC2);
-  }
+  PrepareProduct({&a, &b, &c, &d}, "SpectraProductDifference", out);
   ComplexProductDifference(a.ptr<float>(),
                            b.ptr<float>(),
                            c.ptr<float>(),

@@ -54,6 +54,11 @@ class RealDft {
   const Plans* plans_ = nullptr;
 };
 
+// a * b, element-wise complex, for half spectra of one size (RealDft), into
+// *out: cv::mulSpectrums's arithmetic to the bit (each part summed in double
+// from the exact products, rounded once), in a loop that vectorises.
+void SpectraProduct(const cv::Mat& a, const cv::Mat& b, cv::Mat* out);
+
 // a * b - c * d, element-wise complex, for half spectra of one size (RealDft),
 // into *out: the residual spectrum of the blur refinement in one pass.
 void SpectraProductDifference(const cv::Mat& a,

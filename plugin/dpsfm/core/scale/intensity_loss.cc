@@ -418,7 +418,7 @@ void AddIntervals(const IntensityPatch& patch,
                      const cv::Mat& kernel_spectrum,
                      int c) {
     const cv::Rect interior = grid.InteriorOf(c);
-    cv::mulSpectrums(view_spectrum, kernel_spectrum, product, 0);
+    SpectraProduct(view_spectrum, kernel_spectrum, &product);
     grid.Transform(c).Inverse(&product, interior.y + interior.height, &image);
     return cv::Mat(image(interior).clone());
   };
