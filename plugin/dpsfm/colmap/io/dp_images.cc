@@ -233,6 +233,7 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   frames.left = reduce && !from_sum ? reduce(first.values) : first.values;
   first.values.release();
   DPFrameFile second = ReadDPFrameFile(other_path, &buffers);
+  buffers = DPDecodeBuffers();  // the raw pixels go; `second` holds its values
   if (second.values.size() != frames.frame_size ||
       second.values.channels() != channels) {
     std::ostringstream message;
