@@ -401,5 +401,34 @@ TEST(EstimateNoiseSigma, MatchesGaussianNoise) {
   EXPECT_NEAR(EstimateNoiseSigma(noise), 0.02, 0.001);
 }
 
+// NoiseSigmaReaches(p, sigma) is EstimateNoiseSigma(p) >= sigma, exactly:
+// at the estimate itself, at the next double on either side (where a
+// threshold off by one rounding step would tell), and at random sigmas, on
+// patches of either parity of response count, with texture and without.
+TEST(NoiseSigmaReaches, TheEstimateComparedToTheBit) {
+  cv::RNG rng(5);
+  for (const cv::Size size : {cv::Size(23, 19), cv::Size(24, 24)}) {
+    for (const double texture : {0.0, 0.2}) {
+      cv::Mat patch(size, CV_32FC1);
+      rng.fill(patch, cv::RNG::NORMAL, 0.5, 0.01);
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
+          patch.at<float>(y, x) += texture * std::sin(0.7 * x + 0.3 * y);
+        }
+      }
+      const double sigma = EstimateNoiseSigma(patch);
+      ASSERT_GT(sigma, 0);
+      EXPECT_TRUE(NoiseSigmaReaches(patch, sigma));
+      EXPECT_TRUE(NoiseSigmaReaches(patch, std::nextafter(sigma, 0.0)));
+      EXPECT_FALSE(NoiseSigmaReaches(patch, std::nextafter(sigma, 1.0)));
+      for (int k = 0; k < 200; ++k) {
+        const double s = sigma * rng.uniform(0.5, 1.5);
+        EXPECT_EQ(NoiseSigmaReaches(patch, s), sigma >= s) << s;
+      }
+      EXPECT_FALSE(NoiseSigmaReaches(patch, std::nan("")));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dpsfm

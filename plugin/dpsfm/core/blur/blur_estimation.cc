@@ -79,15 +79,15 @@ bool EqualiseViews(const cv::Mat& left,
 double PatchNoiseVariance(const cv::Mat& gl,
                           const cv::Mat& gr,
                           const BlurEstimationOptions& options) {
-  double sigma2_hp = kInf;
-  if (options.subtract_noise_floor) {
-    const double sl = EstimateNoiseSigma(gl);
-    const double sr = EstimateNoiseSigma(gr);
-    cv::Mat diff = gl - gr;
-    const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
-    sigma2_hp = std::min(0.5 * (sl * sl + sr * sr), sd * sd);
-  }
-  return sigma2_hp;
+  if (!options.subtract_noise_floor) return kInf;
+  cv::Mat diff = gl - gr;
+  const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
+  // Where both views' estimates reach sd, the smaller is the difference's
+  // (0.5 (sl^2 + sr^2) >= sd^2, to the bit): their medians are not needed.
+  if (NoiseSigmaReaches(gl, sd) && NoiseSigmaReaches(gr, sd)) return sd * sd;
+  const double sl = EstimateNoiseSigma(gl);
+  const double sr = EstimateNoiseSigma(gr);
+  return std::min(0.5 * (sl * sl + sr * sr), sd * sd);
 }
 
 // The exact minimum from the coarse search's best basin (and a second one

@@ -219,6 +219,10 @@ double HorizontalTexture(const cv::Mat& gray_patch);
 // the 3x3 Laplacian-like mask [1 -2 1; -2 4 -2; 1 -2 1] (Immerkaer 1996) over
 // the patch without its outer pixel ring. Texture inflates it.
 double EstimateNoiseSigma(const cv::Mat& gray_patch);
+// Whether EstimateNoiseSigma(gray_patch) >= sigma, exactly (false for a NaN
+// sigma), by counting the responses below the median that sigma needs
+// instead of selecting it.
+bool NoiseSigmaReaches(const cv::Mat& gray_patch, double sigma);
 
 // Cheap per-patch texture and noise measures for a whole view, computed once
 // per view (not once per patch) to screen patches before the blur search:

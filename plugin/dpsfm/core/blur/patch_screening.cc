@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -22,7 +23,13 @@ double HorizontalTexture(const cv::Mat& gray_patch) {
   return cv::mean(cv::abs(gx))[0];
 }
 
-double EstimateNoiseSigma(const cv::Mat& gray_patch) {
+namespace {
+
+// The filter's gain: the norm of its taps.
+constexpr double kNoiseMaskGain = 6.0;
+
+// The mask's absolute responses over the patch without its outer ring.
+std::vector<float> NoiseResponses(const cv::Mat& gray_patch) {
   DPSFM_CHECK(gray_patch.type() == CV_32FC1 && gray_patch.rows >= 3 &&
               gray_patch.cols >= 3)
       << "EstimateNoiseSigma needs a CV_32FC1 patch of at least 3x3";
@@ -39,8 +46,31 @@ double EstimateNoiseSigma(const cv::Mat& gray_patch) {
       responses.push_back(std::abs(v));
     }
   }
-  // The filter's gain is 6 (the norm of its taps).
-  return SigmaFromMedianAbsolute(UpperMedianInPlace(&responses), 6.0);
+  return responses;
+}
+
+}  // namespace
+
+double EstimateNoiseSigma(const cv::Mat& gray_patch) {
+  std::vector<float> responses = NoiseResponses(gray_patch);
+  return SigmaFromMedianAbsolute(UpperMedianInPlace(&responses),
+                                 kNoiseMaskGain);
+}
+
+bool NoiseSigmaReaches(const cv::Mat& gray_patch, double sigma) {
+  const std::vector<float> responses = NoiseResponses(gray_patch);
+  if (std::isnan(sigma)) return false;
+  // The median absolute response t that gives sigma, rounded up to a float:
+  // a median >= t gives EstimateNoiseSigma >= sigma (both steps monotone).
+  float t = static_cast<float>(sigma * kHalfNormalMedian * kNoiseMaskGain);
+  while (SigmaFromMedianAbsolute(t, kNoiseMaskGain) < sigma) {
+    t = std::nextafter(t, std::numeric_limits<float>::infinity());
+  }
+  // The value of rank n / 2 is >= t exactly when at most n / 2 values lie
+  // below t.
+  size_t below = 0;
+  for (const float v : responses) below += v < t;
+  return below <= responses.size() / 2;
 }
 
 namespace {
@@ -58,7 +88,7 @@ double SubsampledNoiseSigma(const cv::Mat& response, const cv::Rect& rect) {
     }
   }
   if (values.empty()) return 0;
-  return SigmaFromMedianAbsolute(UpperMedianInPlace(&values), 6.0);
+  return SigmaFromMedianAbsolute(UpperMedianInPlace(&values), kNoiseMaskGain);
 }
 
 }  // namespace
