@@ -633,29 +633,6 @@ TEST(ReadDPFrameFile, FloatFramesAreLinear) {
   EXPECT_EQ(reason, "32-bit file");
 }
 
-// Frames read into shared buffers (a view's two): a frame still held is
-// never decoded over, and once nothing holds them the next frame is decoded
-// into the buffers' memory.
-TEST(ReadDPFrameFile, BuffersAreUsedAgainButNeverUnderAHeldFrame) {
-  TempDir dir;
-  ASSERT_TRUE(cv::imwrite(dir / "a.png",
-                          cv::Mat(6, 8, CV_16UC3, cv::Scalar::all(1000))));
-  ASSERT_TRUE(cv::imwrite(dir / "b.png",
-                          cv::Mat(6, 8, CV_16UC3, cv::Scalar::all(50000))));
-  DPDecodeBuffers buffers;
-  DPFrameFile a = ReadDPFrameFile(dir / "a.png", &buffers);
-  DPFrameFile b = ReadDPFrameFile(dir / "b.png", &buffers);
-  EXPECT_NE(b.values.data, a.values.data);
-  EXPECT_FLOAT_EQ(a.values.at<cv::Vec3f>(5, 7)[2] * 65535.0f, 1000);
-  EXPECT_FLOAT_EQ(b.values.at<cv::Vec3f>(5, 7)[2] * 65535.0f, 50000);
-  const uchar* b_memory = b.values.data;
-  a = DPFrameFile();
-  b = DPFrameFile();
-  const DPFrameFile c = ReadDPFrameFile(dir / "a.png", &buffers);
-  EXPECT_EQ(c.values.data, b_memory);
-  EXPECT_FLOAT_EQ(c.values.at<cv::Vec3f>(0, 0)[0] * 65535.0f, 1000);
-}
-
 TEST(ReadDPFrameFile, UnreadableFileIsNamed) {
   TempDir dir;
   WriteTextFile(dir / "bad.png", "\x89PNG\r\n\x1a\nnot really");

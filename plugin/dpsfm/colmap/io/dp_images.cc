@@ -86,34 +86,24 @@ DPFramePaths DPImageIndex::Find(const std::string& image_name) const {
 
 namespace {
 
-// *buffer made `rows` x `cols` of `type`, in the memory it has when nothing
-// else holds that memory (a frame handed out earlier and still kept gets
-// new memory rather than being overwritten).
-void Reuse(int rows, int cols, int type, cv::Mat* buffer) {
-  if (buffer->u != nullptr && buffer->u->refcount > 1) buffer->release();
-  buffer->create(rows, cols, type);
-}
-
-// Decodes an image file's bytes into *pixels with OpenImageIO, the library
-// COLMAP 4 reads images with, so that any frame COLMAP reads, the plugin
-// reads: as OpenCV's decoder would (8-bit, 16-bit or float; colour in BGR
-// order). False when it cannot. The bytes are decoded in memory where the
+// Decodes an image file's bytes with OpenImageIO, the library COLMAP 4 reads
+// images with, so that any frame COLMAP reads, the plugin reads. Returns the
+// pixels as OpenCV's decoder would (8-bit, 16-bit or float; colour in BGR
+// order), or an empty matrix. The bytes are decoded in memory where the
 // format allows it; other formats are opened by name (a second read).
-bool DecodeImage(const std::string& bytes,
-                 const std::string& path,
-                 cv::Mat* pixels) {
+cv::Mat DecodeImage(const std::string& bytes, const std::string& path) {
   OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
   std::unique_ptr<OIIO::ImageInput> input =
       OIIO::ImageInput::open(path, nullptr, &memory);
   if (!input) input = OIIO::ImageInput::open(path);
   if (!input) {
     OIIO::geterror();  // clears OpenImageIO's per-thread error
-    return false;
+    return cv::Mat();
   }
   const OIIO::ImageSpec& spec = input->spec();
   const int channels = spec.nchannels;
   if (channels < 1 || channels > 4 || spec.width <= 0 || spec.height <= 0) {
-    return false;
+    return cv::Mat();
   }
   OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
   int depth = CV_32F;
@@ -124,35 +114,32 @@ bool DecodeImage(const std::string& bytes,
     format = OIIO::TypeDesc::UINT16;
     depth = CV_16U;
   }
-  Reuse(spec.height, spec.width, CV_MAKETYPE(depth, channels), pixels);
-  if (!input->read_image(0, 0, 0, channels, format, pixels->data)) {
+  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, channels));
+  if (!input->read_image(0, 0, 0, channels, format, pixels.data)) {
     input->geterror();
-    return false;
+    return cv::Mat();
   }
-  if (channels == 3) cv::cvtColor(*pixels, *pixels, cv::COLOR_RGB2BGR);
-  if (channels == 4) cv::cvtColor(*pixels, *pixels, cv::COLOR_RGBA2BGRA);
-  return true;
+  if (channels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
+  if (channels == 4) cv::cvtColor(pixels, pixels, cv::COLOR_RGBA2BGRA);
+  return pixels;
 }
 
 }  // namespace
 
-DPFrameFile ReadDPFrameFile(const std::string& path, DPDecodeBuffers* reused) {
+DPFrameFile ReadDPFrameFile(const std::string& path) {
   if (!fs::is_regular_file(path)) {
     throw InputError("DP view does not exist: " + path);
   }
   DPFrameFile file;
-  DPDecodeBuffers own;
-  DPDecodeBuffers& buffers = reused != nullptr ? *reused : own;
-  cv::Mat& raw = buffers.raw;
-  bool decoded = false;
+  cv::Mat raw;
   {
     // Read once: the pixels and what the file declares about its encoding
     // come from the same bytes, released before the conversion below.
     const std::string bytes = ReadFileBytes(path);
     file.declared = ParseDeclaredEncoding(bytes);
-    decoded = !bytes.empty() && DecodeImage(bytes, path, &raw);
+    if (!bytes.empty()) raw = DecodeImage(bytes, path);
   }
-  if (!decoded) {
+  if (raw.empty()) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
   }
@@ -191,10 +178,8 @@ DPFrameFile ReadDPFrameFile(const std::string& path, DPDecodeBuffers* reused) {
     default:
       throw InputError("DP view has an unsupported channel count: " + path);
   }
-  const int type = image.channels() == 1 ? CV_32FC1 : CV_32FC3;
-  Reuse(image.rows, image.cols, type, &buffers.values);
-  image.convertTo(buffers.values, type, 1.0 / unit);
-  file.values = buffers.values;
+  image.convertTo(
+      file.values, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
   return file;
 }
 
@@ -221,19 +206,16 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   const std::string& other_path = from_sum ? paths.sum : paths.right;
   DPFrames frames;
   // The left view first, brought to linear light by its own encoding (the
-  // other file must agree, below) and reduced before the other is read, which
-  // is decoded into the same memory; with a sum frame it is needed at full
-  // size for the subtraction.
-  DPDecodeBuffers buffers;
-  DPFrameFile first = ReadDPFrameFile(paths.left, &buffers);
+  // other file must agree, below) and reduced before the other is read;
+  // with a sum frame it is needed at full size for the subtraction.
+  DPFrameFile first = ReadDPFrameFile(paths.left);
   frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
   DecodeToLinearLight(frames.encoding, &first.values);
   frames.frame_size = first.values.size();
   const int channels = first.values.channels();
   frames.left = reduce && !from_sum ? reduce(first.values) : first.values;
   first.values.release();
-  DPFrameFile second = ReadDPFrameFile(other_path, &buffers);
-  buffers = DPDecodeBuffers();  // the raw pixels go; `second` holds its values
+  DPFrameFile second = ReadDPFrameFile(other_path);
   if (second.values.size() != frames.frame_size ||
       second.values.channels() != channels) {
     std::ostringstream message;

@@ -63,17 +63,7 @@ struct DPFrameFile {
   bool lossy = false;         // JPEG
   DeclaredEncoding declared;  // ParseDeclaredEncoding of the same bytes
 };
-//
-// `buffers` (optional), for a caller reading frames of one size in turn (a
-// view's two): the pixels are decoded and converted in their memory, and
-// `values` is theirs unless a frame handed out earlier still holds it (then
-// it gets new memory). Fresh full-size buffers cost a page fault per 4 KB:
-// a 16-bit colour frame of 3000 x 2000 maps and zeroes 108 MB.
-struct DPDecodeBuffers {
-  cv::Mat raw, values;
-};
-DPFrameFile ReadDPFrameFile(const std::string& path,
-                            DPDecodeBuffers* buffers = nullptr);
+DPFrameFile ReadDPFrameFile(const std::string& path);
 
 // How a frame's values encode light (docs/user-guide.md, "DP frames"): the
 // requested encoding when it is not kAuto; otherwise what the file declares
