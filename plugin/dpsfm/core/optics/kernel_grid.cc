@@ -66,7 +66,7 @@ DPKernelGrid::DPKernelGrid(const DPPsfModel& psf,
   // the kernels of its mirror node (Radius of one is exactly minus the
   // other's) with the views swapped: only r >= 0 is rendered.
   mirrored_ = psf.SwapsViewsWithSign();
-  const int first = mirrored_ ? half_nodes_ : 0;
+  const int first = FirstRenderedNode();
   ParallelFor(num_nodes_ - first, num_threads, [&](int k) {
     const int n = first + k;
     const DPKernels kernels = psf.Kernels(Radius(n));
@@ -130,7 +130,7 @@ void DPKernelGrid::TabulateSpectra(int num_threads) {
   right_spectra_.resize(num_nodes_);
   // Mirrored nodes hold their mirror's kernels, so their spectra too (a
   // node's class follows from its kernels' size).
-  const int first = mirrored_ ? half_nodes_ : 0;
+  const int first = FirstRenderedNode();
   ParallelFor(num_nodes_ - first, num_threads, [&](int k) {
     const int n = first + k;
     const RealDft& dft = transforms_[class_of_[n]];

@@ -103,6 +103,8 @@ class DPKernelGrid {
   void TabulateSpectra(int num_threads);
   // The node at minus node n's radius.
   int MirrorNode(int n) const { return num_nodes_ - 1 - n; }
+  // The first node rendered and transformed; those below it are mirrored.
+  int FirstRenderedNode() const { return mirrored_ ? half_nodes_ : 0; }
 
   double step_ = 0;
   int half_nodes_ = 0;
