@@ -1,8 +1,10 @@
 // Each statistic against values worked out by hand.
 #include "dpsfm/core/util/statistics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -56,6 +58,70 @@ TEST(RankInPlace, UpperMedianAndRanks) {
   EXPECT_EQ(RankInPlace(&v, 3), 8);
   std::vector<int> odd = {9, 3, 5};
   EXPECT_EQ(UpperMedianInPlace(&odd), 5);
+}
+
+// The rank n / 2 of a sorted copy: an oracle that shares nothing with
+// either selection.
+float SortedUpperMedian(std::vector<float> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+TEST(UpperMedianBySelection, TheSortedValueOnEveryKindOfSample) {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> normal(0, 1);
+  const float denormal = std::numeric_limits<float>::denorm_min();
+  const float inf = std::numeric_limits<float>::infinity();
+  int checked = 0;
+  for (const size_t n : {1, 2, 3, 63, 64, 65, 100, 751, 4096, 11881}) {
+    for (int kind = 0; kind < 7; ++kind) {
+      std::vector<float> v(n);
+      for (size_t i = 0; i < n; ++i) {
+        const float x = normal(rng);
+        switch (kind) {
+          case 0:  // noise responses: |N(0, s^2)| at one scale
+            v[i] = std::abs(0.01f * x);
+            break;
+          case 1:  // spanning many octaves
+            v[i] = std::abs(x) * std::pow(10.0f, (i % 13) - 6.0f);
+            break;
+          case 2:  // many ties, zeros among them
+            v[i] = static_cast<float>(static_cast<int>(3 * std::abs(x)));
+            break;
+          case 3:  // all in one of the 4096 ranges
+            v[i] = 1.0f + 1e-3f * std::abs(x);
+            break;
+          case 4:  // signed, with denormals and infinities
+            v[i] = i % 17 == 0   ? denormal * (i % 3)
+                   : i % 29 == 0 ? (x > 0 ? inf : -inf)
+                                 : x;
+            break;
+          case 5:  // one value
+            v[i] = 0.25f;
+            break;
+          default:  // sorted descending (a bad case for pivots)
+            v[i] = static_cast<float>(n - i);
+            break;
+        }
+      }
+      const float expected = SortedUpperMedian(v);
+      std::vector<float> copy = v;
+      EXPECT_EQ(UpperMedianBySelection(&copy), expected)
+          << "n " << n << ", kind " << kind;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 70);
+}
+
+TEST(UpperMedianBySelection, WithANaNAsUpperMedianInPlace) {
+  std::vector<float> v(500);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(i % 37);
+  v[123] = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> a = v, b = v;
+  const float expected = UpperMedianInPlace(&a);
+  const float got = UpperMedianBySelection(&b);
+  EXPECT_TRUE(got == expected || (std::isnan(got) && std::isnan(expected)));
 }
 
 TEST(SigmaFromMedianAbsolute, HalfNormalMedian) {

@@ -555,13 +555,14 @@ std::vector<double> EstimateChannelNoiseSigma(const cv::Mat& image) {
     cv::filter2D(ch, response, CV_32F, mask);
     // Drop the filter's own border.
     const cv::Mat inner = response(cv::Rect(1, 1, ch.cols - 2, ch.rows - 2));
-    std::vector<float> values;
-    values.reserve(inner.total());
-    for (int y = 0; y < inner.rows; ++y) {
+    std::vector<float> values(inner.total());
+    float* out = values.data();
+    for (int y = 0; y < inner.rows; ++y, out += inner.cols) {
       const float* row = inner.ptr<float>(y);
-      for (int x = 0; x < inner.cols; ++x) values.push_back(std::abs(row[x]));
+      for (int x = 0; x < inner.cols; ++x) out[x] = std::abs(row[x]);
     }
-    sigmas.push_back(SigmaFromMedianAbsolute(UpperMedianInPlace(&values), 6.0));
+    sigmas.push_back(
+        SigmaFromMedianAbsolute(UpperMedianBySelection(&values), 6.0));
   }
   return sigmas;
 }

@@ -1,6 +1,9 @@
 #include "dpsfm/core/util/statistics.h"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace dpsfm {
@@ -26,6 +29,45 @@ double Median(std::vector<double> values) {
   const double lower =
       *std::max_element(values.begin(), values.begin() + n / 2);
   return 0.5 * (lower + upper);
+}
+
+namespace {
+
+// A float's bits mapped so that unsigned order is the values' order
+// (negative values reversed below the positive ones).
+inline uint32_t OrderedBits(float value) {
+  uint32_t bits;
+  std::memcpy(&bits, &value, sizeof(bits));
+  return bits ^ ((bits & 0x80000000u) != 0 ? 0xffffffffu : 0x80000000u);
+}
+
+}  // namespace
+
+float UpperMedianBySelection(std::vector<float>* values) {
+  const size_t n = values->size();
+  constexpr size_t kSmall = 64;  // std::nth_element is as fast below this
+  if (n < kSmall) return UpperMedianInPlace(values);
+  constexpr int kShift = 20;  // 12 leading bits: 4096 ranges
+  std::array<uint32_t, size_t{1} << (32 - kShift)> counts{};
+  float* v = values->data();
+  bool any_nan = false;
+  for (size_t i = 0; i < n; ++i) {
+    ++counts[OrderedBits(v[i]) >> kShift];
+    any_nan |= std::isnan(v[i]);
+  }
+  if (any_nan) return UpperMedianInPlace(values);
+  // The range that holds rank n / 2, and how many values lie below it.
+  const size_t k = n / 2;
+  size_t range = 0, below = 0;
+  while (below + counts[range] <= k) below += counts[range++];
+  // Its values to the front (in place: each is written at or before where
+  // it was read), then the rank within them.
+  size_t m = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if ((OrderedBits(v[i]) >> kShift) == range) v[m++] = v[i];
+  }
+  std::nth_element(v, v + (k - below), v + m);
+  return v[k - below];
 }
 
 double FiniteMedian(std::vector<double> values) {

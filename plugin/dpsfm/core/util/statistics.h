@@ -42,6 +42,17 @@ T UpperMedianInPlace(std::vector<T>* values) {
   return RankInPlace(values, values->size() / 2);
 }
 
+// The value of rank n / 2 of floats, as UpperMedianInPlace gives it, by
+// radix selection: one pass counts the values per range of their leading
+// 12 bits (sign, exponent and three mantissa bits, in the values' order),
+// the range that holds rank n / 2 is gathered, and the rank is selected
+// within it. 4-7x faster than std::nth_element on the noise estimators'
+// 750-12000 responses (its partitions mispredict about every other
+// branch). The value is exact, so the same as UpperMedianInPlace's.
+// Consumes *values (contents unspecified afterwards), which must not be
+// empty; with a NaN among them it is UpperMedianInPlace.
+float UpperMedianBySelection(std::vector<float>* values);
+
 // The noise sigma behind the median of absolute filter responses: for a
 // filter of gain g (the norm of its taps) on N(0, sigma^2) noise, the
 // responses are N(0, g^2 sigma^2) and median |x| = Phi^-1(3/4) g sigma.
