@@ -235,7 +235,7 @@ TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
   ASSERT_NE(cv::norm(expected[4].left, expected[0].left, cv::NORM_INF), 0);
   for (const int depth : {0, 1, 2, 5}) {
     const Clock::time_point created = Clock::now();
-    ViewPrefetcher prefetcher(&reader, order, depth, nullptr);
+    ViewPrefetcher prefetcher(&reader, order, depth, FrameReduction{});
     for (const int index : order) {
       const Clock::time_point called = Clock::now();
       const ViewPrefetcher::Read read = prefetcher.Next();
@@ -263,7 +263,7 @@ TEST(ViewPrefetcher, SameViewsInTheSameOrderAtEveryDepth) {
     // Only the given order is read.
     EXPECT_THROW(prefetcher.Next(), std::out_of_range) << depth;
   }
-  EXPECT_THROW(ViewPrefetcher(&reader, order, -1, nullptr),
+  EXPECT_THROW(ViewPrefetcher(&reader, order, -1, FrameReduction{}),
                std::invalid_argument);
 }
 
@@ -278,7 +278,7 @@ TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
     for (int view = 0; view < 7; ++view) no_hold[view] = 0;
     ReadGates gates(dir, no_hold);
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, order, depth, nullptr);
+    ViewPrefetcher prefetcher(&reader, order, depth, FrameReduction{});
     // Before the first Next(): the first `depth` views, read ahead.
     for (int k = 0; k < depth; ++k) {
       EXPECT_TRUE(gates.WaitStarted(order[k])) << depth << " " << k;
@@ -305,6 +305,40 @@ TEST(ViewPrefetcher, ReadsAtMostDepthViewsAhead) {
   }
 }
 
+// Next(false) starts no read (a checkpoint that may end the run follows
+// the view); Resume() starts those held back, up to `depth` ahead.
+TEST(ViewPrefetcher, ReadsHeldBackUntilResumed) {
+  TempDir dir;
+  const WorkspaceReader reader = ReaderFor(dir, 5, -1);
+  const std::vector<int> order = {3, 0, 4, 1};
+  const auto settle = std::chrono::milliseconds(50);
+  for (const int depth : {1, 2}) {
+    std::map<int, double> no_hold;
+    for (int view = 0; view < 5; ++view) no_hold[view] = 0;
+    ReadGates gates(dir, no_hold);
+    ASSERT_EQ(gates.error(), "");
+    ViewPrefetcher prefetcher(&reader, order, depth, FrameReduction{});
+    EXPECT_EQ(prefetcher.Next(false).view.name, "v3.png");
+    std::this_thread::sleep_for(settle);
+    // Only the reads started before: the first `depth` views.
+    EXPECT_EQ(gates.Started(), FirstOf(order, static_cast<size_t>(depth)))
+        << "depth " << depth;
+    prefetcher.Resume();
+    EXPECT_TRUE(gates.WaitStarted(order[depth])) << depth;
+    std::this_thread::sleep_for(settle);
+    EXPECT_EQ(gates.Started(), FirstOf(order, depth + 1u)) << depth;
+    // Held back again, then read on by the next Next().
+    EXPECT_EQ(prefetcher.Next(false).view.name, "v0.png");
+    std::this_thread::sleep_for(settle);
+    EXPECT_EQ(gates.Started(), FirstOf(order, depth + 1u)) << depth;
+    // Without Resume(), Next() starts what it needs.
+    EXPECT_EQ(prefetcher.Next().view.name, "v4.png");
+    EXPECT_EQ(prefetcher.Next().view.name, "v1.png");
+    EXPECT_EQ(gates.Started(), FirstOf(order, order.size()));
+    EXPECT_THROW(prefetcher.Next(), std::out_of_range) << depth;
+  }
+}
+
 TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
   TempDir dir;
   const WorkspaceReader reader = ReaderFor(dir, 3, -1);
@@ -313,7 +347,7 @@ TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
     // Depth 0: the read happens inside Next(), which waits all of it.
     ReadGates gates(dir, {{1, hold}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1}, 0, nullptr);
+    ViewPrefetcher prefetcher(&reader, {0, 1}, 0, FrameReduction{});
     EXPECT_EQ(prefetcher.Next().view.name, "v0.png");
     const ViewPrefetcher::Read read = prefetcher.Next();
     EXPECT_EQ(read.view.name, "v1.png");
@@ -324,7 +358,7 @@ TEST(ViewPrefetcher, ReadTimesAreTheReadsAndPrefetchHidesThem) {
   {
     ReadGates gates(dir, {{1, hold}, {2, hold}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2}, 1, nullptr);
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2}, 1, FrameReduction{});
     EXPECT_EQ(prefetcher.Next().view.name, "v0.png");
     // View 1 is read while the caller works on view 0: once its gate has
     // opened (the read has lasted `hold`), Next() waits at most for the
@@ -364,7 +398,8 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
   for (const int depth : {0, 1, 3}) {
     ReadGates gates(dir, {{3, 0}});
     ASSERT_EQ(gates.error(), "");
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3, 4}, depth, nullptr);
+    ViewPrefetcher prefetcher(
+        &reader, {0, 1, 2, 3, 4}, depth, FrameReduction{});
     for (int k = 0; k < 3; ++k) {
       EXPECT_EQ(prefetcher.Next().view.name, "v" + std::to_string(k) + ".png")
           << depth;
@@ -383,8 +418,9 @@ TEST(ViewPrefetcher, ReadErrorSurfacesAtItsView) {
     ReadGates gates(dir, {{3, 0}});
     ASSERT_EQ(gates.error(), "");
     std::unique_ptr<ViewPrefetcher> prefetcher;
-    EXPECT_NO_THROW(prefetcher = std::make_unique<ViewPrefetcher>(
-                        &reader, std::vector<int>{3, 0}, depth, nullptr));
+    EXPECT_NO_THROW(
+        prefetcher = std::make_unique<ViewPrefetcher>(
+            &reader, std::vector<int>{3, 0}, depth, FrameReduction{}));
     ASSERT_NE(prefetcher, nullptr);
     if (depth > 0) EXPECT_TRUE(gates.WaitStarted(3));
     expect_error_names_v3(prefetcher.get(), depth);
@@ -404,7 +440,7 @@ TEST(ViewPrefetcher, EachFrameIsReducedOnTheReadingThread) {
   for (const int depth : {0, 1, 3}) {
     std::mutex mutex;
     std::map<float, std::vector<std::thread::id>> reduced;
-    const auto reduce = [&](const cv::Mat& frame) {
+    const auto reduce = [&](const cv::Mat& frame, const cv::Size&) {
       const float level = frame.at<float>(0, 0);
       {
         std::lock_guard<std::mutex> lock(mutex);
@@ -413,7 +449,8 @@ TEST(ViewPrefetcher, EachFrameIsReducedOnTheReadingThread) {
       if (level == v3_level) throw InputError("cannot reduce v3");
       return cv::Mat(frame(cv::Rect(0, 0, 2, 1)).clone());
     };
-    ViewPrefetcher prefetcher(&reader, {4, 0, 3, 1}, depth, reduce);
+    ViewPrefetcher prefetcher(
+        &reader, {4, 0, 3, 1}, depth, FrameReduction{reduce});
     for (const int index : {4, 0}) {
       const ViewPrefetcher::Read read = prefetcher.Next();
       EXPECT_EQ(read.view.name, "v" + std::to_string(index) + ".png");
@@ -454,7 +491,7 @@ TEST(ViewPrefetcher, ReturnedViewsAreHeldByTheCallerAlone) {
   TempDir dir;
   const WorkspaceReader reader = ReaderFor(dir, 4, -1);
   for (const int depth : {0, 1, 3}) {
-    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth, nullptr);
+    ViewPrefetcher prefetcher(&reader, {0, 1, 2, 3}, depth, FrameReduction{});
     for (int k = 0; k < 4; ++k) {
       const ViewPrefetcher::Read read = prefetcher.Next();
       for (const cv::Mat* mat :
@@ -475,7 +512,7 @@ TEST(ViewPrefetcher, DroppingWaitsForTheReadsInFlight) {
   ASSERT_EQ(gates.error(), "");
   {
     // Dropped at once: reads 0-3 are in flight (or queued), 4 is not.
-    ViewPrefetcher dropped(&reader, {0, 1, 2, 3, 4}, 4, nullptr);
+    ViewPrefetcher dropped(&reader, {0, 1, 2, 3, 4}, 4, FrameReduction{});
   }
   // Every read in flight ran to its end (its gate opened before its open
   // returned), none beyond them started.

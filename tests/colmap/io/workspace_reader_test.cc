@@ -4,6 +4,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/workspace_reader.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/scale/view_patches.h"
 #include "dpsfm/core/util/check.h"
 #include "tests/test_utils.h"
 
@@ -529,7 +531,7 @@ TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
   cv::imwrite(dir / "l.png", left);
   cv::imwrite(dir / "r.png", right);
   cv::imwrite(dir / "s.png", cv::Mat(left + right));
-  const FrameReduction halve = [](const cv::Mat& frame) {
+  const auto halve = [](const cv::Mat& frame) {
     cv::Mat out;
     cv::resize(frame, out, frame.size() / 2, 0, 0, cv::INTER_AREA);
     return out;
@@ -547,7 +549,13 @@ TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
   for (const DPFramePaths& p : {paths, sum_paths}) {
     for (const bool swap : {false, true}) {
       const DPFrames full = LoadDPFrames(p, swap);
-      const DPFrames reduced = LoadDPFrames(p, swap, DPEncoding::kAuto, halve);
+      const DPFrames reduced = LoadDPFrames(
+          p,
+          swap,
+          DPEncoding::kAuto,
+          FrameReduction{[&](const cv::Mat& frame, const cv::Size&) {
+            return halve(frame);
+          }});
       EXPECT_EQ(full.frame_size, cv::Size(24, 20));
       EXPECT_EQ(reduced.frame_size, cv::Size(24, 20));
       EXPECT_TRUE(same(reduced.left, halve(full.left))) << swap;
@@ -560,16 +568,68 @@ TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
   const DPFrames old_right = LoadDPFrames(paths, false);
   const cv::Mat other_right = cv::Mat(20, 24, CV_16UC3, cv::Scalar(1, 2, 3));
   int calls = 0;
-  const FrameReduction rewrite_right = [&](const cv::Mat& frame) {
-    if (calls++ == 0) cv::imwrite(dir / "r.png", other_right);
-    return halve(frame);
-  };
+  const FrameReduction rewrite_right{
+      [&](const cv::Mat& frame, const cv::Size&) {
+        if (calls++ == 0) cv::imwrite(dir / "r.png", other_right);
+        return halve(frame);
+      }};
   const DPFrames reduced =
       LoadDPFrames(paths, false, DPEncoding::kAuto, rewrite_right);
   EXPECT_EQ(calls, 2);
   EXPECT_TRUE(same(reduced.left, halve(old_right.left)));
   EXPECT_TRUE(same(reduced.right, halve(LoadDPFrames(paths, false).right)));
   EXPECT_FALSE(same(reduced.right, halve(old_right.right)));
+}
+
+// A reduction that may work on strips (FrameReduction::strip_rows, as the
+// scale controller passes DPScaleEstimator's) is applied a strip at a time,
+// and the views are those of the whole frames reduced, bit for bit: 16-bit
+// linear and 8-bit sRGB colour, frames taller than a strip.
+TEST(LoadDPFrames, ReducedAStripAtATimeAsWholeFrames) {
+  TempDir dir;
+  cv::Mat left16(300, 250, CV_16UC3), right16(300, 250, CV_16UC3);
+  cv::randu(left16, 0, 65535);
+  cv::randu(right16, 0, 65535);
+  cv::Mat left8, right8;
+  left16.convertTo(left8, CV_8U, 1.0 / 257);
+  right16.convertTo(right8, CV_8U, 1.0 / 257);
+  ASSERT_TRUE(cv::imwrite(dir / "l16.png", left16));
+  ASSERT_TRUE(cv::imwrite(dir / "r16.png", right16));
+  ASSERT_TRUE(cv::imwrite(dir / "l8.png", left8));
+  ASSERT_TRUE(cv::imwrite(dir / "r8.png", right8));
+  // As DPScaleEstimator::ReduceFrame: the factor is the whole frame's.
+  int calls = 0;
+  const auto reduce = [&](const cv::Mat& rows, const cv::Size& frame_size) {
+    ++calls;
+    EXPECT_EQ(frame_size, cv::Size(250, 300));
+    return WorkingFrame(rows, 0.5);
+  };
+  const FrameReduction whole{reduce};
+  const FrameReduction strips{reduce, [](const cv::Size& size) {
+                                return WorkingFrameStripRows(size, 0.5);
+                              }};
+  for (const std::string bits : {"16", "8"}) {
+    DPFramePaths paths;
+    paths.left = dir / ("l" + bits + ".png");
+    paths.right = dir / ("r" + bits + ".png");
+    calls = 0;
+    const DPFrames a = LoadDPFrames(paths, false, DPEncoding::kAuto, whole);
+    EXPECT_EQ(calls, 2);
+    calls = 0;
+    const DPFrames b = LoadDPFrames(paths, false, DPEncoding::kAuto, strips);
+    EXPECT_EQ(calls, 6) << "300 rows in strips of 128";
+    EXPECT_EQ(b.frame_size, cv::Size(250, 300));
+    EXPECT_EQ(b.encoding,
+              bits == "8" ? DPEncoding::kSrgb : DPEncoding::kLinear);
+    for (const auto& [x, y] :
+         {std::make_pair(a.left, b.left), std::make_pair(a.right, b.right)}) {
+      ASSERT_EQ(y.size(), cv::Size(125, 150));
+      ASSERT_EQ(y.type(), x.type());
+      ASSERT_TRUE(y.isContinuous() && x.isContinuous());
+      EXPECT_EQ(std::memcmp(x.data, y.data, x.total() * x.elemSize()), 0)
+          << bits << "-bit";
+    }
+  }
 }
 
 TEST(LoadDPFrames, EightBitColour) {
@@ -601,11 +661,12 @@ TEST(ReadDPFrameFile, ChannelOrderAndSixteenBitValues) {
     ASSERT_TRUE(cv::imwrite(dir / name, colour));
     const DPFrameFile file = ReadDPFrameFile(dir / name);
     EXPECT_EQ(file.bits, 16) << name;
-    ASSERT_EQ(file.values.type(), CV_32FC3) << name;
+    const cv::Mat values = DPFrameValues(file);
+    ASSERT_EQ(values.type(), CV_32FC3) << name;
     for (int y = 0; y < colour.rows; ++y) {
       for (int x = 0; x < colour.cols; ++x) {
         for (int c = 0; c < 3; ++c) {
-          ASSERT_FLOAT_EQ(file.values.at<cv::Vec3f>(y, x)[c] * 65535.0f,
+          ASSERT_FLOAT_EQ(values.at<cv::Vec3f>(y, x)[c] * 65535.0f,
                           colour.at<cv::Vec3w>(y, x)[c])
               << name << " " << x << "," << y << "," << c;
         }
@@ -625,8 +686,9 @@ TEST(ReadDPFrameFile, FloatFramesAreLinear) {
   ASSERT_TRUE(cv::imwrite(dir / "f.tif", grey));
   const DPFrameFile file = ReadDPFrameFile(dir / "f.tif");
   EXPECT_EQ(file.bits, 32);
-  ASSERT_EQ(file.values.type(), CV_32FC1);
-  EXPECT_FLOAT_EQ(file.values.at<float>(3, 4), 0.01f * (3 * 7 + 4));
+  const cv::Mat values = DPFrameValues(file);
+  ASSERT_EQ(values.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(values.at<float>(3, 4), 0.01f * (3 * 7 + 4));
   std::string reason;
   EXPECT_EQ(DecideEncoding(DPEncoding::kAuto, file, &reason),
             DPEncoding::kLinear);

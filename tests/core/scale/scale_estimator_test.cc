@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -813,6 +814,70 @@ TEST(DPScaleEstimator, ReducedFramesGiveTheSameResult) {
     EXPECT_NE(std::string(e.what()).find(views[0].name), std::string::npos)
         << e.what();
   }
+}
+
+// A reader may reduce a frame a strip at a time where WorkingFrameStripRows
+// says so: each strip's share is the whole frame's, to the bit (an integer
+// factor to exactly frame / k), and it says 0 where it would not be.
+TEST(WorkingFrameStripRows, StripsReduceAsTheWholeFrame) {
+  EXPECT_EQ(WorkingFrameStripRows({3000, 2000}, 0.5), 2);
+  EXPECT_EQ(WorkingFrameStripRows({3000, 2001}, 1.0 / 3), 3);
+  EXPECT_EQ(WorkingFrameStripRows({3001, 2000}, 0.5), 0);  // 1501 x 2 != 3001
+  EXPECT_EQ(WorkingFrameStripRows({3000, 2001}, 0.5), 0);
+  EXPECT_EQ(WorkingFrameStripRows({1000, 800}, 0.4), 0);  // not 1 / k
+  EXPECT_EQ(WorkingFrameStripRows({1200, 800}, 1), 0);    // no reduction
+  cv::RNG rng(5);
+  for (const int k : {2, 3, 4}) {
+    for (const int type : {CV_32FC1, CV_32FC3}) {
+      cv::Mat frame(k * 37, k * 29, type);
+      rng.fill(frame, cv::RNG::UNIFORM, 0.0, 1.0);
+      const double factor = 1.0 / k;
+      ASSERT_EQ(WorkingFrameStripRows(frame.size(), factor), k);
+      const cv::Mat whole = WorkingFrame(frame, factor);
+      ASSERT_EQ(whole.size(), cv::Size(29, 37));
+      // Strips of k, 5k and 16k rows, the last one shorter.
+      for (const int blocks : {1, 5, 16}) {
+        cv::Mat joined;
+        for (int y = 0; y < frame.rows; y += blocks * k) {
+          const cv::Mat strip =
+              frame.rowRange(y, std::min(frame.rows, y + blocks * k));
+          joined.push_back(WorkingFrame(strip, factor));
+        }
+        ASSERT_EQ(joined.size(), whole.size());
+        EXPECT_EQ(cv::norm(joined, whole, cv::NORM_INF), 0)
+            << "k " << k << ", strips of " << blocks << " blocks";
+        // Bit for bit, not merely equal in value.
+        EXPECT_EQ(
+            std::memcmp(
+                joined.data, whole.data, whole.total() * whole.elemSize()),
+            0);
+      }
+    }
+  }
+}
+
+// A reader reduces each frame a strip at a time where
+// ReduceFrameStripRows allows it: the strips, reduced by the whole frame's
+// factor, are the frame reduced, to the bit; frames the defaults do not
+// reduce, or not by a whole factor, say 0.
+TEST(DPScaleEstimator, FramesReduceAStripAtATime) {
+  const DPScaleEstimator estimator(DPScaleOptions(),
+                                   std::make_shared<TranslatingDiskPsf>());
+  const cv::Size size(3000, 2000);  // reduced by 2 by default
+  ASSERT_EQ(estimator.ReduceFrameStripRows(size), 2);
+  EXPECT_EQ(estimator.ReduceFrameStripRows({1200, 800}), 0);  // kept
+  EXPECT_EQ(estimator.ReduceFrameStripRows({3001, 2000}), 0);
+  cv::Mat frame(size, CV_32FC1);
+  cv::RNG(3).fill(frame, cv::RNG::UNIFORM, 0.0, 1.0);
+  const cv::Mat whole = estimator.ReduceFrame(frame);
+  ASSERT_EQ(whole.size(), cv::Size(1500, 1000));
+  cv::Mat joined;
+  for (int y = 0; y < size.height; y += 128) {
+    joined.push_back(estimator.ReduceFrame(
+        frame.rowRange(y, std::min(size.height, y + 128)), size));
+  }
+  ASSERT_EQ(joined.size(), whole.size());
+  EXPECT_EQ(std::memcmp(joined.data, whole.data, whole.total() * 4), 0);
 }
 
 TEST(DPScaleEstimator, MalformedInputThrowsNamingTheView) {

@@ -77,21 +77,26 @@ ScaleRun DPScaleController::Run() {
   views_timer.Start();
   const int planned = run.planned;
   // Views are read ahead (decoding and depth maps overlap the blur search),
-  // never beyond those planned, each frame reduced to the working resolution
-  // as soon as it is decoded, so a read holds one full-size frame at a time
-  // and a view waiting no more than the search needs.
+  // never beyond those planned nor through a checkpoint (the run may end
+  // there), each frame reduced to the working resolution as soon as it is
+  // decoded (a strip at a time where it can be), so a read holds one frame
+  // as decoded at a time and a view waiting no more than the search needs.
   const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
       std::vector<int>(order.begin(), order.begin() + planned),
       prefetch_views_,
-      [estimator](const cv::Mat& frame) {
-        return estimator->ReduceFrame(frame);
-      });
+      FrameReduction{[estimator](const cv::Mat& rows, const cv::Size& size) {
+                       return estimator->ReduceFrame(rows, size);
+                     },
+                     [estimator](const cv::Size& size) {
+                       return estimator->ReduceFrameStripRows(size);
+                     }});
   // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
-    ViewPrefetcher::Read read = prefetcher.Next();
+    // No view is read ahead through a checkpoint: the run may end there.
+    ViewPrefetcher::Read read = prefetcher.Next(!budget.IsCheckpoint(k + 1));
     const DPView& view = read.view;
     run.timings.read += read.seconds;
     run.timings.read_wait += read.waited;
@@ -167,6 +172,7 @@ ScaleRun DPScaleController::Run() {
                   << "--DPScaleEstimator.all_views 1 visits them all)";
         break;
       }
+      prefetcher.Resume();
     }
   }
   for (int k = static_cast<int>(run.visited.size()); k < num_views; ++k) {

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -115,6 +117,12 @@ cv::Mat DecodeImage(const std::string& bytes, const std::string& path) {
     depth = CV_16U;
   }
   cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, channels));
+  // 8- and 16-bit files are read as they are stored (TypeDesc::UNKNOWN):
+  // asked for their own type by name, OpenImageIO decodes into a buffer of
+  // its own and copies (68 MB for a 16-bit colour frame of 3000 x 2000).
+  if (format == spec.format && spec.channelformats.empty()) {
+    format = OIIO::TypeDesc::UNKNOWN;
+  }
   if (!input->read_image(0, 0, 0, channels, format, pixels.data)) {
     input->geterror();
     return cv::Mat();
@@ -143,45 +151,86 @@ DPFrameFile ReadDPFrameFile(const std::string& path) {
     throw InputError("cannot read DP view (corrupt or unsupported format): " +
                      path);
   }
-  double unit;
   switch (raw.depth()) {
     case CV_8U:
-      unit = 255.0;
       file.bits = 8;
       break;
     case CV_16U:
-      unit = 65535.0;
       file.bits = 16;
       break;
     default:
-      // Floating point (EXR, float TIFF): values as stored.
-      unit = 1.0;
-      file.bits = 32;
+      file.bits = 32;  // floating point (EXR, float TIFF)
       break;
   }
   std::string extension = fs::path(path).extension().string();
   colmap::StringToLower(&extension);
   file.lossy = extension == ".jpg" || extension == ".jpeg";
-  cv::Mat image;
   switch (raw.channels()) {
     case 1:
     case 3:
-      image = raw;
+      file.pixels = raw;
       break;
     case 4:
-      cv::cvtColor(raw, image, cv::COLOR_BGRA2BGR);
+      cv::cvtColor(raw, file.pixels, cv::COLOR_BGRA2BGR);
       break;
     case 2:
       // Grey + alpha.
-      cv::extractChannel(raw, image, 0);
+      cv::extractChannel(raw, file.pixels, 0);
       break;
     default:
       throw InputError("DP view has an unsupported channel count: " + path);
   }
-  image.convertTo(
-      file.values, image.channels() == 1 ? CV_32FC1 : CV_32FC3, 1.0 / unit);
   return file;
 }
+
+cv::Mat DPFrameValues(const DPFrameFile& file, const cv::Range& rows) {
+  const double unit = file.bits == 8 ? 255.0 : file.bits == 16 ? 65535.0 : 1.0;
+  cv::Mat values;
+  file.pixels.rowRange(rows).convertTo(
+      values, CV_MAKETYPE(CV_32F, file.pixels.channels()), 1.0 / unit);
+  return values;
+}
+
+namespace {
+
+// A file's view in linear light, reduced when `reduction` says so, and the
+// file's pixels released. Where the reduction allows it (strip_rows), a
+// strip of rows at a time: a 3000 x 2000 colour view is then never held in
+// float at full size (72 MB), only its pixels as decoded and the reduced
+// view; each strip's values are those of the whole frame's, to the bit.
+cv::Mat LinearView(DPFrameFile* file,
+                   DPEncoding encoding,
+                   const FrameReduction* reduction) {
+  const bool reduce = reduction != nullptr && reduction->reduce;
+  const cv::Size size = file->pixels.size();
+  const int k =
+      reduce && reduction->strip_rows ? reduction->strip_rows(size) : 0;
+  cv::Mat view;
+  if (k > 0) {
+    const int strip = 64 * k;  // 64 reduced rows
+    for (int y = 0; y < size.height; y += strip) {
+      const cv::Range rows(y, std::min(size.height, y + strip));
+      cv::Mat values = DPFrameValues(*file, rows);
+      DecodeToLinearLight(encoding, &values);
+      const cv::Mat part = reduction->reduce(values, size);
+      if (part.rows * k != rows.size()) {
+        throw std::logic_error("a frame reduction by " + std::to_string(k) +
+                               " gave " + std::to_string(part.rows) +
+                               " rows for " + std::to_string(rows.size()));
+      }
+      if (view.empty()) view.create(size.height / k, part.cols, part.type());
+      part.copyTo(view.rowRange(y / k, y / k + part.rows));
+    }
+    file->pixels.release();
+    return view;
+  }
+  view = DPFrameValues(*file);
+  file->pixels.release();
+  DecodeToLinearLight(encoding, &view);
+  return reduce ? reduction->reduce(view, size) : view;
+}
+
+}  // namespace
 
 DPEncoding DecideEncoding(DPEncoding requested,
                           const DPFrameFile& file,
@@ -201,7 +250,7 @@ DPEncoding DecideEncoding(DPEncoding requested,
 DPFrames LoadDPFrames(const DPFramePaths& paths,
                       bool swap_views,
                       DPEncoding encoding,
-                      const FrameReduction& reduce) {
+                      const FrameReduction& reduction) {
   const bool from_sum = paths.right.empty();
   const std::string& other_path = from_sum ? paths.sum : paths.right;
   DPFrames frames;
@@ -210,19 +259,20 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   // with a sum frame it is needed at full size for the subtraction.
   DPFrameFile first = ReadDPFrameFile(paths.left);
   frames.encoding = DecideEncoding(encoding, first, &frames.encoding_reason);
-  DecodeToLinearLight(frames.encoding, &first.values);
-  frames.frame_size = first.values.size();
-  const int channels = first.values.channels();
-  frames.left = reduce && !from_sum ? reduce(first.values) : first.values;
-  first.values.release();
+  frames.frame_size = first.pixels.size();
+  const int channels = first.pixels.channels();
+  frames.bits = first.bits;
+  frames.lossy = first.lossy;
+  frames.left =
+      LinearView(&first, frames.encoding, from_sum ? nullptr : &reduction);
   DPFrameFile second = ReadDPFrameFile(other_path);
-  if (second.values.size() != frames.frame_size ||
-      second.values.channels() != channels) {
+  if (second.pixels.size() != frames.frame_size ||
+      second.pixels.channels() != channels) {
     std::ostringstream message;
     message << "DP views differ in size or channels: " << paths.left << " is "
             << frames.frame_size.width << "x" << frames.frame_size.height << "x"
-            << channels << ", " << other_path << " is " << second.values.cols
-            << "x" << second.values.rows << "x" << second.values.channels();
+            << channels << ", " << other_path << " is " << second.pixels.cols
+            << "x" << second.pixels.rows << "x" << second.pixels.channels();
     throw InputError(message.str());
   }
   std::string other_reason;
@@ -236,13 +286,12 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
                      "); export both views the same way, or set "
                      "--DPScaleEstimator.dp_encoding");
   }
-  frames.bits = std::min(first.bits, second.bits);
-  frames.lossy = first.lossy || second.lossy;
-  DecodeToLinearLight(frames.encoding, &second.values);
+  frames.bits = std::min(frames.bits, second.bits);
+  frames.lossy = frames.lossy || second.lossy;
   if (from_sum) {
     // right = sum - left. A "sum" frame darker than the left view means the
     // files are not A and A+B.
-    frames.right = second.values - frames.left;
+    frames.right = LinearView(&second, frames.encoding, nullptr) - frames.left;
     const double mean_right = cv::mean(frames.right)[0];
     if (mean_right < 0.05 * cv::mean(frames.left)[0]) {
       throw InputError("sum frame " + paths.sum +
@@ -250,12 +299,12 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
                        "; expected A+B and A frames in the same units");
     }
     cv::max(frames.right, 0.0, frames.right);
-    if (reduce) {
-      frames.left = reduce(frames.left);
-      frames.right = reduce(frames.right);
+    if (reduction.reduce) {
+      frames.left = reduction.reduce(frames.left, frames.frame_size);
+      frames.right = reduction.reduce(frames.right, frames.frame_size);
     }
   } else {
-    frames.right = reduce ? reduce(second.values) : second.values;
+    frames.right = LinearView(&second, frames.encoding, &reduction);
   }
   if (swap_views) {
     std::swap(frames.left, frames.right);

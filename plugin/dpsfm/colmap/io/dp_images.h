@@ -54,16 +54,21 @@ class DPImageIndex {
 };
 
 // One DP frame file as encoded, decoded by OpenImageIO (as COLMAP 4 reads
-// images): CV_32FC1 or CV_32FC3, colour in B, G, R order; 16-bit values
-// divided by 65535, 8-bit by 255, floating-point ones as stored. Throws
+// images): `pixels` as decoded, CV_8U, CV_16U or CV_32F with one or three
+// channels, colour in B, G, R order (an alpha channel dropped). Throws
 // InputError for a missing, unreadable or unsupported file.
 struct DPFrameFile {
-  cv::Mat values;
+  cv::Mat pixels;
   int bits = 0;               // 8, 16 or 32 (float) per channel
   bool lossy = false;         // JPEG
   DeclaredEncoding declared;  // ParseDeclaredEncoding of the same bytes
 };
 DPFrameFile ReadDPFrameFile(const std::string& path);
+
+// Rows `rows` of a file's pixels as CV_32FC1 or CV_32FC3: 16-bit values
+// divided by 65535, 8-bit by 255, floating-point ones as stored.
+cv::Mat DPFrameValues(const DPFrameFile& file,
+                      const cv::Range& rows = cv::Range::all());
 
 // How a frame's values encode light (docs/user-guide.md, "DP frames"): the
 // requested encoding when it is not kAuto; otherwise what the file declares
@@ -87,19 +92,32 @@ struct DPFrames {
   bool lossy = false;
 };
 
+// A reduction of each view to the working resolution as soon as it is in
+// linear light (DPScaleEstimator::ReduceFrame, ReduceFrameStripRows).
+struct FrameReduction {
+  // Reduces rows of a frame of `frame_size`: all of them, or a strip (null:
+  // no reduction).
+  std::function<cv::Mat(const cv::Mat& rows, const cv::Size& frame_size)>
+      reduce;
+  // For frames of a size, k > 0 when `reduce` of any strip of a multiple of
+  // k rows gives those rows' share of the reduced frame (null or 0: whole
+  // frames only). Then a view is converted, brought to linear light and
+  // reduced a strip at a time, never held in float at full size.
+  std::function<int(const cv::Size& frame_size)> strip_rows;
+};
+
 // Loads one image's DP views and brings them to linear light. With a sum
 // frame, right = sum - left in linear light (Canon's DPRSplit gives A and
 // A+B in the same units). `swap_views` exchanges left and right for sensors
 // with the opposite naming. Throws InputError when the two files differ in
-// size, channels or encoding. `reduce` (if given) replaces each view in
-// linear light as soon as it is decoded (a sum frame's right view after
-// the subtraction), so a read holds one full-size frame at a time, as
+// size, channels or encoding. A reduction (FrameReduction) replaces each
+// view as soon as it is in linear light (a sum frame's right view after
+// the subtraction), so a read holds one decoded frame at a time, as
 // LoadView does with DPScaleEstimator::ReduceFrame.
-using FrameReduction = std::function<cv::Mat(const cv::Mat&)>;
 DPFrames LoadDPFrames(const DPFramePaths& paths,
                       bool swap_views,
                       DPEncoding encoding = DPEncoding::kAuto,
-                      const FrameReduction& reduce = nullptr);
+                      const FrameReduction& reduction = {});
 
 // The integer factor k with frame size = camera size / k (phones give half
 // size DP frames), or throws InputError naming the image and both sizes.

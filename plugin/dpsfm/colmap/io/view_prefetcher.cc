@@ -40,10 +40,7 @@ ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
   }
   if (depth_ > 0) {
     pool_ = std::make_unique<colmap::ThreadPool>(depth_);
-    while (static_cast<int>(in_flight_.size()) < depth_ &&
-           launched_ < order_.size()) {
-      Launch();
-    }
+    Resume();
   }
 }
 
@@ -64,7 +61,7 @@ void ViewPrefetcher::Launch() {
   });
 }
 
-ViewPrefetcher::Read ViewPrefetcher::Next() {
+ViewPrefetcher::Read ViewPrefetcher::Next(bool read_on) {
   colmap::Timer timer;
   timer.Start();
   Read read;
@@ -74,17 +71,26 @@ ViewPrefetcher::Read ViewPrefetcher::Next() {
     }
     read = TimedRead(reader_, order_[launched_++], reduce_);
   } else {
+    // Reads held back by Next(false) without Resume() start now.
+    if (in_flight_.empty() && launched_ < order_.size()) Launch();
     if (in_flight_.empty()) throw std::out_of_range("no more views to read");
     std::future<Read> next = std::move(in_flight_.front());
     in_flight_.pop_front();
     read = next.get();  // moves the view out
     // The next read starts once this one is out, so reads stay in order
     // and at most depth views wait in memory.
-    if (launched_ < order_.size()) Launch();
+    if (read_on) Resume();
   }
   if (read.error) std::rethrow_exception(read.error);
   read.waited = timer.ElapsedSeconds();
   return read;
+}
+
+void ViewPrefetcher::Resume() {
+  while (static_cast<int>(in_flight_.size()) < depth_ &&
+         launched_ < order_.size()) {
+    Launch();
+  }
 }
 
 }  // namespace dpsfm

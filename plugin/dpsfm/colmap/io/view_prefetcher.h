@@ -42,8 +42,14 @@ class ViewPrefetcher {
     // fatal when it is destroyed.
     std::exception_ptr error;
   };
-  // The next view in order; rethrows its read's error (InputError).
-  Read Next();
+  // The next view in order; rethrows its read's error (InputError). With
+  // `read_on` false no further read starts until Resume(): a checkpoint that
+  // may end the run follows this view, and a view read for nothing would be
+  // held, with its read's buffers, through the checkpoint's estimate (the
+  // run's peak: 130-190 MB at 3000 x 2000).
+  Read Next(bool read_on = true);
+  // Starts the reads Next(false) held back.
+  void Resume();
 
  private:
   void Launch();

@@ -421,7 +421,7 @@ DPView WorkspaceReader::LoadView(size_t index,
   view.name = source.image_name;
   view.left = frames.left;
   view.right = frames.right;
-  if (reduce) view.frame_size = frames.frame_size;
+  if (reduce.reduce) view.frame_size = frames.frame_size;
   view.frames.encoding = frames.encoding;
   view.frames.encoding_reason = frames.encoding_reason;
   view.frames.bits = frames.bits;

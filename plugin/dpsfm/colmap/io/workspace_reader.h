@@ -78,7 +78,7 @@ class WorkspaceReader {
   // (DPScaleEstimator::ReduceFrame), each frame is reduced as soon as it is
   // decoded (LoadDPFrames) and the view records the frames' size as
   // decoded (DPView::frame_size).
-  DPView LoadView(size_t index, const FrameReduction& reduce = nullptr) const;
+  DPView LoadView(size_t index, const FrameReduction& reduce = {}) const;
 
  private:
   std::string DepthMapPath(const std::string& image_name) const;

@@ -252,9 +252,20 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
 }
 
 cv::Mat DPScaleEstimator::ReduceFrame(const cv::Mat& frame) const {
-  if (frame.empty()) return frame;  // AddView refuses it, naming the view
-  return WorkingFrame(frame,
-                      ViewPatchGeometry(frame.size(), options_).resize_factor);
+  return ReduceFrame(frame, frame.size());
+}
+
+cv::Mat DPScaleEstimator::ReduceFrame(const cv::Mat& rows,
+                                      const cv::Size& frame_size) const {
+  if (rows.empty()) return rows;  // AddView refuses it, naming the view
+  return WorkingFrame(rows,
+                      ViewPatchGeometry(frame_size, options_).resize_factor);
+}
+
+int DPScaleEstimator::ReduceFrameStripRows(const cv::Size& frame_size) const {
+  if (frame_size.empty()) return 0;
+  return WorkingFrameStripRows(
+      frame_size, ViewPatchGeometry(frame_size, options_).resize_factor);
 }
 
 bool DPScaleEstimator::LinearStage(

@@ -470,6 +470,14 @@ class DPScaleEstimator {
   // the options) so that views waiting hold their working frames alone (a
   // quarter of a 3000 x 2000 view's).
   cv::Mat ReduceFrame(const cv::Mat& frame) const;
+  // The same for `rows` of a frame of `frame_size` (the reduction is the
+  // whole frame's): all of them, or a strip of a multiple of
+  // ReduceFrameStripRows(frame_size) rows, whose share of the reduced frame
+  // it gives, to the bit, so that a reader may reduce a frame a strip at a
+  // time. ReduceFrameStripRows is 0 where only whole frames may be reduced
+  // (WorkingFrameStripRows).
+  cv::Mat ReduceFrame(const cv::Mat& rows, const cv::Size& frame_size) const;
+  int ReduceFrameStripRows(const cv::Size& frame_size) const;
 
   int NumViews() const;
 

@@ -73,6 +73,17 @@ cv::Mat WorkingFrame(const cv::Mat& frame, double resize_factor) {
   return working;
 }
 
+int WorkingFrameStripRows(const cv::Size& frame, double resize_factor) {
+  if (!(resize_factor < 1)) return 0;
+  const long k = std::lround(1 / resize_factor);
+  if (k < 2 || std::abs(k * resize_factor - 1) > 1e-12) return 0;
+  const cv::Size working = WorkingSize(frame, resize_factor);
+  if (working.width * k != frame.width || working.height * k != frame.height) {
+    return 0;
+  }
+  return static_cast<int>(k);
+}
+
 WorkingView MakeWorkingView(const DPView& view, double resize_factor) {
   const cv::Size frame = FrameSize(view);
   WorkingView working;

@@ -38,6 +38,13 @@ cv::Size FrameSize(const DPView& view);
 // resize the reference code uses); the frame itself when it is not reduced.
 cv::Mat WorkingFrame(const cv::Mat& frame, double resize_factor);
 
+// k > 0 when WorkingFrame of any strip of a multiple of k rows of a frame
+// of this size gives those rows' share of WorkingFrame of the whole frame,
+// to the bit: a reduction by an integer factor k to exactly frame / k
+// (cv::INTER_AREA then averages whole k x k blocks, each on its own). 0
+// otherwise, and without a reduction.
+int WorkingFrameStripRows(const cv::Size& frame, double resize_factor);
+
 // The view on the working frame (WorkingFrame, or the view's frames when
 // a reader reduced them already: DPScaleEstimator::ReduceFrame) and its grey
 // versions; sx, sy: working / frame pixels per axis (exact for the rounded
