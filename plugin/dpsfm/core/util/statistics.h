@@ -46,9 +46,10 @@ T UpperMedianInPlace(std::vector<T>* values) {
 // radix selection: one pass counts the values per range of their leading
 // 12 bits (sign, exponent and three mantissa bits, in the values' order),
 // the range that holds rank n / 2 is gathered, and the rank is selected
-// within it. 4-7x faster than std::nth_element on the noise estimators'
-// 750-12000 responses (its partitions mispredict about every other
-// branch). The value is exact, so the same as UpperMedianInPlace's.
+// within it. The value is exact, so the same as UpperMedianInPlace's; 4-7x
+// faster than std::nth_element on 750-12000 values of half-normal noise
+// (whose partitions mispredict about every other branch): the noise
+// medians went from 10 % to 3 % of planes_gain's CPU (perf).
 // Consumes *values (contents unspecified afterwards), which must not be
 // empty; with a NaN among them it is UpperMedianInPlace.
 float UpperMedianBySelection(std::vector<float>* values);
