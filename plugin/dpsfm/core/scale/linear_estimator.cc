@@ -13,6 +13,7 @@
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
 #include "dpsfm/core/util/statistics.h"
+#include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
 namespace {
@@ -69,6 +70,7 @@ bool LinearEstimatorOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(num_bootstrap, 0);
   DPSFM_CHECK_OPTION_VALUE(confidence_level > 0 && confidence_level < 1,
                            confidence_level);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
   DPSFM_CHECK_NESTED_OPTIONS(irls);
   return true;
 }
@@ -479,15 +481,23 @@ void BootstrapScaleInterval(const std::vector<LinearViewData>& views,
   IrlsOptions irls = options.irls;
   irls.max_iterations = std::min(irls.max_iterations, 200);
   irls.tolerance = std::max(irls.tolerance, 1e-7);
-  std::vector<double> samples;
-  std::vector<double> weights(system.NumRows());
-  for (int b = 0; b < options.num_bootstrap; ++b) {
-    std::fill(weights.begin(), weights.end(), 0.0);
+  // The resamples drawn in order (one random stream), then solved in
+  // parallel, each from its own weights: the same at any thread count.
+  const int num_resamples = options.num_bootstrap;
+  std::vector<std::vector<double>> weights(
+      num_resamples, std::vector<double>(system.NumRows(), 0.0));
+  for (int b = 0; b < num_resamples; ++b) {
     for (const auto& rows : rows_of_view) {
       std::uniform_int_distribution<size_t> pick(0, rows.size() - 1);
-      for (size_t k = 0; k < rows.size(); ++k) weights[rows[pick(rng)]] += 1;
+      for (size_t k = 0; k < rows.size(); ++k) weights[b][rows[pick(rng)]] += 1;
     }
-    const IrlsResult fit = SolveL1Irls(system, irls, &weights);
+  }
+  std::vector<IrlsResult> fits(num_resamples);
+  ParallelFor(num_resamples, options.num_threads, [&](int b) {
+    fits[b] = SolveL1Irls(system, irls, &weights[b]);
+  });
+  std::vector<double> samples;
+  for (const IrlsResult& fit : fits) {
     const bool solved = fit.success && fit.x[n] > 0;
     if (solved) samples.push_back(ScaleFromSbar(fit.x[n]));
     for (int j = 0; j < n; ++j) {

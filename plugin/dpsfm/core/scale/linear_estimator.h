@@ -111,6 +111,9 @@ struct LinearEstimatorOptions {
   // Central probability mass of the reported interval.
   double confidence_level = 0.95;
   uint64_t seed = 42;
+  // OpenMP threads for the bootstrap's solves (the resamples are drawn in
+  // order first, so the interval is the same at any count); -1 = all.
+  int num_threads = -1;
   bool Check(std::string* failure = nullptr) const;
 };
 

@@ -286,6 +286,7 @@ bool DPScaleEstimator::LinearStage(
   }
   LinearEstimatorOptions linear_options = options_.linear;
   linear_options.seed = options_.seed;
+  linear_options.num_threads = options_.num_threads;
   try {
     *linear = EstimateScaleLinear(linear_views, linear_options);
   } catch (const std::exception& e) {

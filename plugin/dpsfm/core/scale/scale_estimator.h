@@ -151,8 +151,8 @@ struct DPScaleOptions {
   double max_relative_residual = 0.002;
   double relative_residual_factor = 10;
 
-  // --- Linear stage (T_p, N_v, IRLS, bootstrap). Its seed is replaced by
-  // `seed` below.
+  // --- Linear stage (T_p, N_v, IRLS, bootstrap). Its seed and num_threads
+  // are replaced by the fields below.
   LinearEstimatorOptions linear;
 
   // --- Intensity stage (candidates, T_s, refine pass, loss, bootstrap).
@@ -257,7 +257,8 @@ struct DPScaleOptions {
   // scale 18 % off; psf_profile_bench). 0 trusts the family.
   double self_calibration_shape_uncertainty = 0.2;
 
-  // OpenMP threads for blur estimation and the intensity search; -1 = all.
+  // OpenMP threads for blur estimation, the linear stage's bootstrap and
+  // the intensity search; -1 = all.
   int num_threads = -1;
   uint64_t seed = 42;
 
