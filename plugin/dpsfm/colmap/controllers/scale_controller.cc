@@ -77,10 +77,12 @@ ScaleRun DPScaleController::Run() {
   views_timer.Start();
   const int planned = run.planned;
   // Views are read ahead (decoding and depth maps overlap the blur search),
-  // never beyond those planned nor through a checkpoint (the run may end
-  // there), each frame reduced to the working resolution as soon as it is
-  // decoded (a strip at a time where it can be), so a read holds one frame
-  // as decoded at a time and a view waiting no more than the search needs.
+  // never beyond those planned, and no read starts while a checkpoint
+  // decides (the run may end there: with one view read ahead, the default,
+  // none is read for a checkpoint that ends it); each frame reduced to the
+  // working resolution as soon as it is decoded (a strip at a time where it
+  // can be), so a read holds one frame as decoded at a time and a view
+  // waiting no more than the search needs.
   const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
@@ -95,7 +97,7 @@ ScaleRun DPScaleController::Run() {
   // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
-    // No view is read ahead through a checkpoint: the run may end there.
+    // No read starts before a checkpoint's decision: the run may end there.
     ViewPrefetcher::Read read = prefetcher.Next(!budget.IsCheckpoint(k + 1));
     const DPView& view = read.view;
     run.timings.read += read.seconds;
