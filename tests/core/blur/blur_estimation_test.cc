@@ -1,5 +1,6 @@
 #include "dpsfm/core/blur/blur_estimation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -428,6 +429,46 @@ TEST(NoiseSigmaReaches, TheEstimateComparedToTheBit) {
       EXPECT_FALSE(NoiseSigmaReaches(patch, std::nan("")));
     }
   }
+}
+
+// PairNoiseVariance is the smaller of the views' variance and the
+// difference's, as the three full estimates give it, to the bit: with views
+// that differ by noise only (the difference's wins: the shortcut that skips
+// the views' medians) and with views that differ by a pattern (the views'
+// wins: their medians, from the responses the count used).
+TEST(PairNoiseVariance, TheSmallerOfTheThreeEstimatesToTheBit) {
+  cv::RNG rng(9);
+  int differences = 0, views = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const cv::Size size(31 + trial % 2, 27);
+    cv::Mat left(size, CV_32FC1), right(size, CV_32FC1), noise(size, CV_32FC1);
+    rng.fill(left, cv::RNG::NORMAL, 0.0, 0.01);
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
+        left.at<float>(y, x) += 0.2f * std::sin(0.7 * x + 0.3 * y);
+      }
+    }
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.002 * (1 + trial % 3));
+    right = left + noise;
+    if (trial >= 6) {
+      // A pattern in one view only: it inflates the difference's estimate.
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
+          right.at<float>(y, x) += ((x + y) % 2 ? 0.05f : -0.05f);
+        }
+      }
+    }
+    const double sl = EstimateNoiseSigma(left);
+    const double sr = EstimateNoiseSigma(right);
+    const double sd =
+        EstimateNoiseSigma(cv::Mat(left - right)) / std::sqrt(2.0);
+    const double views_variance = 0.5 * (sl * sl + sr * sr);
+    const double expected = std::min(views_variance, sd * sd);
+    EXPECT_EQ(PairNoiseVariance(left, right), expected) << "trial " << trial;
+    (views_variance < sd * sd ? views : differences) += 1;
+  }
+  EXPECT_GT(differences, 0);
+  EXPECT_GT(views, 0);
 }
 
 }  // namespace

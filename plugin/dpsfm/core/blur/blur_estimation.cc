@@ -72,22 +72,14 @@ bool EqualiseViews(const cv::Mat& left,
   return true;
 }
 
-// Noise: the Laplacian-mask estimate of each view is inflated by texture,
-// that of the difference of the views by DP disparity; take the smaller.
-// The refinement tightens it further with the fit itself. inf without the
-// noise floor's subtraction.
+// Noise: the smaller of the views' and the difference's estimates
+// (PairNoiseVariance). The refinement tightens it further with the fit
+// itself. inf without the noise floor's subtraction.
 double PatchNoiseVariance(const cv::Mat& gl,
                           const cv::Mat& gr,
                           const BlurEstimationOptions& options) {
   if (!options.subtract_noise_floor) return kInf;
-  cv::Mat diff = gl - gr;
-  const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
-  // Where both views' estimates reach sd, the smaller is the difference's
-  // (0.5 (sl^2 + sr^2) >= sd^2, to the bit): their medians are not needed.
-  if (NoiseSigmaReaches(gl, sd) && NoiseSigmaReaches(gr, sd)) return sd * sd;
-  const double sl = EstimateNoiseSigma(gl);
-  const double sr = EstimateNoiseSigma(gr);
-  return std::min(0.5 * (sl * sl + sr * sr), sd * sd);
+  return PairNoiseVariance(gl, gr);
 }
 
 // The exact minimum from the coarse search's best basin (and a second one

@@ -221,8 +221,14 @@ double HorizontalTexture(const cv::Mat& gray_patch);
 double EstimateNoiseSigma(const cv::Mat& gray_patch);
 // Whether EstimateNoiseSigma(gray_patch) >= sigma, exactly (false for a NaN
 // sigma), by counting the responses below the median that sigma needs
-// instead of selecting it.
+// instead of selecting it: the count PairNoiseVariance makes.
 bool NoiseSigmaReaches(const cv::Mat& gray_patch, double sigma);
+// The noise variance of two gain-equalised CV_32FC1 views of a patch: the
+// smaller of the views' estimates (0.5 (sl^2 + sr^2), inflated by texture)
+// and the difference's (sd^2, sd = EstimateNoiseSigma(gl - gr) / sqrt 2,
+// inflated by DP disparity), the rule PatchScreening::NoiseSigma follows
+// on its subsampled maps. Each view is filtered once.
+double PairNoiseVariance(const cv::Mat& gl, const cv::Mat& gr);
 
 // Cheap per-patch texture and noise measures for a whole view, computed once
 // per view (not once per patch) to screen patches before the blur search:

@@ -1,6 +1,7 @@
-// PatchScreening, HorizontalTexture, EstimateNoiseSigma and TextureSnr
-// (declared in blur_estimation.h): the texture and noise measures that
-// screen patches before the blur search.
+// PatchScreening, HorizontalTexture, EstimateNoiseSigma, NoiseSigmaReaches,
+// PairNoiseVariance and TextureSnr (declared in blur_estimation.h): the
+// texture and noise measures that screen patches before the blur search and
+// set its noise floor.
 #include "dpsfm/core/blur/blur_estimation.h"
 
 #include <algorithm>
@@ -52,28 +53,57 @@ std::vector<float> NoiseResponses(const cv::Mat& gray_patch) {
   return responses;
 }
 
-}  // namespace
-
-double EstimateNoiseSigma(const cv::Mat& gray_patch) {
-  std::vector<float> responses = NoiseResponses(gray_patch);
-  return SigmaFromMedianAbsolute(UpperMedianBySelection(&responses),
+// The noise sigma behind the responses (consumed).
+double SigmaOfResponses(std::vector<float>* responses) {
+  return SigmaFromMedianAbsolute(UpperMedianBySelection(responses),
                                  kNoiseMaskGain);
 }
 
-bool NoiseSigmaReaches(const cv::Mat& gray_patch, double sigma) {
-  const std::vector<float> responses = NoiseResponses(gray_patch);
+// Whether SigmaOfResponses(responses) >= sigma, without selecting: the
+// median absolute response t that gives sigma, rounded up to a float (a
+// median >= t gives a sigma >= sigma, both steps monotone), and the value
+// of rank n / 2 is >= t exactly when at most n / 2 values lie below t.
+bool ResponsesReach(const std::vector<float>& responses, double sigma) {
   if (std::isnan(sigma)) return false;
-  // The median absolute response t that gives sigma, rounded up to a float:
-  // a median >= t gives EstimateNoiseSigma >= sigma (both steps monotone).
   float t = static_cast<float>(sigma * kHalfNormalMedian * kNoiseMaskGain);
   while (SigmaFromMedianAbsolute(t, kNoiseMaskGain) < sigma) {
     t = std::nextafter(t, std::numeric_limits<float>::infinity());
   }
-  // The value of rank n / 2 is >= t exactly when at most n / 2 values lie
-  // below t.
   size_t below = 0;
   for (const float v : responses) below += v < t;
   return below <= responses.size() / 2;
+}
+
+// The rule both noise estimates of a pair of views follow: the views'
+// estimate (sl, sr) is inflated by texture, the difference's (its variance)
+// by DP disparity; the smaller of the two variances.
+double SmallerNoiseVariance(double sl, double sr, double difference_variance) {
+  return std::min(0.5 * (sl * sl + sr * sr), difference_variance);
+}
+
+}  // namespace
+
+double EstimateNoiseSigma(const cv::Mat& gray_patch) {
+  std::vector<float> responses = NoiseResponses(gray_patch);
+  return SigmaOfResponses(&responses);
+}
+
+bool NoiseSigmaReaches(const cv::Mat& gray_patch, double sigma) {
+  return ResponsesReach(NoiseResponses(gray_patch), sigma);
+}
+
+double PairNoiseVariance(const cv::Mat& gl, const cv::Mat& gr) {
+  cv::Mat diff = gl - gr;
+  const double sd = EstimateNoiseSigma(diff) / std::sqrt(2.0);
+  // Where both views' estimates reach sd, the smaller is the difference's
+  // (0.5 (sl^2 + sr^2) >= sd^2, to the bit): their medians are not needed.
+  // Each view is filtered once, for the count and, where it does not
+  // settle it, the median.
+  std::vector<float> left = NoiseResponses(gl);
+  std::vector<float> right = NoiseResponses(gr);
+  if (ResponsesReach(left, sd) && ResponsesReach(right, sd)) return sd * sd;
+  return SmallerNoiseVariance(
+      SigmaOfResponses(&left), SigmaOfResponses(&right), sd * sd);
 }
 
 namespace {
@@ -91,8 +121,7 @@ double SubsampledNoiseSigma(const cv::Mat& response, const cv::Rect& rect) {
     }
   }
   if (values.empty()) return 0;
-  return SigmaFromMedianAbsolute(UpperMedianBySelection(&values),
-                                 kNoiseMaskGain);
+  return SigmaOfResponses(&values);
 }
 
 }  // namespace
@@ -127,8 +156,7 @@ double PatchScreening::Texture(const cv::Rect& r) const {
 double PatchScreening::NoiseSigma(const cv::Rect& rect) const {
   const double sl = SubsampledNoiseSigma(noise_left_, rect);
   const double sr = SubsampledNoiseSigma(noise_right_, rect);
-  const double sd = DifferenceVariance(rect);
-  return std::sqrt(std::min(0.5 * (sl * sl + sr * sr), sd));
+  return std::sqrt(SmallerNoiseVariance(sl, sr, DifferenceVariance(rect)));
 }
 
 double PatchScreening::NoiseSigmaBound(const cv::Rect& rect) const {
