@@ -12,12 +12,12 @@ namespace {
 
 ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
                                int index,
-                               const FrameReduction& reduce) {
+                               const FrameReduction& reduction) {
   colmap::Timer timer;
   timer.Start();
   ViewPrefetcher::Read read;
   try {
-    read.view = reader->LoadView(index, reduce);
+    read.view = reader->LoadView(index, reduction);
   } catch (...) {
     read.error = std::current_exception();
   }
@@ -30,10 +30,10 @@ ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
 ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
                                std::vector<int> order,
                                int depth,
-                               FrameReduction reduce)
+                               FrameReduction reduction)
     : reader_(reader),
       order_(std::move(order)),
-      reduce_(std::move(reduce)),
+      reduction_(std::move(reduction)),
       depth_(depth) {
   if (depth_ < 0) {
     throw std::invalid_argument("prefetch depth must be >= 0");
@@ -53,11 +53,11 @@ ViewPrefetcher::~ViewPrefetcher() {
 void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
-  const FrameReduction* reduce = &reduce_;
+  const FrameReduction* reduction = &reduction_;
   auto promise = std::make_shared<std::promise<Read>>();
   in_flight_.push_back(promise->get_future());
-  pool_->AddTask([reader, index, reduce, promise]() {
-    promise->set_value(TimedRead(reader, index, *reduce));
+  pool_->AddTask([reader, index, reduction, promise]() {
+    promise->set_value(TimedRead(reader, index, *reduction));
   });
 }
 
@@ -69,7 +69,7 @@ ViewPrefetcher::Read ViewPrefetcher::Next(bool read_on) {
     if (launched_ >= order_.size()) {
       throw std::out_of_range("no more views to read");
     }
-    read = TimedRead(reader_, order_[launched_++], reduce_);
+    read = TimedRead(reader_, order_[launched_++], reduction_);
   } else {
     // Reads held back by Next(false) without Resume() start now.
     if (in_flight_.empty() && launched_ < order_.size()) Launch();

@@ -20,16 +20,16 @@ namespace dpsfm {
 
 class ViewPrefetcher {
  public:
-  // Reads reader->LoadView(order[k], reduce) for k = 0, 1, ... in that order
-  // on `depth` worker threads (so `reduce`, e.g. DPScaleEstimator::
+  // Reads reader->LoadView(order[k], reduction) for k = 0, 1, ... in that
+  // order on `depth` worker threads (so the reduction, e.g. DPScaleEstimator::
   // ReduceFrame, runs there too), at most `depth` views ahead of the one
   // Next() returned last (so memory holds at most depth + 1 views). depth 0
-  // reads in Next() itself. The reader and whatever `reduce` uses must
+  // reads in Next() itself. The reader and whatever the reduction uses must
   // outlive the prefetcher.
   ViewPrefetcher(const WorkspaceReader* reader,
                  std::vector<int> order,
                  int depth,
-                 FrameReduction reduce);
+                 FrameReduction reduction);
   // Waits for the reads in flight (their views are dropped).
   ~ViewPrefetcher();
 
@@ -57,7 +57,7 @@ class ViewPrefetcher {
 
   const WorkspaceReader* reader_;
   const std::vector<int> order_;
-  const FrameReduction reduce_;
+  const FrameReduction reduction_;
   const int depth_;
   size_t launched_ = 0;
   std::unique_ptr<colmap::ThreadPool> pool_;

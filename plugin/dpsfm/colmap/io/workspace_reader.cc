@@ -372,7 +372,7 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
 }
 
 DPView WorkspaceReader::LoadView(size_t index,
-                                 const FrameReduction& reduce) const {
+                                 const FrameReduction& reduction) const {
   const ViewSource& source = sources_.at(index);
   const colmap::Image& image = reconstruction_.Image(source.image_id);
   const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
@@ -380,7 +380,7 @@ DPView WorkspaceReader::LoadView(size_t index,
   const DPFrames frames = LoadDPFrames(source.dp,
                                        options_.swap_dp_views,
                                        ParseDPEncoding(options_.dp_encoding),
-                                       reduce);
+                                       reduction);
   // A dense workspace's model is undistorted; the DP frames keep the
   // geometry of the original images. With the original camera known (from
   // the database) and different, depths are mapped through both cameras.
@@ -421,7 +421,7 @@ DPView WorkspaceReader::LoadView(size_t index,
   view.name = source.image_name;
   view.left = frames.left;
   view.right = frames.right;
-  if (reduce.reduce) view.frame_size = frames.frame_size;
+  if (reduction.reduce) view.frame_size = frames.frame_size;
   view.frames.encoding = frames.encoding;
   view.frames.encoding_reason = frames.encoding_reason;
   view.frames.bits = frames.bits;

@@ -74,11 +74,11 @@ class WorkspaceReader {
   const ViewSource& Source(size_t index) const { return sources_[index]; }
 
   // Loads the DP frames, depth and lens data of one view. Throws InputError
-  // naming the file for unreadable or inconsistent data. With `reduce`
+  // naming the file for unreadable or inconsistent data. With a `reduction`
   // (DPScaleEstimator::ReduceFrame), each frame is reduced as soon as it is
   // decoded (LoadDPFrames) and the view records the frames' size as
   // decoded (DPView::frame_size).
-  DPView LoadView(size_t index, const FrameReduction& reduce = {}) const;
+  DPView LoadView(size_t index, const FrameReduction& reduction = {}) const;
 
  private:
   std::string DepthMapPath(const std::string& image_name) const;
