@@ -46,9 +46,11 @@ cv::Mat GridConvolution(const DPKernelGrid& grid,
   cv::mulSpectrums(
       grid.TransformInput(patch, border, c), grid.RightSpectrum(n), product, 0);
   const cv::Rect interior = grid.InteriorOf(c);
-  grid.Transform(c).Inverse(&product, interior.y + interior.height, &image);
+  grid.Transform(c).Inverse(
+      &product, cv::Range(interior.y, interior.y + interior.height), &image);
   cv::Mat out;
-  image(interior).convertTo(out, CV_64FC1);
+  image.colRange(interior.x, interior.x + interior.width)
+      .convertTo(out, CV_64FC1);
   return out;
 }
 

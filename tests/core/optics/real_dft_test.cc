@@ -1,5 +1,6 @@
 #include "dpsfm/core/optics/real_dft.h"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstring>
@@ -92,21 +93,50 @@ TEST(RealDft, TheInverseGivesTheImageBackOnTheRowsAsked) {
   for (const cv::Size& size : kSizes) {
     const RealDft dft(size);
     const cv::Mat image = RandomImage(size, size.height, 3);
-    for (const int rows : {size.height, (size.height + 1) / 2}) {
+    const int h = size.height;
+    // From the top, to the bottom, and inside: rows that start off FFTW's
+    // alignment (an odd start where a row's half spectrum has an odd
+    // length: 9, 25 and 48 wide) go through the work space's front.
+    for (const cv::Range& rows : {cv::Range(0, h),
+                                  cv::Range(0, (h + 1) / 2),
+                                  cv::Range(h / 3, h),
+                                  cv::Range(std::min(1, h - 1), h - h / 3),
+                                  cv::Range(h / 2, h / 2)}) {
       cv::Mat spectrum;
       dft.Forward(image, size.height, &spectrum);
       cv::Mat back(size, CV_32FC1, cv::Scalar(-7));
       dft.Inverse(&spectrum, rows, &back);
-      for (int y = 0; y < size.height; ++y) {
+      ASSERT_EQ(back.rows, rows.size()) << size;
+      ASSERT_EQ(back.cols, size.width) << size;
+      for (int y = 0; y < rows.size(); ++y) {
         for (int x = 0; x < size.width; ++x) {
-          if (y < rows) {
-            EXPECT_NEAR(back.at<float>(y, x), image.at<float>(y, x), 1e-5)
-                << size << " (" << y << ", " << x << ")";
-          } else {
-            EXPECT_EQ(back.at<float>(y, x), -7) << "a row not asked for";
-          }
+          EXPECT_NEAR(
+              back.at<float>(y, x), image.at<float>(rows.start + y, x), 1e-5)
+              << size << " rows " << rows.start << "-" << rows.end << " (" << y
+              << ", " << x << ")";
         }
       }
+    }
+  }
+}
+
+// Rows asked for alone are the same bits as in the whole inverse.
+TEST(RealDft, RowsAskedForAloneAreTheWholeInversesBits) {
+  for (const cv::Size& size : {cv::Size(48, 48), cv::Size(64, 40)}) {
+    const RealDft dft(size);
+    const cv::Mat image = RandomImage(size, size.height, 9);
+    cv::Mat spectrum, whole, part;
+    dft.Forward(image, size.height, &spectrum);
+    dft.Inverse(&spectrum, cv::Range(0, size.height), &whole);
+    for (const int start : {1, 6, 7}) {
+      dft.Forward(image, size.height, &spectrum);
+      dft.Inverse(&spectrum, cv::Range(start, size.height - 5), &part);
+      ASSERT_EQ(part.rows, size.height - 5 - start);
+      EXPECT_EQ(0,
+                std::memcmp(part.data,
+                            whole.ptr<float>(start),
+                            part.total() * part.elemSize()))
+          << size << " from row " << start;
     }
   }
 }
@@ -140,7 +170,13 @@ TEST(RealDft, RefusesWhatItCannotTransform) {
   EXPECT_THROW(dft.Forward(shifted, 8, &spectrum), std::invalid_argument);
   cv::Mat image;
   cv::Mat wrong = cv::Mat::zeros(8, 4, CV_32FC2);
-  EXPECT_THROW(dft.Inverse(&wrong, 8, &image), std::invalid_argument);
+  EXPECT_THROW(dft.Inverse(&wrong, cv::Range(0, 8), &image),
+               std::invalid_argument);
+  cv::Mat right = cv::Mat::zeros(8, 5, CV_32FC2);
+  EXPECT_THROW(dft.Inverse(&right, cv::Range(4, 9), &image),
+               std::invalid_argument);
+  EXPECT_THROW(dft.Inverse(&right, cv::Range(5, 4), &image),
+               std::invalid_argument);
 }
 
 // The product difference, transformed back, is the difference of the
@@ -156,7 +192,7 @@ TEST(SpectraProductDifference, TheDifferenceOfTwoCircularConvolutions) {
     cv::Mat product, back;
     SpectraProductDifference(
         spectra[0], spectra[1], spectra[2], spectra[3], &product);
-    dft.Inverse(&product, size.height, &back);
+    dft.Inverse(&product, cv::Range(0, size.height), &back);
     const cv::Mat expected = CircularConvolution(space[0], space[1]) -
                              CircularConvolution(space[2], space[3]);
     for (int y = 0; y < size.height; ++y) {

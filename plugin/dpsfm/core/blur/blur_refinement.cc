@@ -75,12 +75,13 @@ void BlurRefinement::Evaluate(int n) {
                            grid.LeftSpectrum(n),
                            &product_);
   const cv::Rect interior = grid.InteriorOf(c);
-  grid.Transform(c).Inverse(
-      &product_, interior.y + interior.height, &residual_image_);
+  grid.Transform(c).Inverse(&product_,
+                            cv::Range(interior.y, interior.y + interior.height),
+                            &residual_image_);
   e.residual.resize(t_.num_interior);
   float* out = e.residual.data();
   for (int y = 0; y < interior.height; ++y) {
-    const float* row = residual_image_.ptr<float>(interior.y + y) + interior.x;
+    const float* row = residual_image_.ptr<float>(y) + interior.x;
     std::copy(row, row + interior.width, out);
     out += interior.width;
   }

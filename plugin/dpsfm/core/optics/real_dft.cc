@@ -1,6 +1,7 @@
 #include "dpsfm/core/optics/real_dft.h"
 
 #include <atomic>
+#include <cstring>
 #include <initializer_list>
 #include <map>
 #include <memory>
@@ -183,25 +184,37 @@ void RealDft::Forward(const cv::Mat& image,
   fftwf_execute_dft(plans_->forward_columns, out, out);
 }
 
-void RealDft::Inverse(cv::Mat* spectrum, int rows, cv::Mat* image) const {
+void RealDft::Inverse(cv::Mat* spectrum,
+                      const cv::Range& rows,
+                      cv::Mat* image) const {
   DPSFM_CHECK(spectrum->type() == CV_32FC2 &&
               spectrum->size() == SpectrumSize() && spectrum->isContinuous())
       << "RealDft::Inverse takes a continuous CV_32FC2 half spectrum of "
       << SpectrumSize() << ", got " << spectrum->size();
-  DPSFM_CHECK(rows >= 0 && rows <= size_.height)
-      << "RealDft::Inverse: " << rows << " rows of " << size_.height;
-  if (image->type() != CV_32FC1 || image->size() != size_ ||
-      !image->isContinuous()) {
-    *image = cv::Mat(size_, CV_32FC1);
+  DPSFM_CHECK(rows.start >= 0 && rows.start <= rows.end &&
+              rows.end <= size_.height)
+      << "RealDft::Inverse: rows " << rows.start << " to " << rows.end << " of "
+      << size_.height;
+  const int count = rows.size();
+  if (image->type() != CV_32FC1 || image->rows != count ||
+      image->cols != size_.width || !image->isContinuous()) {
+    *image = cv::Mat(count, size_.width, CV_32FC1);
   }
+  if (count == 0) return;
   CheckAligned(spectrum->data, "spectrum");
   CheckAligned(image->data, "image");
-  if (rows == 0) return;
   auto* in = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
   fftwf_execute_dft(plans_->inverse_columns, in, in);
-  fftwf_execute_dft_c2r(plans_->Rows(false, rows), in, image->ptr<float>());
-  cv::Mat computed = image->rowRange(0, rows);
-  computed *= 1.0 / size_.area();
+  // The rows' plan runs on arrays aligned as FFTW allocates them; rows that
+  // start off that alignment are moved to the front of the work space
+  // first (a few kB, against the transform's passes).
+  fftwf_complex* first = in + static_cast<size_t>(rows.start) * plans_->half;
+  if (fftwf_alignment_of(reinterpret_cast<float*>(first)) != 0) {
+    std::memmove(in, first, sizeof(fftwf_complex) * count * plans_->half);
+    first = in;
+  }
+  fftwf_execute_dft_c2r(plans_->Rows(false, count), first, image->ptr<float>());
+  *image *= 1.0 / size_.area();
 }
 
 void SpectraProduct(const cv::Mat& a, const cv::Mat& b, cv::Mat* out) {

@@ -39,11 +39,14 @@ class RealDft {
   // (reallocated unless it is a continuous CV_32FC2 of SpectrumSize()).
   void Forward(const cv::Mat& image, int nonzero_rows, cv::Mat* spectrum) const;
 
-  // The real inverse of the half spectrum *spectrum divided by the area
-  // (cv::DFT_SCALE), rows [0, rows) of it into *image (CV_32FC1 of size();
-  // rows below are left as they are). *spectrum is the work space: it holds
-  // no spectrum afterwards.
-  void Inverse(cv::Mat* spectrum, int rows, cv::Mat* image) const;
+  // Rows `rows` of the real inverse of the half spectrum *spectrum divided
+  // by the area (cv::DFT_SCALE), into *image: CV_32FC1, rows.size() x
+  // size().width, its row 0 the inverse's row rows.start (reallocated unless
+  // it is a continuous matrix of that size). Only those rows are computed
+  // in the second pass: the searches keep a patch's interior, below a
+  // border of rows that would be computed for nothing. *spectrum is the
+  // work space: it holds no spectrum afterwards.
+  void Inverse(cv::Mat* spectrum, const cv::Range& rows, cv::Mat* image) const;
 
   // A half spectrum of SpectrumSize(), continuous, as the transforms need.
   cv::Mat NewSpectrum() const;

@@ -419,8 +419,10 @@ void AddIntervals(const IntensityPatch& patch,
                      int c) {
     const cv::Rect interior = grid.InteriorOf(c);
     SpectraProduct(view_spectrum, kernel_spectrum, &product);
-    grid.Transform(c).Inverse(&product, interior.y + interior.height, &image);
-    return cv::Mat(image(interior).clone());
+    grid.Transform(c).Inverse(
+        &product, cv::Range(interior.y, interior.y + interior.height), &image);
+    return cv::Mat(
+        image.colRange(interior.x, interior.x + interior.width).clone());
   };
   // A view blurred at a node: the mean-removed part on the interior, its
   // sum, and the constant the mean contributes.
