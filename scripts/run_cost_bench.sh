@@ -35,7 +35,12 @@
 # left out without the captures), DPSFM_COST_LARGE=0 (skip the 300 views),
 # DPSFM_COST_COLMAP (another binary that has dp_scale_estimator, e.g. an
 # older build's or `dpsfm`, to compare; the profiles are calibrated with
-# the tree's own), DPSFM_COST_DIR (<cache>/cost).
+# the tree's own), DPSFM_COST_BEFORE (a binary to compare with, run in turn
+# with the measured one: each run of the one is followed by the same run of
+# the other, so both see the machine as it is then, and a before -> after
+# table follows; two binaries measured one after the other drifted by
+# several per cent against each other, docs/benchmark.md, session 24),
+# DPSFM_COST_DIR (<cache>/cost).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/accuracy_suite.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/realdp_captures.sh"
@@ -53,8 +58,14 @@ cp "$build_dir/colmap/src/colmap/exe/colmap" "$build_dir/examples/dpsfm_make_exa
    "$build_dir/examples/dpsfm_make_realdp_workspace" "$out/bin/"
 calibrator="$out/bin/colmap"
 colmap="${DPSFM_COST_COLMAP:-$out/bin/colmap}"
+before="${DPSFM_COST_BEFORE:-}"
+if [ -n "$before" ]; then
+  [ -x "$before" ] || die "DPSFM_COST_BEFORE: no binary at $before"
+  cp "$before" "$out/bin/colmap-before"
+  before="$out/bin/colmap-before"
+fi
 generator="$out/bin/dpsfm_make_example"
-log "source: $(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$DPSFM_ROOT" status --porcelain 2>/dev/null | grep -q . && echo ' (with uncommitted changes)'); estimating with $colmap"
+log "source: $(git -C "$DPSFM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$DPSFM_ROOT" status --porcelain 2>/dev/null | grep -q . && echo ' (with uncommitted changes)'); estimating with $colmap${before:+, in turn with $before}"
 
 # 1. The scenes and their profiles, made once (kept while their generator
 # options are the same).
@@ -125,9 +136,14 @@ fi
 run() {
   local name="$1"
   shift
+  if [ -n "$before" ]; then
+    timed_dry_run "$before" "$out/runs-before/$name" "$@"
+  fi
   timed_dry_run "$colmap" "$out/runs/$name" "$@"
 }
+rm -rf "$out/runs-before"
 rm -f "$out"/runs/*
+[ -z "$before" ] || mkdir -p "$out/runs-before"
 real_bound=8
 start=$SECONDS
 for ((i = 1; i <= runs; ++i)); do
@@ -167,33 +183,38 @@ for ((i = 1; i <= runs; ++i)); do
   log "round $i of $runs done ($((SECONDS - start)) s)"
 done
 
-python3 - "$out/runs" "$runs" "$real_bound" <<'PY'
+python3 - "$out/runs" "$runs" "$real_bound" "${before:+$out/runs-before}" <<'PY'
 import collections, json, os, statistics, sys
-runs_dir, runs, real_bound = sys.argv[1], int(sys.argv[2]), sys.argv[3]
-rows = collections.OrderedDict()
-for name in sorted(os.listdir(runs_dir)):
-    if not name.endswith(".time"):
-        continue
-    scene, path, _ = name[:-5].rsplit(".", 2)
-    wall, user, system, rss_kb = open(os.path.join(runs_dir, name)).read().split()[-4:]
-    figures = {"wall": float(wall), "cpu": float(user) + float(system),
-               "rss": float(rss_kb) / 1024 / 1024}
-    try:
-        r = json.load(open(os.path.join(runs_dir, name[:-5] + ".json")))
-    except Exception:
-        r = {}
-    t = r.get("timings", {})
-    for key in ["read", "read_wait", "blur", "psf_fit", "linear", "intensity", "total"]:
-        figures[key] = t.get(key, float("nan"))
-    figures["after"] = figures["wall"] - figures["total"]
-    # The view budget's checkpoints (each a whole estimate: profile fit,
-    # linear, intensity); the profile fit and intensity columns are the
-    # final estimate's alone.
-    figures["checkpoints"] = sum(c.get("seconds", float("nan")) for c in
-                                 r.get("view_budget", {}).get("checkpoints", []))
-    figures["views"] = r.get("view_budget", {}).get("views_visited") or len(r.get("views", []))
-    figures["scale"] = r.get("scale") if r.get("success") else None
-    rows.setdefault((scene, path), []).append(figures)
+runs_dir, runs, real_bound, before_dir = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+
+def load(runs_dir):
+    rows = collections.OrderedDict()
+    for name in sorted(os.listdir(runs_dir)):
+        if not name.endswith(".time"):
+            continue
+        scene, path, _ = name[:-5].rsplit(".", 2)
+        wall, user, system, rss_kb = open(os.path.join(runs_dir, name)).read().split()[-4:]
+        figures = {"wall": float(wall), "cpu": float(user) + float(system),
+                   "rss": float(rss_kb) / 1024 / 1024}
+        try:
+            r = json.load(open(os.path.join(runs_dir, name[:-5] + ".json")))
+        except Exception:
+            r = {}
+        t = r.get("timings", {})
+        for key in ["read", "read_wait", "blur", "psf_fit", "linear", "intensity", "total"]:
+            figures[key] = t.get(key, float("nan"))
+        figures["after"] = figures["wall"] - figures["total"]
+        # The view budget's checkpoints (each a whole estimate: profile fit,
+        # linear, intensity); the profile fit and intensity columns are the
+        # final estimate's alone.
+        figures["checkpoints"] = sum(c.get("seconds", float("nan")) for c in
+                                     r.get("view_budget", {}).get("checkpoints", []))
+        figures["views"] = r.get("view_budget", {}).get("views_visited") or len(r.get("views", []))
+        figures["scale"] = r.get("scale") if r.get("success") else None
+        rows.setdefault((scene, path), []).append(figures)
+    return rows
+
+rows = load(runs_dir)
 
 def median(values):
     values = [v for v in values if v == v]
@@ -236,5 +257,37 @@ for group, group_sums in sums.items():
         if both:
             print("Measured-kernel profile / translating disk%s, totals over the %d scenes that have both: %.2f"
                   % (where, len(both), sum(t[m_path] for t in both) / sum(t[d_path] for t in both)))
+
+# Before -> after, from runs made in turn (DPSFM_COST_BEFORE).
+if before_dir:
+    before_rows = load(before_dir)
+    keys = ["read", "blur", "psf_fit", "intensity", "checkpoints", "total", "wall", "cpu", "rss"]
+    print("\nBefore -> after, medians of %d runs made in turn (seconds):\n" % runs)
+    print("| scene | path | decode | blur search | profile fit | intensity | checkpoints | total | wall | CPU | peak RSS (GiB) | total / decode | scale before -> after |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    group_sums = collections.defaultdict(lambda: [0.0] * 6)
+    for (scene, path), after in rows.items():
+        old = before_rows.get((scene, path))
+        if not old:
+            continue
+        mb = {k: median([f[k] for f in old]) for k in keys}
+        ma = {k: median([f[k] for f in after]) for k in keys}
+        cells = ["%.2f -> %.2f" % (mb[k], ma[k]) for k in keys]
+        ratio = lambda m: m["total"] / m["read"] if m["read"] > 0 else float("nan")
+        cells.append("%.1f -> %.1f" % (ratio(mb), ratio(ma)))
+        sb, sa = old[0]["scale"], after[0]["scale"]
+        if sb and sa:
+            cells.append("%.6g -> %.6g (%+.1e)" % (sb, sa, sa / sb - 1))
+        else:
+            cells.append("%s -> %s" % ("%.6g" % sb if sb else "refused", "%.6g" % sa if sa else "refused"))
+        print("| %s | %s | %s |" % (scene, path, " | ".join(cells)))
+        if not scene.startswith("large") and not scene.startswith("r6m2_"):
+            s = group_sums[path]
+            for k, key in enumerate(["total", "read", "cpu"]):
+                s[k] += mb[key]
+                s[k + 3] += ma[key]
+    for path, s in group_sums.items():
+        print("\nAccuracy scenes, %s, in sum: total %.1f -> %.1f s (%+.1f %%), %.1fx -> %.1fx decode (%.1f -> %.1f s), CPU %.1f -> %.1f s"
+              % (path, s[0], s[3], 100 * (s[3] / s[0] - 1), s[0] / s[1], s[3] / s[4], s[1], s[4], s[2], s[5]))
 PY
 log "cost benchmark took $((SECONDS - start)) s of runs"
