@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -108,7 +109,40 @@ TEST(StoreCrops, RoundTripKeepsTheBorder) {
         ExpectCropOfFrame(crop.right, right, interior, run.second, "right");
       }
     }
+    // Apart (their bounding box of 29 x 24 px over two crops of 18 x 18):
+    // each crop its own buffer.
+    EXPECT_TRUE(plain[0].left.isContinuous());
+    EXPECT_NE(plain[0].left.datastart, plain[1].left.datastart);
+    EXPECT_NE(plain[0].right.datastart, plain[1].right.datastart);
+    // Overlapping (35 x 30 px over two of 24 x 24): views into one region.
+    EXPECT_FALSE(wide[0].left.isContinuous());
+    EXPECT_EQ(wide[0].left.datastart, wide[1].left.datastart);
+    EXPECT_EQ(wide[0].right.datastart, wide[1].right.datastart);
+    EXPECT_NE(wide[0].left.datastart, wide[0].right.datastart);
   }
+  // A view's crops on a patch grid (stride 8 under crops of 18 px, as the
+  // searches' patches overlap): the store holds the region they cover,
+  // 42 x 34 px, against 12 crops of 18 x 18 one by one.
+  const cv::Mat left = Frame(cv::Size(60, 50), 3, 0);
+  const cv::Mat right = Frame(cv::Size(60, 50), 3, 50);
+  std::vector<std::pair<int, cv::Rect>> grid;
+  for (int y = 4; y <= 20; y += 8) {
+    for (int x = 4; x <= 28; x += 8) {
+      grid.emplace_back(static_cast<int>(grid.size()), cv::Rect(x, y, 10, 10));
+    }
+  }
+  const std::vector<StoredCrop> stored = StoreCrops(left, right, grid, 4, 4);
+  ASSERT_EQ(stored.size(), grid.size());
+  std::set<const uchar*> buffers;
+  for (size_t k = 0; k < grid.size(); ++k) {
+    ExpectCropOfFrame(stored[k].left, left, grid[k].second, 4, "left");
+    ExpectCropOfFrame(stored[k].right, right, grid[k].second, 4, "right");
+    buffers.insert(stored[k].left.datastart);
+    buffers.insert(stored[k].right.datastart);
+    EXPECT_EQ(stored[k].left.dataend - stored[k].left.datastart,
+              42 * 34 * 3 * 2);
+  }
+  EXPECT_EQ(buffers.size(), 2u);
   EXPECT_TRUE(
       StoreCrops(
           Frame(cv::Size(8, 8), 1, 0), Frame(cv::Size(8, 8), 1, 1), {}, 2, 2)

@@ -11,7 +11,9 @@ namespace dpsfm {
 
 struct StoredCrop {
   int sample = -1;      // index of the view's PatchSample
-  cv::Mat left, right;  // CV_16UC1/3 crops with border
+  // CV_16UC1/3 crops with border; views into one region of the frames
+  // that a view's crops share when it is smaller than they are (StoreCrops).
+  cv::Mat left, right;
   int border = 0;       // px around the patch interior
 };
 
@@ -22,7 +24,10 @@ int MaxStoredCrops(int crop, int channels, int max_count, double max_megabytes);
 // Crops of the working frames around each (sample, interior) with
 // `store_border` px of border. The frames carry `border` px around every
 // interior; a wider store border is reached by reflecting the frames
-// (BORDER_REFLECT_101), so wide crops near the edges exist too.
+// (BORDER_REFLECT_101), so wide crops near the edges exist too. The crops
+// share one copy of the frames' region around them (their bounding box)
+// when it is smaller than they are: they are then views into it, not
+// continuous, and keep it alive while any of them is held.
 std::vector<StoredCrop> StoreCrops(
     const cv::Mat& left,
     const cv::Mat& right,
