@@ -164,13 +164,22 @@ void SetCoarseNormalisation(BlurTables* t) {
   t->coarse_normaliser = 1.0 / (static_cast<double>(nr) * nc * sum_x * sum_y);
 }
 
+// Per spectrum class, the spectrum of ones over the region its inputs take.
+void SetRegionSpectra(BlurTables* t) {
+  const cv::Mat ones = cv::Mat::ones(t->patch_size, CV_32FC1);
+  for (int c = 0; c < t->grid->NumSpectrumClasses(); ++c) {
+    t->region_spectra.push_back(t->grid->TransformInput(ones, t->border, c));
+  }
+}
+
 }  // namespace
 
-PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
-                                       const BlurEstimationOptions& options,
-                                       const cv::Size& patch_size,
-                                       int num_threads) {
-  DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
+namespace internal {
+
+std::unique_ptr<BlurTables> MakeBlurTables(const DPPsfModel& psf,
+                                           const BlurEstimationOptions& options,
+                                           const cv::Size& patch_size,
+                                           int num_threads) {
   std::unique_ptr<BlurTables> t(new BlurTables);
   t->options = options;
   t->patch_size = patch_size;
@@ -179,7 +188,18 @@ PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
   SelectCoarseNodes(t.get());
   TabulateKernels(multiplicity, num_threads, t.get());
   SetCoarseNormalisation(t.get());
-  tables_ = std::move(t);
+  SetRegionSpectra(t.get());
+  return t;
+}
+
+}  // namespace internal
+
+PatchBlurEstimator::PatchBlurEstimator(const DPPsfModel& psf,
+                                       const BlurEstimationOptions& options,
+                                       const cv::Size& patch_size,
+                                       int num_threads) {
+  DPSFM_CHECK_OPTIONS(options, "BlurEstimationOptions");
+  tables_ = internal::MakeBlurTables(psf, options, patch_size, num_threads);
 }
 
 PatchBlurEstimator::~PatchBlurEstimator() = default;
