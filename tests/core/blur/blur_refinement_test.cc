@@ -98,8 +98,8 @@ TEST(BlurRefinement, EqualisedGainsAndLossesAgainstSpatialConvolutions) {
   for (const int n : {node, t->half_nodes, t->num_nodes - 1}) {
     refinement.Evaluate(n);
     const double spatial = SpatialLoss(*t, left, right, n);
-    // The true blur's node leaves float rounding alone (~1e-17); a wrong
-    // offset term would leave ~1e-3.
+    // The true blur's node leaves float rounding alone (~1e-17); views
+    // scaled about another offset would leave ~1e-3.
     EXPECT_NEAR(refinement.RawLoss(n), spatial, 1e-4 * spatial + 1e-12)
         << "node " << n;
   }

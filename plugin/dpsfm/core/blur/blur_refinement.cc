@@ -43,24 +43,6 @@ double Dot(const std::vector<float>& a, const std::vector<float>& b) {
   return sum;
 }
 
-// A view v scaled by `gain` about `offset`: gain (v + offset) - offset =
-// gain v + (gain - 1) offset; `ones` is what a view of ones is in v's
-// domain (an image of ones, or a spectrum of one), so the same holds for
-// v's spectrum. The gain as it is: v itself.
-cv::Mat EqualisedView(const cv::Mat& v,
-                      double gain,
-                      double offset,
-                      const cv::Mat& ones = cv::Mat()) {
-  if (gain == 1) return v;
-  cv::Mat out;
-  if (ones.empty()) {
-    v.convertTo(out, v.type(), gain, (gain - 1) * offset);
-  } else {
-    cv::addWeighted(v, gain, ones, (gain - 1) * offset, 0.0, out);
-  }
-  return out;
-}
-
 }  // namespace
 
 BlurRefinement::BlurRefinement(const BlurTables& t,
@@ -76,14 +58,9 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
       sigma2_hp_(sigma2_hp),
       inv_m_(1.0 / t.num_interior),
       spectra_(t.grid->NumSpectrumClasses()),
-      evals_(t.num_nodes) {}
-
-cv::Mat BlurRefinement::Left() const {
-  return EqualisedView(gl_, left_gain_, offset_);
-}
-
-cv::Mat BlurRefinement::Right() const {
-  return EqualisedView(gr_, right_gain_, offset_);
+      evals_(t.num_nodes) {
+  left_positive_ = gl_ + offset_;
+  right_positive_ = gr_ + offset_;
 }
 
 void BlurRefinement::Evaluate(int n) {
@@ -203,10 +180,9 @@ int BlurRefinement::NearestNode(double radius) const {
 }
 
 void BlurRefinement::EqualiseGain(double radius) {
-  if (left_integral_.empty()) {
-    cv::integral(gl_ + offset_, left_integral_, CV_64F);
-    cv::integral(gr_ + offset_, right_integral_, CV_64F);
-  }
+  cv::Mat integral_left, integral_right;
+  cv::integral(left_positive_, integral_left, CV_64F);
+  cv::integral(right_positive_, integral_right, CV_64F);
   // Interior sums are linear in the kernels: interpolate like them.
   const double pos = std::max(
       0.0, std::min(t_.num_nodes - 1.0, radius / t_.step + t_.half_nodes));
@@ -215,29 +191,28 @@ void BlurRefinement::EqualiseGain(double radius) {
   double a = 0, b = 0;
   for (const int n : {n0, n0 + 1}) {
     const double w = n == n0 ? 1 - s : s;
-    a += w * BlurredSum(left_integral_, t_.grid->RightKernel(n), t_.interior);
-    b += w * BlurredSum(right_integral_, t_.grid->LeftKernel(n), t_.interior);
+    a += w * BlurredSum(integral_left, t_.grid->RightKernel(n), t_.interior);
+    b += w * BlurredSum(integral_right, t_.grid->LeftKernel(n), t_.interior);
   }
-  a *= left_gain_;
-  b *= right_gain_;
   if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
   const double half_log_ratio = 0.5 * std::log(a / b);
-  left_gain_ *= std::exp(-half_log_ratio);
-  right_gain_ *= std::exp(half_log_ratio);
+  left_positive_ *= std::exp(-half_log_ratio);
+  right_positive_ *= std::exp(half_log_ratio);
+  // Into new matrices: gl_ and gr_ may share the caller's (a prepared
+  // patch searched with many profiles, from several threads).
+  cv::Mat gl, gr;
+  left_positive_.convertTo(gl, CV_32FC1, 1.0, -offset_);
+  right_positive_.convertTo(gr, CV_32FC1, 1.0, -offset_);
+  gl_ = gl;
+  gr_ = gr;
   for (ViewSpectra& views : spectra_) views.fresh = false;
 }
 
 const BlurRefinement::ViewSpectra& BlurRefinement::TransformedViews(int c) {
   ViewSpectra& views = spectra_[c];
-  if (views.given_left.empty()) {
-    views.given_left = t_.grid->TransformInput(gl_, t_.border, c);
-    views.given_right = t_.grid->TransformInput(gr_, t_.border, c);
-  }
   if (!views.fresh) {
-    const cv::Mat& region = t_.region_spectra[c];
-    views.left = EqualisedView(views.given_left, left_gain_, offset_, region);
-    views.right =
-        EqualisedView(views.given_right, right_gain_, offset_, region);
+    views.left = t_.grid->TransformInput(gl_, t_.border, c);
+    views.right = t_.grid->TransformInput(gr_, t_.border, c);
     views.fresh = true;
   }
   return views;

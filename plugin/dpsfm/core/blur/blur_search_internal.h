@@ -55,11 +55,6 @@ struct BlurTables {
   // Noise gain of the coarse loss per coarse node: the band's share of
   // |H_l|^2 + |H_r|^2 (the coarse loss sees only the band's noise).
   std::vector<double> coarse_noise_gain;
-  // Per spectrum class of the grid, the spectrum of ones over the region
-  // its inputs take (DPKernelGrid::TransformInput of a patch of ones): a
-  // view scaled by s about an offset o, s v + (s - 1) o, has the spectrum
-  // s V + (s - 1) o of it (BlurRefinement::EqualiseGain).
-  std::vector<cv::Mat> region_spectra;
   std::vector<float> window_x;
   std::vector<float> window_y;
   double coarse_normaliser = 1;  // 1 / (N_total * sum w^2)
@@ -116,9 +111,8 @@ class BlurRefinement {
                  double offset,
                  double sigma2_hp);
 
-  // The views as equalised so far.
-  cv::Mat Left() const;
-  cv::Mat Right() const;
+  const cv::Mat& Left() const { return gl_; }
+  const cv::Mat& Right() const { return gr_; }
 
   // Residual G_l * H_r - G_r * H_l at node n (once per node).
   void Evaluate(int n);
@@ -144,12 +138,9 @@ class BlurRefinement {
   // (by ~0.6 r), which the first estimate mistook for gain; at r = 15 that
   // alone moves the estimate by ~0.2 px. The right comparison is the
   // interior means of the two blurred cross views at the blur, which agree
-  // exactly for equal gains. Each view is scaled about the offset (its
-  // positive version, view + offset, by a factor): its spectra follow from
-  // those of the views as given (BlurTables::region_spectra) at the next
-  // evaluation, and the interior means from their integral images, so no
-  // view is rescaled or transformed again. Evaluations made before stay
-  // (the caller resets them when the gain moved the estimate).
+  // exactly for equal gains. The views are transformed again at the next
+  // evaluation; evaluations made before stay (the caller resets them when
+  // the gain moved the estimate).
   void EqualiseGain(double radius);
 
   void ResetEvaluations() { evals_.assign(t_.num_nodes, NodeEval()); }
@@ -164,24 +155,20 @@ class BlurRefinement {
   };
 
   // The views' spectra for one class of the kernel grid's nodes, when an
-  // evaluation needs them: those of the views as given, transformed once,
-  // and those of the views as equalised, derived from them (EqualiseGain).
-  // A search evaluates nodes of one or two classes.
+  // evaluation needs them: the search equalises the gain before its first
+  // evaluation, so transforming in the constructor would be wasted, and a
+  // search evaluates nodes of one or two classes.
   struct ViewSpectra {
-    cv::Mat given_left, given_right;
-    bool fresh = false;  // left, right of the gains as they are
+    bool fresh = false;  // of gl_, gr_ as they are
     cv::Mat left, right;
   };
   const ViewSpectra& TransformedViews(int c);
 
   const BlurTables& t_;
   const BlurEstimationOptions& options_;
-  const cv::Mat gl_, gr_;  // the views as given
+  cv::Mat gl_, gr_;
+  cv::Mat left_positive_, right_positive_;
   const double offset_;
-  // The equalisation's factors (on view + offset), and the integral images
-  // of view + offset, made at the first equalisation.
-  double left_gain_ = 1, right_gain_ = 1;
-  cv::Mat left_integral_, right_integral_;
   const double sigma2_hp_;
   const double inv_m_;
   std::vector<ViewSpectra> spectra_;  // per spectrum class of the grid

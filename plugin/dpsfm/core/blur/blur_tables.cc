@@ -164,14 +164,6 @@ void SetCoarseNormalisation(BlurTables* t) {
   t->coarse_normaliser = 1.0 / (static_cast<double>(nr) * nc * sum_x * sum_y);
 }
 
-// Per spectrum class, the spectrum of ones over the region its inputs take.
-void SetRegionSpectra(BlurTables* t) {
-  const cv::Mat ones = cv::Mat::ones(t->patch_size, CV_32FC1);
-  for (int c = 0; c < t->grid->NumSpectrumClasses(); ++c) {
-    t->region_spectra.push_back(t->grid->TransformInput(ones, t->border, c));
-  }
-}
-
 }  // namespace
 
 namespace internal {
@@ -188,7 +180,6 @@ std::unique_ptr<BlurTables> MakeBlurTables(const DPPsfModel& psf,
   SelectCoarseNodes(t.get());
   TabulateKernels(multiplicity, num_threads, t.get());
   SetCoarseNormalisation(t.get());
-  SetRegionSpectra(t.get());
   return t;
 }
 
