@@ -123,7 +123,9 @@ struct DPScaleOptions {
   // patches it is better than linear on average. 16 MB hold ~680 crops of
   // 45 px (1200x800 frames) or ~57 of 153 px (DSLR frames at the
   // reference's resize 0.5), counted with the blur stage's border
-  // (self-calibration's wider crops take ~1.6x that).
+  // (self-calibration's wider crops take up to ~1.6x that; overlapping
+  // crops share their frames' region instead when it is smaller,
+  // StoreCrops).
   int max_stored_patches_per_view = 256;
   double max_stored_megabytes_per_view = 16;
   // A patch needs depth on this fraction of its pixels (dense mode)...
