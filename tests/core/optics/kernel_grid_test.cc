@@ -45,12 +45,8 @@ cv::Mat GridConvolution(const DPKernelGrid& grid,
   cv::Mat product, image;
   cv::mulSpectrums(
       grid.TransformInput(patch, border, c), grid.RightSpectrum(n), product, 0);
-  const cv::Rect interior = grid.InteriorOf(c);
-  grid.Transform(c).Inverse(
-      &product, cv::Range(interior.y, interior.y + interior.height), &image);
   cv::Mat out;
-  image.colRange(interior.x, interior.x + interior.width)
-      .convertTo(out, CV_64FC1);
+  grid.InteriorOfInverse(c, &product, &image).convertTo(out, CV_64FC1);
   return out;
 }
 

@@ -218,7 +218,7 @@ TEST(SpectraProductDifference, RefusesSpectraOfDifferentSizes) {
 // loop the machine runs (real_dft.cc), no step is fused. Fused, the first
 // products would round differently somewhere (the test can tell).
 TEST(SpectraProductDifference, EachProductRoundedToTheBit) {
-  std::vector<cv::Mat> s(4, cv::Mat(9, 7, CV_32FC2));
+  std::vector<cv::Mat> s(4);
   for (int k = 0; k < 4; ++k) {
     s[k] = cv::Mat(9, 7, CV_32FC2);
     cv::randn(s[k], 0, k % 2 == 0 ? 300 : 0.7);

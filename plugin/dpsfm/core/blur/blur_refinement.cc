@@ -74,16 +74,14 @@ void BlurRefinement::Evaluate(int n) {
                            views.right,
                            grid.LeftSpectrum(n),
                            &product_);
-  const cv::Rect interior = grid.InteriorOf(c);
-  grid.Transform(c).Inverse(&product_,
-                            cv::Range(interior.y, interior.y + interior.height),
-                            &residual_image_);
+  const cv::Mat interior =
+      grid.InteriorOfInverse(c, &product_, &residual_image_);
   e.residual.resize(t_.num_interior);
   float* out = e.residual.data();
-  for (int y = 0; y < interior.height; ++y) {
-    const float* row = residual_image_.ptr<float>(y) + interior.x;
-    std::copy(row, row + interior.width, out);
-    out += interior.width;
+  for (int y = 0; y < interior.rows; ++y) {
+    const float* row = interior.ptr<float>(y);
+    std::copy(row, row + interior.cols, out);
+    out += interior.cols;
   }
   e.energy = Dot(e.residual, e.residual);
   e.done = true;

@@ -173,6 +173,15 @@ cv::Rect DPKernelGrid::InteriorOf(int c) const {
   return cv::Rect(cv::Point(reach, reach), interior_size_);
 }
 
+cv::Mat DPKernelGrid::InteriorOfInverse(int c,
+                                        cv::Mat* product,
+                                        cv::Mat* image) const {
+  const cv::Rect interior = InteriorOf(c);
+  transforms_[c].Inverse(
+      product, cv::Range(interior.y, interior.y + interior.height), image);
+  return image->colRange(interior.x, interior.x + interior.width);
+}
+
 double DPKernelGridBound(double max_radius_px, double step_px) {
   return std::max(1,
                   static_cast<int>(std::ceil(max_radius_px / step_px - 1e-9))) *

@@ -68,8 +68,7 @@ class DPKernelGrid {
   // Half spectra (RealDft) of the kernels wrapped around the origin
   // (WrapKernel), at the DFT size of the node's class: multiplied with
   // TransformInput of a patch for that class, and transformed back
-  // (Transform(c).Inverse), they give the true convolution on the interior
-  // (InteriorOf).
+  // (InteriorOfInverse), they give the true convolution on the interior.
   const cv::Mat& LeftSpectrum(int node) const { return left_spectra_[node]; }
   const cv::Mat& RightSpectrum(int node) const { return right_spectra_[node]; }
   int NumSpectrumClasses() const { return static_cast<int>(classes_.size()); }
@@ -82,9 +81,13 @@ class DPKernelGrid {
   // around it, zero-padded to the class's DFT size.
   cv::Mat TransformInput(const cv::Mat& patch, int border, int c) const;
   // Where the interior lies in the inverse transform of a product with a
-  // class c spectrum; only the rows up to its last one are needed
-  // (RealDft::Inverse's rows).
+  // class c spectrum.
   cv::Rect InteriorOf(int c) const;
+  // The interior of the inverse transform of *product (a product with a
+  // class c spectrum; it is the transform's work space, and holds no
+  // spectrum afterwards): only the interior's rows are computed, into
+  // *image (reused when it has their size); the interior is a view into it.
+  cv::Mat InteriorOfInverse(int c, cv::Mat* product, cv::Mat* image) const;
 
   // |h_l(n)|^2, |h_r(n)|^2 and, for n < NumNodes() - 1, <h_l(n), h_l(n+1)>,
   // <h_r(n), h_r(n+1)>: white noise of variance sigma^2 convolved with an

@@ -417,16 +417,11 @@ void AddIntervals(const IntensityPatch& patch,
   };
   cv::Mat product, image;
   // The interior of a view's spectrum times a kernel's, back in space.
-  auto blurred = [&](const cv::Mat& view_spectrum,
-                     const cv::Mat& kernel_spectrum,
-                     int c) {
-    const cv::Rect interior = grid.InteriorOf(c);
-    SpectraProduct(view_spectrum, kernel_spectrum, &product);
-    grid.Transform(c).Inverse(
-        &product, cv::Range(interior.y, interior.y + interior.height), &image);
-    return cv::Mat(
-        image.colRange(interior.x, interior.x + interior.width).clone());
-  };
+  auto blurred =
+      [&](const cv::Mat& view_spectrum, const cv::Mat& kernel_spectrum, int c) {
+        SpectraProduct(view_spectrum, kernel_spectrum, &product);
+        return cv::Mat(grid.InteriorOfInverse(c, &product, &image).clone());
+      };
   // A view blurred at a node: the mean-removed part on the interior, its
   // sum, and the constant the mean contributes.
   struct BlurredView {
