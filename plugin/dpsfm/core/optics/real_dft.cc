@@ -1,12 +1,15 @@
 #include "dpsfm/core/optics/real_dft.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cstring>
 #include <initializer_list>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <utility>
+#include <vector>
 
 #include <fftw3.h>
 
@@ -30,6 +33,26 @@ void CheckAligned(const void* data, const char* what) {
   DPSFM_CHECK(fftwf_alignment_of(
                   const_cast<float*>(static_cast<const float*>(data))) == 0)
       << "RealDft: the " << what << " is not aligned for FFTW";
+}
+
+// The calling thread's work array of at least `count` complex numbers,
+// aligned as FFTW allocates (the column passes between two arrays): kept
+// for the thread, grown when a larger transform needs it.
+fftwf_complex* ThreadWork(size_t count) {
+  struct Work {
+    ~Work() { fftwf_free(data); }
+    fftwf_complex* data = nullptr;
+    size_t count = 0;
+  };
+  thread_local Work work;
+  if (work.count < count) {
+    fftwf_free(work.data);
+    work.data = fftwf_alloc_complex(count);
+    DPSFM_CHECK(work.data != nullptr)
+        << "RealDft: no memory for " << count << " complex numbers";
+    work.count = count;
+  }
+  return work.data;
 }
 
 // The spectrum products are element-wise loops that the compiler
@@ -112,13 +135,78 @@ struct RealDft::Plans {
     forward_columns = fftwf_plan_many_dft(1, &this->rows, half, spectrum,
                                           nullptr, half, 1, spectrum, nullptr,
                                           half, 1, FFTW_FORWARD, FFTW_ESTIMATE);
-    inverse_columns = fftwf_plan_many_dft(1, &this->rows, half, spectrum,
-                                          nullptr, half, 1, spectrum, nullptr,
-                                          half, 1, FFTW_BACKWARD,
+    inverse_columns = fftwf_plan_many_dft(1,
+                                          &this->rows,
+                                          half,
+                                          spectrum,
+                                          nullptr,
+                                          half,
+                                          1,
+                                          spectrum,
+                                          nullptr,
+                                          half,
+                                          1,
+                                          FFTW_BACKWARD,
                                           FFTW_ESTIMATE);
-    fftwf_free(spectrum);
     DPSFM_CHECK(forward_columns != nullptr && inverse_columns != nullptr)
         << "FFTW made no plan for " << cols << "x" << rows;
+    fftwf_complex* work = fftwf_alloc_complex(rows * half);
+    forward_columns_apart =
+        ColumnsApart(FFTW_FORWARD, forward_columns, spectrum, work);
+    inverse_columns_apart =
+        ColumnsApart(FFTW_BACKWARD, inverse_columns, spectrum, work);
+    fftwf_free(work);
+    fftwf_free(spectrum);
+  }
+
+  // The column pass from one array into another, when it computes the
+  // in-place plan's bits. FFTW_ESTIMATE plans the in-place pass over
+  // strided columns as a loop of single columns, each through a buffer (a
+  // copy in and out: fftwf_cpy2d, the largest single function in a profile
+  // of the six make-cost scenes), and the same pass between two arrays
+  // without the buffers: 3.4x faster at 40 px, 2.7x at 60, 2.3x at 96,
+  // 1.5-1.6x at 36 and 45, the same at 64 (docs/benchmark.md, session 26).
+  // At 48, 50, 54, 72, 80 and 100 px it picks other codelets, whose
+  // rounding differs. Whether the two agree is decided here, on a
+  // pseudo-random probe, on the machine that runs them: the plans depend on
+  // its SIMD, so a table of sizes could not say, and an answer must not
+  // depend on which pass ran. nullptr where they differ; the in-place plan
+  // runs then.
+  fftwf_plan ColumnsApart(int sign,
+                          fftwf_plan in_place,
+                          fftwf_complex* spectrum,
+                          fftwf_complex* work) {
+    fftwf_plan apart = fftwf_plan_many_dft(1,
+                                           &rows,
+                                           half,
+                                           spectrum,
+                                           nullptr,
+                                           half,
+                                           1,
+                                           work,
+                                           nullptr,
+                                           half,
+                                           1,
+                                           sign,
+                                           FFTW_ESTIMATE | FFTW_DESTROY_INPUT);
+    if (apart == nullptr) return nullptr;
+    const size_t floats = 2 * static_cast<size_t>(rows) * half;
+    std::vector<float> probe(floats);
+    uint32_t state = 12345;
+    for (float& v : probe) {
+      state = state * 1664525u + 1013904223u;  // Numerical Recipes' LCG
+      v = static_cast<float>(state >> 8) * (1.0f / 16777216.0f) - 0.5f;
+    }
+    float* s = reinterpret_cast<float*>(spectrum);
+    std::copy(probe.begin(), probe.end(), s);
+    fftwf_execute_dft(apart, spectrum, work);
+    std::copy(probe.begin(), probe.end(), s);
+    fftwf_execute_dft(in_place, spectrum, spectrum);
+    if (std::memcmp(spectrum, work, sizeof(float) * floats) != 0) {
+      fftwf_destroy_plan(apart);
+      return nullptr;
+    }
+    return apart;
   }
 
   // The plan of `count` rows (real <-> half spectrum), made on first use.
@@ -149,6 +237,8 @@ struct RealDft::Plans {
 
   int rows, cols, half;
   fftwf_plan forward_columns = nullptr, inverse_columns = nullptr;
+  // Between the spectrum and a work array (ColumnsApart), or nullptr.
+  fftwf_plan forward_columns_apart = nullptr, inverse_columns_apart = nullptr;
   std::unique_ptr<std::atomic<fftwf_plan>[]> forward_rows, inverse_rows;
 };
 
@@ -186,14 +276,26 @@ void RealDft::Forward(const cv::Mat& image,
   CheckAligned(image.data, "image");
   CheckAligned(spectrum->data, "spectrum");
   auto* out = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
+  // The rows into the work array when the columns come out of it, else
+  // into the spectrum, whose columns are then transformed in place.
+  const size_t half = plans_->half;
+  fftwf_complex* rows = plans_->forward_columns_apart != nullptr
+                            ? ThreadWork(half * size_.height)
+                            : out;
   // Rows known to be zero transform to zero.
-  spectrum->rowRange(nonzero_rows, size_.height).setTo(0);
+  float* values = reinterpret_cast<float*>(rows);
+  std::fill(
+      values + 2 * half * nonzero_rows, values + 2 * half * size_.height, 0.0f);
   if (nonzero_rows > 0) {
     fftwf_execute_dft_r2c(plans_->Rows(true, nonzero_rows),
                           const_cast<float*>(image.ptr<float>()),
-                          out);
+                          rows);
   }
-  fftwf_execute_dft(plans_->forward_columns, out, out);
+  if (rows != out) {
+    fftwf_execute_dft(plans_->forward_columns_apart, rows, out);
+  } else {
+    fftwf_execute_dft(plans_->forward_columns, out, out);
+  }
 }
 
 void RealDft::Inverse(cv::Mat* spectrum,
@@ -216,7 +318,14 @@ void RealDft::Inverse(cv::Mat* spectrum,
   CheckAligned(spectrum->data, "spectrum");
   CheckAligned(image->data, "image");
   auto* in = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
-  fftwf_execute_dft(plans_->inverse_columns, in, in);
+  if (plans_->inverse_columns_apart != nullptr) {
+    fftwf_complex* work =
+        ThreadWork(static_cast<size_t>(plans_->half) * size_.height);
+    fftwf_execute_dft(plans_->inverse_columns_apart, in, work);
+    in = work;
+  } else {
+    fftwf_execute_dft(plans_->inverse_columns, in, in);
+  }
   // The rows' plan runs on arrays aligned as FFTW allocates them; rows that
   // start off that alignment are moved to the front of the work space
   // first (a few kB, against the transform's passes).

@@ -11,7 +11,10 @@
 // A 2-D transform is done in two passes, rows then columns (forward) and
 // columns then rows (inverse), so that rows known to be zero are not
 // transformed and rows not needed are not computed back (what cv::dft's
-// nonzero_rows does).
+// nonzero_rows does). The column pass runs between the spectrum and a
+// per-thread work array where FFTW computes the same bits that way as in
+// place (checked per size when the plans are made), because it then needs
+// no buffers.
 //
 // Spectra are half spectra: CV_32FC2, rows x (cols / 2 + 1), the columns
 // u = 0 .. cols / 2 of the full spectrum (the others are their conjugate
