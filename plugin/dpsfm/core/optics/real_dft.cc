@@ -131,23 +131,8 @@ struct RealDft::Plans {
       inverse_rows[k].store(nullptr);
     }
     fftwf_complex* spectrum = fftwf_alloc_complex(rows * half);
-    // The columns in place: `half` of them, `rows` long, `half` apart.
-    forward_columns = fftwf_plan_many_dft(1, &this->rows, half, spectrum,
-                                          nullptr, half, 1, spectrum, nullptr,
-                                          half, 1, FFTW_FORWARD, FFTW_ESTIMATE);
-    inverse_columns = fftwf_plan_many_dft(1,
-                                          &this->rows,
-                                          half,
-                                          spectrum,
-                                          nullptr,
-                                          half,
-                                          1,
-                                          spectrum,
-                                          nullptr,
-                                          half,
-                                          1,
-                                          FFTW_BACKWARD,
-                                          FFTW_ESTIMATE);
+    forward_columns = Columns(FFTW_FORWARD, spectrum, spectrum, 0);
+    inverse_columns = Columns(FFTW_BACKWARD, spectrum, spectrum, 0);
     DPSFM_CHECK(forward_columns != nullptr && inverse_columns != nullptr)
         << "FFTW made no plan for " << cols << "x" << rows;
     fftwf_complex* work = fftwf_alloc_complex(rows * half);
@@ -157,6 +142,28 @@ struct RealDft::Plans {
         ColumnsApart(FFTW_BACKWARD, inverse_columns, spectrum, work);
     fftwf_free(work);
     fftwf_free(spectrum);
+  }
+
+  // The column pass, `half` columns `rows` long and `half` apart, from `in`
+  // into `out` (the same array: in place), planned with FFTW_ESTIMATE and
+  // `flags`.
+  fftwf_plan Columns(int sign,
+                     fftwf_complex* in,
+                     fftwf_complex* out,
+                     unsigned flags) {
+    return fftwf_plan_many_dft(1,
+                               &rows,
+                               half,
+                               in,
+                               nullptr,
+                               half,
+                               1,
+                               out,
+                               nullptr,
+                               half,
+                               1,
+                               sign,
+                               FFTW_ESTIMATE | flags);
   }
 
   // The column pass from one array into another, when it computes the
@@ -176,19 +183,7 @@ struct RealDft::Plans {
                           fftwf_plan in_place,
                           fftwf_complex* spectrum,
                           fftwf_complex* work) {
-    fftwf_plan apart = fftwf_plan_many_dft(1,
-                                           &rows,
-                                           half,
-                                           spectrum,
-                                           nullptr,
-                                           half,
-                                           1,
-                                           work,
-                                           nullptr,
-                                           half,
-                                           1,
-                                           sign,
-                                           FFTW_ESTIMATE | FFTW_DESTROY_INPUT);
+    fftwf_plan apart = Columns(sign, spectrum, work, FFTW_DESTROY_INPUT);
     if (apart == nullptr) return nullptr;
     const size_t floats = 2 * static_cast<size_t>(rows) * half;
     std::vector<float> probe(floats);
