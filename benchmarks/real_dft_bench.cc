@@ -3,8 +3,9 @@
 // gets from cv::getOptimalDFTSize, for the work one blur-refinement node
 // does: a forward transform of a patch whose last third of rows is padding,
 // a spectrum product, and an inverse transform of which five sixths of the
-// rows are kept. Prints microseconds per node (median of 5 rounds) and the
-// ratio; never asserts.
+// rows are kept. Prints microseconds per node (median of 5 rounds), the
+// ratio and how RealDft runs each size's column passes here; never
+// asserts.
 //
 //   real_dft_bench [--rounds N]
 #include <algorithm>
@@ -42,6 +43,18 @@ double MedianMicroseconds(int rounds, int calls, Work work) {
   return us[rounds / 2];
 }
 
+const char* PassName(RealDft::ColumnPass pass) {
+  switch (pass) {
+    case RealDft::ColumnPass::kApart:
+      return "apart";
+    case RealDft::ColumnPass::kThroughColumns:
+      return "through columns";
+    case RealDft::ColumnPass::kInPlace:
+      return "in place";
+  }
+  return "?";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -53,7 +66,9 @@ int main(int argc, char** argv) {
       "One refinement node: forward (2/3 of the rows nonzero), product, "
       "inverse (5/6 of the rows), us, median of %d rounds\n",
       rounds);
-  std::printf("| size | cv::dft | RealDft (FFTW) | cv / FFTW |\n|---|---|---|---|\n");
+  std::printf(
+      "| size | cv::dft | RealDft (FFTW) | cv / FFTW | column pass (forward, "
+      "inverse) |\n|---|---|---|---|---|\n");
   const std::vector<int> sizes = {36, 40, 45, 48, 50, 54, 60, 64,
                                   72, 80, 96, 100, 128, 144};
   for (const int n : sizes) {
@@ -85,12 +100,14 @@ int main(int argc, char** argv) {
       cv::mulSpectrums(spectrum, kernel_spectrum, product, 0);
       dft.Inverse(&product, cv::Range(0, kept), &back);
     });
-    std::printf("| %d%s | %.1f | %.1f | %.2f |\n",
+    std::printf("| %d%s | %.1f | %.1f | %.2f | %s, %s |\n",
                 n,
                 FastDftSize(n) == n ? "" : " (coarse)",
                 cv_us,
                 fftw_us,
-                cv_us / fftw_us);
+                cv_us / fftw_us,
+                PassName(dft.ColumnPassOf(true)),
+                PassName(dft.ColumnPassOf(false)));
   }
   return 0;
 }

@@ -123,7 +123,11 @@ DPSFM_VECTOR_CLONES void ComplexProductDifference(const float* __restrict__ pa,
 }  // namespace
 
 struct RealDft::Plans {
-  Plans(int rows, int cols) : rows(rows), cols(cols), half(cols / 2 + 1) {
+  Plans(int rows, int cols)
+      : rows(rows),
+        cols(cols),
+        half(cols / 2 + 1),
+        column_dist(BufferDist(rows)) {
     forward_rows = std::make_unique<std::atomic<fftwf_plan>[]>(rows + 1);
     inverse_rows = std::make_unique<std::atomic<fftwf_plan>[]>(rows + 1);
     for (int k = 0; k <= rows; ++k) {
@@ -131,25 +135,25 @@ struct RealDft::Plans {
       inverse_rows[k].store(nullptr);
     }
     fftwf_complex* spectrum = fftwf_alloc_complex(rows * half);
-    forward_columns = Columns(FFTW_FORWARD, spectrum, spectrum, 0);
-    inverse_columns = Columns(FFTW_BACKWARD, spectrum, spectrum, 0);
-    DPSFM_CHECK(forward_columns != nullptr && inverse_columns != nullptr)
-        << "FFTW made no plan for " << cols << "x" << rows;
     fftwf_complex* work = fftwf_alloc_complex(rows * half);
-    forward_columns_apart =
-        ColumnsApart(FFTW_FORWARD, forward_columns, spectrum, work);
-    inverse_columns_apart =
-        ColumnsApart(FFTW_BACKWARD, inverse_columns, spectrum, work);
+    fftwf_complex* columns = fftwf_alloc_complex(half * column_dist);
+    forward = MakeColumnPass(FFTW_FORWARD, spectrum, work, columns);
+    inverse = MakeColumnPass(FFTW_BACKWARD, spectrum, work, columns);
+    fftwf_free(columns);
     fftwf_free(work);
     fftwf_free(spectrum);
   }
 
   // The column pass, `half` columns `rows` long and `half` apart, from `in`
-  // into `out` (the same array: in place), planned with FFTW_ESTIMATE and
+  // into `out` (the same array: in place), their elements `out_stride`
+  // apart and the columns `out_dist` (`half` and 1 as in `in`, or 1 and
+  // `column_dist`: contiguous columns), planned with FFTW_ESTIMATE and
   // `flags`.
   fftwf_plan Columns(int sign,
                      fftwf_complex* in,
                      fftwf_complex* out,
+                     int out_stride,
+                     int out_dist,
                      unsigned flags) {
     return fftwf_plan_many_dft(1,
                                &rows,
@@ -160,31 +164,46 @@ struct RealDft::Plans {
                                1,
                                out,
                                nullptr,
-                               half,
-                               1,
+                               out_stride,
+                               out_dist,
                                sign,
                                FFTW_ESTIMATE | flags);
   }
 
-  // The column pass from one array into another, when it computes the
-  // in-place plan's bits. FFTW_ESTIMATE plans the in-place pass over
-  // strided columns as a loop of single columns, each through a buffer (a
-  // copy in and out: fftwf_cpy2d, the largest single function in a profile
-  // of the six make-cost scenes), and the same pass between two arrays
-  // without the buffers: 3.4x faster at 40 px, 2.7x at 60, 2.3x at 96,
-  // 1.5-1.6x at 36 and 45, the same at 64 (docs/benchmark.md, session 26).
-  // At 48, 50, 54, 72, 80 and 100 px it picks other codelets, whose
-  // rounding differs. Whether the two agree is decided here, on a
+  // The column pass in place, and the fastest way found to compute its bits
+  // without its buffers. FFTW_ESTIMATE plans the in-place pass over strided
+  // columns either as a loop of single strided columns or through a buffer
+  // ("dft-buffered": the columns transformed into a buffer of contiguous
+  // columns, then copied back by fftwf_cpy2d, the largest single function
+  // in a profile of the six make-cost scenes). Two other ways, tried in
+  // turn:
+  // - between the spectrum and a work array (`apart`): FFTW needs no
+  //   buffers then, 3.4x faster at 40 px, 2.7x at 60, 2.3x at 96, 1.5-1.6x
+  //   at 36 and 45, the same at 64 (docs/benchmark.md, session 26); at 48,
+  //   50, 54, 72, 80 and 100 px it picks other codelets, whose rounding
+  //   differs;
+  // - into contiguous columns (`to_columns`), the buffered plan's own first
+  //   step planned alone, then the rows wanted gathered from them
+  //   (GatherRows): the same codelets, without FFTW's copy back through its
+  //   tiles, and the inverse gathers only the rows it keeps; 1.6x at 48 px,
+  //   1.1x at 72 and 80 (session 27).
+  // Whether each computes the in-place plan's bits is decided here, on a
   // pseudo-random probe, on the machine that runs them: the plans depend on
   // its SIMD, so a table of sizes could not say, and an answer must not
-  // depend on which pass ran. nullptr where they differ; the in-place plan
-  // runs then.
-  fftwf_plan ColumnsApart(int sign,
-                          fftwf_plan in_place,
-                          fftwf_complex* spectrum,
-                          fftwf_complex* work) {
-    fftwf_plan apart = Columns(sign, spectrum, work, FFTW_DESTROY_INPUT);
-    if (apart == nullptr) return nullptr;
+  // depend on which pass ran. The in-place plan runs where neither does.
+  struct ColumnPlans {
+    fftwf_plan in_place = nullptr;
+    fftwf_plan apart = nullptr;
+    fftwf_plan to_columns = nullptr;
+  };
+  ColumnPlans MakeColumnPass(int sign,
+                             fftwf_complex* spectrum,
+                             fftwf_complex* work,
+                             fftwf_complex* columns) {
+    ColumnPlans pass;
+    pass.in_place = Columns(sign, spectrum, spectrum, half, 1, 0);
+    DPSFM_CHECK(pass.in_place != nullptr)
+        << "FFTW made no plan for " << cols << "x" << rows;
     const size_t floats = 2 * static_cast<size_t>(rows) * half;
     std::vector<float> probe(floats);
     uint32_t state = 12345;
@@ -194,14 +213,63 @@ struct RealDft::Plans {
     }
     float* s = reinterpret_cast<float*>(spectrum);
     std::copy(probe.begin(), probe.end(), s);
-    fftwf_execute_dft(apart, spectrum, work);
-    std::copy(probe.begin(), probe.end(), s);
-    fftwf_execute_dft(in_place, spectrum, spectrum);
-    if (std::memcmp(spectrum, work, sizeof(float) * floats) != 0) {
-      fftwf_destroy_plan(apart);
-      return nullptr;
+    fftwf_execute_dft(pass.in_place, spectrum, spectrum);
+    const std::vector<float> expected(s, s + floats);
+    auto same = [&](const fftwf_complex* result) {
+      return std::memcmp(result, expected.data(), sizeof(float) * floats) == 0;
+    };
+    pass.apart = Columns(sign, spectrum, work, half, 1, FFTW_DESTROY_INPUT);
+    if (pass.apart != nullptr) {
+      std::copy(probe.begin(), probe.end(), s);
+      fftwf_execute_dft(pass.apart, spectrum, work);
+      if (same(work)) return pass;
+      fftwf_destroy_plan(pass.apart);
+      pass.apart = nullptr;
     }
-    return apart;
+    pass.to_columns = Columns(sign, spectrum, columns, 1, column_dist, 0);
+    if (pass.to_columns != nullptr) {
+      std::copy(probe.begin(), probe.end(), s);
+      fftwf_execute_dft(pass.to_columns, spectrum, columns);
+      GatherRows(columns, cv::Range(0, rows), work);
+      if (same(work)) return pass;
+      fftwf_destroy_plan(pass.to_columns);
+      pass.to_columns = nullptr;
+    }
+    return pass;
+  }
+
+  // Rows `range` of the column pass's result, from its contiguous columns
+  // (Columns) into `out`, rows.size() x half. Column by column: reads in
+  // order, writes `half` apart, all in the first-level cache at these sizes.
+  void GatherRows(const fftwf_complex* columns,
+                  const cv::Range& range,
+                  fftwf_complex* out) const {
+    const int count = range.size();
+    for (int u = 0; u < half; ++u) {
+      const fftwf_complex* column =
+          columns + static_cast<size_t>(u) * column_dist + range.start;
+      fftwf_complex* to = out + u;
+      for (int y = 0; y < count; ++y) {
+        std::memcpy(to[static_cast<size_t>(y) * half],
+                    column[y],
+                    sizeof(fftwf_complex));
+      }
+    }
+  }
+
+  // FFTW's spacing of buffered vectors (kernel/buffered.c, X(bufdist)): the
+  // least n' >= n with n' = 6 (mod 8). The buffered plan's first step is
+  // planned for that spacing, and another may get other codelets.
+  static int BufferDist(int n) { return n + ((6 - n) % 8 + 8) % 8; }
+
+  // A thread's work array: the rows (the spectrum's layout) and, after them
+  // at FFTW's alignment, the contiguous columns when the pass uses them.
+  fftwf_complex* Work(fftwf_complex** columns) const {
+    const size_t rows_part = (static_cast<size_t>(rows) * half + 7) / 8 * 8;
+    fftwf_complex* work =
+        ThreadWork(rows_part + static_cast<size_t>(half) * column_dist);
+    *columns = work + rows_part;
+    return work;
   }
 
   // The plan of `count` rows (real <-> half spectrum), made on first use.
@@ -231,9 +299,9 @@ struct RealDft::Plans {
   }
 
   int rows, cols, half;
-  fftwf_plan forward_columns = nullptr, inverse_columns = nullptr;
-  // Between the spectrum and a work array (ColumnsApart), or nullptr.
-  fftwf_plan forward_columns_apart = nullptr, inverse_columns_apart = nullptr;
+  // The spacing of contiguous columns (Columns).
+  int column_dist;
+  ColumnPlans forward, inverse;
   std::unique_ptr<std::atomic<fftwf_plan>[]> forward_rows, inverse_rows;
 };
 
@@ -252,6 +320,13 @@ RealDft::RealDft(const cv::Size& size) : size_(size) {
 
 cv::Mat RealDft::NewSpectrum() const {
   return cv::Mat(SpectrumSize(), CV_32FC2);
+}
+
+RealDft::ColumnPass RealDft::ColumnPassOf(bool forward) const {
+  const Plans::ColumnPlans& pass = forward ? plans_->forward : plans_->inverse;
+  if (pass.apart != nullptr) return ColumnPass::kApart;
+  if (pass.to_columns != nullptr) return ColumnPass::kThroughColumns;
+  return ColumnPass::kInPlace;
 }
 
 void RealDft::Forward(const cv::Mat& image,
@@ -273,9 +348,11 @@ void RealDft::Forward(const cv::Mat& image,
   auto* out = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
   // The rows into the work array when the columns come out of it, else
   // into the spectrum, whose columns are then transformed in place.
+  const Plans::ColumnPlans& pass = plans_->forward;
   const size_t half = plans_->half;
-  fftwf_complex* rows = plans_->forward_columns_apart != nullptr
-                            ? ThreadWork(half * size_.height)
+  fftwf_complex* columns = nullptr;
+  fftwf_complex* rows = pass.apart != nullptr || pass.to_columns != nullptr
+                            ? plans_->Work(&columns)
                             : out;
   // Rows known to be zero transform to zero.
   float* values = reinterpret_cast<float*>(rows);
@@ -286,10 +363,13 @@ void RealDft::Forward(const cv::Mat& image,
                           const_cast<float*>(image.ptr<float>()),
                           rows);
   }
-  if (rows != out) {
-    fftwf_execute_dft(plans_->forward_columns_apart, rows, out);
+  if (pass.apart != nullptr) {
+    fftwf_execute_dft(pass.apart, rows, out);
+  } else if (pass.to_columns != nullptr) {
+    fftwf_execute_dft(pass.to_columns, rows, columns);
+    plans_->GatherRows(columns, cv::Range(0, size_.height), out);
   } else {
-    fftwf_execute_dft(plans_->forward_columns, out, out);
+    fftwf_execute_dft(pass.in_place, out, out);
   }
 }
 
@@ -313,21 +393,31 @@ void RealDft::Inverse(cv::Mat* spectrum,
   CheckAligned(spectrum->data, "spectrum");
   CheckAligned(image->data, "image");
   auto* in = reinterpret_cast<fftwf_complex*>(spectrum->ptr<float>());
-  if (plans_->inverse_columns_apart != nullptr) {
-    fftwf_complex* work =
-        ThreadWork(static_cast<size_t>(plans_->half) * size_.height);
-    fftwf_execute_dft(plans_->inverse_columns_apart, in, work);
-    in = work;
+  const Plans::ColumnPlans& pass = plans_->inverse;
+  fftwf_complex* first = nullptr;
+  if (pass.to_columns != nullptr) {
+    // Only the rows asked for are gathered, to the work array's front.
+    fftwf_complex* columns = nullptr;
+    first = plans_->Work(&columns);
+    fftwf_execute_dft(pass.to_columns, in, columns);
+    plans_->GatherRows(columns, rows, first);
   } else {
-    fftwf_execute_dft(plans_->inverse_columns, in, in);
-  }
-  // The rows' plan runs on arrays aligned as FFTW allocates them; rows that
-  // start off that alignment are moved to the front of the work space
-  // first (a few kB, against the transform's passes).
-  fftwf_complex* first = in + static_cast<size_t>(rows.start) * plans_->half;
-  if (fftwf_alignment_of(reinterpret_cast<float*>(first)) != 0) {
-    std::memmove(in, first, sizeof(fftwf_complex) * count * plans_->half);
-    first = in;
+    if (pass.apart != nullptr) {
+      fftwf_complex* columns = nullptr;
+      fftwf_complex* work = plans_->Work(&columns);
+      fftwf_execute_dft(pass.apart, in, work);
+      in = work;
+    } else {
+      fftwf_execute_dft(pass.in_place, in, in);
+    }
+    // The rows' plan runs on arrays aligned as FFTW allocates them; rows
+    // that start off that alignment are moved to the front of the work
+    // space first (a few kB, against the transform's passes).
+    first = in + static_cast<size_t>(rows.start) * plans_->half;
+    if (fftwf_alignment_of(reinterpret_cast<float*>(first)) != 0) {
+      std::memmove(in, first, sizeof(fftwf_complex) * count * plans_->half);
+      first = in;
+    }
   }
   fftwf_execute_dft_c2r(plans_->Rows(false, count), first, image->ptr<float>());
   *image *= 1.0 / size_.area();

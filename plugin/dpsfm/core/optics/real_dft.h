@@ -12,9 +12,9 @@
 // columns then rows (inverse), so that rows known to be zero are not
 // transformed and rows not needed are not computed back (what cv::dft's
 // nonzero_rows does). The column pass runs between the spectrum and a
-// per-thread work array where FFTW computes the same bits that way as in
-// place (checked per size when the plans are made), because it then needs
-// no buffers.
+// per-thread work array, or into contiguous columns there, where FFTW
+// computes the same bits that way as in place (checked per size when the
+// plans are made), because it then needs no buffers.
 //
 // Spectra are half spectra: CV_32FC2, rows x (cols / 2 + 1), the columns
 // u = 0 .. cols / 2 of the full spectrum (the others are their conjugate
@@ -53,6 +53,14 @@ class RealDft {
 
   // A half spectrum of SpectrumSize(), continuous, as the transforms need.
   cv::Mat NewSpectrum() const;
+
+  // How a direction's column pass runs on this machine, decided per size
+  // when the plans are made (the fastest way found that computes the
+  // in-place pass's bits): between the spectrum and a work array, into
+  // contiguous columns whose rows are then gathered, or in place. For tests
+  // and benchmarks.
+  enum class ColumnPass { kApart, kThroughColumns, kInPlace };
+  ColumnPass ColumnPassOf(bool forward) const;
 
  private:
   struct Plans;
