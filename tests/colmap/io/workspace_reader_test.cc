@@ -1,12 +1,15 @@
 // The COLMAP layer's readers: DP view lookup and loading, lens data with its
 // precedence (lens.csv > flag > EXIF > derived), and depth maps.
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -412,6 +415,37 @@ TEST(DPImageIndex, AmbiguousStemIsAnError) {
   EXPECT_THROW(index.Find("IMG.JPG"), InputError);
 }
 
+// Random 16-bit colour left and right views of `size` and their sum, as
+// l.png, r.png and s.png in `dir`: the paths with the right view and with
+// the sum.
+std::pair<DPFramePaths, DPFramePaths> WriteRandomViews(const TempDir& dir,
+                                                       const cv::Size& size) {
+  cv::Mat left(size, CV_16UC3), right(size, CV_16UC3);
+  cv::randu(left, 0, 30000);
+  cv::randu(right, 0, 30000);
+  cv::imwrite(dir / "l.png", left);
+  cv::imwrite(dir / "r.png", right);
+  cv::imwrite(dir / "s.png", cv::Mat(left + right));
+  DPFramePaths paths;
+  paths.left = dir / "l.png";
+  paths.right = dir / "r.png";
+  DPFramePaths sum_paths;
+  sum_paths.left = dir / "l.png";
+  sum_paths.sum = dir / "s.png";
+  return {paths, sum_paths};
+}
+
+cv::Mat HalveByArea(const cv::Mat& frame) {
+  cv::Mat out;
+  cv::resize(frame, out, frame.size() / 2, 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+bool SameBits(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() &&
+         cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
 TEST(LoadDPFrames, SixteenBitSumFrameAndSwap) {
   TempDir dir;
   cv::Mat left(10, 12, CV_16UC1, cv::Scalar(10000));
@@ -525,27 +559,9 @@ TEST(LoadDPFrames, BroughtToLinearLight) {
 // full-size frame at a time.
 TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
   TempDir dir;
-  cv::Mat left(20, 24, CV_16UC3), right(20, 24, CV_16UC3);
-  cv::randu(left, 0, 30000);
-  cv::randu(right, 0, 30000);
-  cv::imwrite(dir / "l.png", left);
-  cv::imwrite(dir / "r.png", right);
-  cv::imwrite(dir / "s.png", cv::Mat(left + right));
-  const auto halve = [](const cv::Mat& frame) {
-    cv::Mat out;
-    cv::resize(frame, out, frame.size() / 2, 0, 0, cv::INTER_AREA);
-    return out;
-  };
-  const auto same = [](const cv::Mat& a, const cv::Mat& b) {
-    return a.size() == b.size() && a.type() == b.type() &&
-           cv::norm(a, b, cv::NORM_INF) == 0;
-  };
-  DPFramePaths paths;
-  paths.left = dir / "l.png";
-  paths.right = dir / "r.png";
-  DPFramePaths sum_paths;
-  sum_paths.left = dir / "l.png";
-  sum_paths.sum = dir / "s.png";
+  const auto [paths, sum_paths] = WriteRandomViews(dir, cv::Size(24, 20));
+  const auto halve = HalveByArea;
+  const auto same = SameBits;
   for (const DPFramePaths& p : {paths, sum_paths}) {
     for (const bool swap : {false, true}) {
       const DPFrames full = LoadDPFrames(p, swap);
@@ -579,6 +595,48 @@ TEST(LoadDPFrames, EachViewIsReducedAsItIsDecoded) {
   EXPECT_TRUE(same(reduced.left, halve(old_right.left)));
   EXPECT_TRUE(same(reduced.right, halve(LoadDPFrames(paths, false).right)));
   EXPECT_FALSE(same(reduced.right, halve(old_right.right)));
+}
+
+// The two files decoded at once (as the scale controller reads views with
+// more than one thread) give the frames of one after the other, bit for
+// bit, and the same errors: the left file's first when both are bad, the
+// right file named when only it is.
+TEST(LoadDPFrames, DecodedTogetherAsOneAfterTheOther) {
+  TempDir dir;
+  const auto [paths, sum_paths] = WriteRandomViews(dir, cv::Size(40, 30));
+  const auto same = SameBits;
+  const FrameReduction halve{
+      [](const cv::Mat& frame, const cv::Size&) { return HalveByArea(frame); }};
+  for (const DPFramePaths& p : {paths, sum_paths}) {
+    for (const FrameReduction& reduction : {FrameReduction{}, halve}) {
+      const DPFrames apart =
+          LoadDPFrames(p, false, DPEncoding::kAuto, reduction, false);
+      const DPFrames together =
+          LoadDPFrames(p, false, DPEncoding::kAuto, reduction, true);
+      EXPECT_TRUE(same(together.left, apart.left));
+      EXPECT_TRUE(same(together.right, apart.right));
+      EXPECT_FALSE(same(together.left, together.right));
+      EXPECT_EQ(together.frame_size, apart.frame_size);
+      EXPECT_EQ(together.encoding, apart.encoding);
+      EXPECT_EQ(together.bits, 16);
+    }
+  }
+  auto error_of = [](const DPFramePaths& p, bool together) {
+    try {
+      LoadDPFrames(p, false, DPEncoding::kAuto, {}, together);
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  DPFramePaths bad = paths;
+  WriteTextFile(dir / "bad.png", "\x89PNG\r\n\x1a\nnot really");
+  bad.right = dir / "bad.png";
+  EXPECT_NE(error_of(bad, true).find("bad.png"), std::string::npos);
+  EXPECT_EQ(error_of(bad, true), error_of(bad, false));
+  bad.left = dir / "missing.png";
+  EXPECT_NE(error_of(bad, true).find("missing.png"), std::string::npos);
+  EXPECT_EQ(error_of(bad, true), error_of(bad, false));
 }
 
 // A reduction that may work on strips (FrameReduction::strip_rows, as the
@@ -677,6 +735,64 @@ TEST(ReadDPFrameFile, ChannelOrderAndSixteenBitValues) {
 
 // Floating-point frames (what COLMAP 4 reads from EXR or float TIFF) are
 // taken as stored, in linear light.
+// Colour at every depth comes out in B, G, R order, the alpha of an opaque
+// RGBA file dropped: 8- and 16-bit PNG (written by OpenCV's encoder), float
+// TIFF.
+TEST(ReadDPFrameFile, ColourInOpenCvOrderAtEveryDepth) {
+  TempDir dir;
+  const auto pattern = [](int type) {
+    cv::Mat m(3, 5, type);
+    const int channels = m.channels();
+    for (int y = 0; y < m.rows; ++y) {
+      for (int x = 0; x < m.cols; ++x) {
+        for (int c = 0; c < channels; ++c) {
+          const double v = c == 3 ? 255 : 10 * c + 50 * x + 3 * y + 1;
+          if (m.depth() == CV_8U) {
+            m.ptr<uint8_t>(y)[x * channels + c] = static_cast<uint8_t>(v);
+          } else if (m.depth() == CV_16U) {
+            m.ptr<uint16_t>(y)[x * channels + c] =
+                static_cast<uint16_t>(c == 3 ? 65535 : 200 * v);
+          } else {
+            m.ptr<float>(y)[x * channels + c] = static_cast<float>(v / 256);
+          }
+        }
+      }
+    }
+    return m;
+  };
+  for (const auto& [name, type] :
+       std::vector<std::pair<std::string, int>>{{"c8.png", CV_8UC3},
+                                                {"c16.png", CV_16UC3},
+                                                {"a8.png", CV_8UC4},
+                                                {"a16.png", CV_16UC4},
+                                                {"f.tif", CV_32FC3}}) {
+    const cv::Mat written = pattern(type);
+    if (written.depth() == CV_32F) {
+      // OpenCV writes float TIFF in one channel only: OpenImageIO writes
+      // this one, from R, G, B.
+      cv::Mat rgb;
+      cv::cvtColor(written, rgb, cv::COLOR_BGR2RGB);
+      std::unique_ptr<OIIO::ImageOutput> out =
+          OIIO::ImageOutput::create(dir / name);
+      ASSERT_TRUE(out != nullptr);
+      ASSERT_TRUE(out->open(
+          dir / name,
+          OIIO::ImageSpec(rgb.cols, rgb.rows, 3, OIIO::TypeDesc::FLOAT)));
+      ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, rgb.data));
+      ASSERT_TRUE(out->close());
+    } else {
+      ASSERT_TRUE(cv::imwrite(dir / name, written)) << name;
+    }
+    const DPFrameFile file = ReadDPFrameFile(dir / name);
+    cv::Mat expected = written;
+    if (written.channels() == 4) {
+      cv::cvtColor(written, expected, cv::COLOR_BGRA2BGR);
+    }
+    ASSERT_EQ(file.pixels.type(), expected.type()) << name;
+    EXPECT_EQ(cv::norm(file.pixels, expected, cv::NORM_INF), 0) << name;
+  }
+}
+
 TEST(ReadDPFrameFile, FloatFramesAreLinear) {
   TempDir dir;
   cv::Mat grey(5, 7, CV_32FC1);

@@ -42,12 +42,14 @@ DPScaleController::DPScaleController(const ViewBudgetOptions& budget,
                                      const WorkspaceReader* reader,
                                      DPScaleEstimator* estimator,
                                      bool capture_overlays,
-                                     int prefetch_views)
+                                     int prefetch_views,
+                                     bool decode_together)
     : budget_(budget),
       reader_(reader),
       estimator_(estimator),
       capture_overlays_(capture_overlays),
-      prefetch_views_(prefetch_views) {
+      prefetch_views_(prefetch_views),
+      decode_together_(decode_together) {
   DPSFM_CHECK_OPTIONS(budget_, "ViewBudgetOptions");
 }
 
@@ -93,7 +95,8 @@ ScaleRun DPScaleController::Run() {
                      },
                      [estimator](const cv::Size& size) {
                        return estimator->ReduceFrameStripRows(size);
-                     }});
+                     }},
+      decode_together_);
   // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
     const int index = order[k];
@@ -658,14 +661,15 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
             << SelfCalibrationNote(core_options.psf_self_calibration) << ")";
 
   // Step 5: the view loop and the estimate. One thread asked for means no
-  // reading thread either.
+  // reading thread either, and one frame file decoded at a time.
   DPScaleEstimator estimator(core_options, psf.field);
-  DPScaleController controller(
-      options.view_budget,
-      &reader,
-      &estimator,
-      !options.report_path.empty(),
-      core_options.num_threads == 1 ? 0 : options.prefetch_views);
+  const bool one_thread = core_options.num_threads == 1;
+  DPScaleController controller(options.view_budget,
+                               &reader,
+                               &estimator,
+                               !options.report_path.empty(),
+                               one_thread ? 0 : options.prefetch_views,
+                               !one_thread);
   ScaleRun run = controller.Run();
   const DPScaleResult& result = run.result;
   RunTimings& timings = run.timings;

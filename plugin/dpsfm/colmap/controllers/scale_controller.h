@@ -40,12 +40,13 @@ class DPScaleController {
                     const WorkspaceReader* reader,
                     DPScaleEstimator* estimator,
                     bool capture_overlays,
-                    int prefetch_views = 1);
+                    int prefetch_views = 1,
+                    bool decode_together = false);
 
   // Visits views in SpreadViewOrder until the budget's rule stops, then
   // estimates. The next prefetch_views views are read (ViewPrefetcher) while
-  // a view's blur search runs. Throws InputError naming the image for malformed
-  // input.
+  // a view's blur search runs, with decode_together each view's two frame
+  // files at once. Throws InputError naming the image for malformed input.
   ScaleRun Run();
 
  private:
@@ -56,6 +57,7 @@ class DPScaleController {
   DPScaleEstimator* estimator_;
   bool capture_overlays_;
   int prefetch_views_;
+  bool decode_together_;
 };
 
 // The whole run after option parsing: finishing an interrupted commit, the

@@ -12,12 +12,13 @@ namespace {
 
 ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
                                int index,
-                               const FrameReduction& reduction) {
+                               const FrameReduction& reduction,
+                               bool decode_together) {
   colmap::Timer timer;
   timer.Start();
   ViewPrefetcher::Read read;
   try {
-    read.view = reader->LoadView(index, reduction);
+    read.view = reader->LoadView(index, reduction, decode_together);
   } catch (...) {
     read.error = std::current_exception();
   }
@@ -30,11 +31,13 @@ ViewPrefetcher::Read TimedRead(const WorkspaceReader* reader,
 ViewPrefetcher::ViewPrefetcher(const WorkspaceReader* reader,
                                std::vector<int> order,
                                int depth,
-                               FrameReduction reduction)
+                               FrameReduction reduction,
+                               bool decode_together)
     : reader_(reader),
       order_(std::move(order)),
       reduction_(std::move(reduction)),
-      depth_(depth) {
+      depth_(depth),
+      decode_together_(decode_together) {
   if (depth_ < 0) {
     throw std::invalid_argument("prefetch depth must be >= 0");
   }
@@ -54,10 +57,11 @@ void ViewPrefetcher::Launch() {
   const int index = order_[launched_++];
   const WorkspaceReader* reader = reader_;
   const FrameReduction* reduction = &reduction_;
+  const bool together = decode_together_;
   auto promise = std::make_shared<std::promise<Read>>();
   in_flight_.push_back(promise->get_future());
-  pool_->AddTask([reader, index, reduction, promise]() {
-    promise->set_value(TimedRead(reader, index, *reduction));
+  pool_->AddTask([reader, index, reduction, together, promise]() {
+    promise->set_value(TimedRead(reader, index, *reduction, together));
   });
 }
 
@@ -69,7 +73,8 @@ ViewPrefetcher::Read ViewPrefetcher::Next(bool read_on) {
     if (launched_ >= order_.size()) {
       throw std::out_of_range("no more views to read");
     }
-    read = TimedRead(reader_, order_[launched_++], reduction_);
+    read =
+        TimedRead(reader_, order_[launched_++], reduction_, decode_together_);
   } else {
     // Reads held back by Next(false) without Resume() start now.
     if (in_flight_.empty() && launched_ < order_.size()) Launch();

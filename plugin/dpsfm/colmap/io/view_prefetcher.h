@@ -25,11 +25,14 @@ class ViewPrefetcher {
   // ReduceFrame, runs there too), at most `depth` views ahead of the one
   // Next() returned last (so memory holds at most depth + 1 views). depth 0
   // reads in Next() itself. The reader and whatever the reduction uses must
-  // outlive the prefetcher.
+  // outlive the prefetcher. With `decode_together` each view's two frame
+  // files are decoded at once (WorkspaceReader::LoadView), so that a read
+  // the search waits for takes both cores.
   ViewPrefetcher(const WorkspaceReader* reader,
                  std::vector<int> order,
                  int depth,
-                 FrameReduction reduction);
+                 FrameReduction reduction,
+                 bool decode_together = false);
   // Waits for the reads in flight (their views are dropped).
   ~ViewPrefetcher();
 
@@ -59,6 +62,7 @@ class ViewPrefetcher {
   const std::vector<int> order_;
   const FrameReduction reduction_;
   const int depth_;
+  const bool decode_together_;
   size_t launched_ = 0;
   std::unique_ptr<colmap::ThreadPool> pool_;
   // The reads in flight. Each task fills a promise and returns nothing:

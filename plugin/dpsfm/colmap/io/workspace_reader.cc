@@ -372,7 +372,8 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
 }
 
 DPView WorkspaceReader::LoadView(size_t index,
-                                 const FrameReduction& reduction) const {
+                                 const FrameReduction& reduction,
+                                 bool decode_together) const {
   const ViewSource& source = sources_.at(index);
   const colmap::Image& image = reconstruction_.Image(source.image_id);
   const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
@@ -380,7 +381,8 @@ DPView WorkspaceReader::LoadView(size_t index,
   const DPFrames frames = LoadDPFrames(source.dp,
                                        options_.swap_dp_views,
                                        ParseDPEncoding(options_.dp_encoding),
-                                       reduction);
+                                       reduction,
+                                       decode_together);
   // A dense workspace's model is undistorted; the DP frames keep the
   // geometry of the original images. With the original camera known (from
   // the database) and different, depths are mapped through both cameras.

@@ -77,8 +77,11 @@ class WorkspaceReader {
   // naming the file for unreadable or inconsistent data. With a `reduction`
   // (DPScaleEstimator::ReduceFrame), each frame is reduced as soon as it is
   // decoded (LoadDPFrames) and the view records the frames' size as
-  // decoded (DPView::frame_size).
-  DPView LoadView(size_t index, const FrameReduction& reduction = {}) const;
+  // decoded (DPView::frame_size). With `decode_together` the two frame files
+  // are decoded at once (LoadDPFrames).
+  DPView LoadView(size_t index,
+                  const FrameReduction& reduction = {},
+                  bool decode_together = false) const;
 
  private:
   std::string DepthMapPath(const std::string& image_name) const;
