@@ -24,7 +24,7 @@
 #    frames of the same sensor), when that scene's profile has been made.
 # Each run's figures are the median of DPSFM_COST_RUNS runs (3): decode
 # (the report's `read`: reading and decoding the frames, in the read-ahead
-# thread), blur search, profile fit, linear, intensity (the final
+# thread, a view's two files at once: wall time), blur search, profile fit, linear, intensity (the final
 # estimate's), the view budget's checkpoints (their estimates in sum), the
 # estimate's total (the report's `total`), after it (wall minus total:
 # plots, report, start-up), wall, peak RSS, and total / decode. Prints
@@ -286,8 +286,10 @@ if before_dir:
             for k, key in enumerate(["total", "read", "cpu"]):
                 s[k] += mb[key]
                 s[k + 3] += ma[key]
+    # The decode column is the reads' wall time: a change in how frames are
+    # read moves it, so the after total is also set against before's reads.
     for path, s in group_sums.items():
-        print("\nAccuracy scenes, %s, in sum: total %.1f -> %.1f s (%+.1f %%), %.1fx -> %.1fx decode (%.1f -> %.1f s), CPU %.1f -> %.1f s"
-              % (path, s[0], s[3], 100 * (s[3] / s[0] - 1), s[0] / s[1], s[3] / s[4], s[1], s[4], s[2], s[5]))
+        print("\nAccuracy scenes, %s, in sum: total %.1f -> %.1f s (%+.1f %%), %.1fx -> %.1fx decode (%.1f -> %.1f s; after's total %.1fx before's decode), CPU %.1f -> %.1f s"
+              % (path, s[0], s[3], 100 * (s[3] / s[0] - 1), s[0] / s[1], s[3] / s[4], s[1], s[4], s[3] / s[1], s[2], s[5]))
 PY
 log "cost benchmark took $((SECONDS - start)) s of runs"
