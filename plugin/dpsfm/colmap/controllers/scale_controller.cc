@@ -83,8 +83,8 @@ ScaleRun DPScaleController::Run() {
   // decides (the run may end there: with one view read ahead, the default,
   // none is read for a checkpoint that ends it); each frame reduced to the
   // working resolution as soon as it is decoded (a strip at a time where it
-  // can be), so a read holds one frame as decoded at a time and a view
-  // waiting no more than the search needs.
+  // can be), so a read holds a view's frames as decoded (both at once with
+  // decode_together) and a view waiting no more than the search needs.
   const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
