@@ -279,9 +279,10 @@ DPFrames LoadDPFrames(const DPFramePaths& paths,
   const std::string& other_path = from_sum ? paths.sum : paths.right;
   DPFrames frames;
   // The left view first, brought to linear light by its own encoding (the
-  // other file must agree, below) and reduced before the other is read;
-  // with a sum frame it is needed at full size for the subtraction. The
-  // other file's errors come after the left's either way.
+  // other file must agree, below) and reduced before the other is read (or
+  // while it is decoded, with decode_together); with a sum frame it is
+  // needed at full size for the subtraction. The other file's errors come
+  // after the left's either way.
   std::future<DPFrameFile> other;
   if (decode_together) {
     other = std::async(std::launch::async, ReadDPFrameFile, other_path);
