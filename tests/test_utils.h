@@ -178,5 +178,24 @@ inline void CopyFolderFiles(const std::string& from, const std::string& to) {
   }
 }
 
+// The real DP captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the
+// source tree, else /work/shared/realdp; the first that holds
+// canon_r6m2_rf50/, or "" when none does.
+inline std::string RealDpDir() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("DPSFM_REALDP_DIR")) {
+    candidates.push_back(env);
+  }
+  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/realdp");
+  candidates.push_back("/work/shared/realdp");
+  for (const std::string& c : candidates) {
+    if (std::filesystem::is_directory(std::filesystem::path(c) /
+                                      "canon_r6m2_rf50")) {
+      return std::filesystem::canonical(c).string();
+    }
+  }
+  return "";
+}
+
 }  // namespace test
 }  // namespace dpsfm

@@ -75,25 +75,6 @@ inline void ExpectDepthMapScaled(const std::string& before_path,
   }
 }
 
-// The real DP captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the
-// source tree, else /work/shared/realdp; the first that holds
-// canon_r6m2_rf50/, or "" when none does.
-inline std::string RealDpDir() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("DPSFM_REALDP_DIR")) {
-    candidates.push_back(env);
-  }
-  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/realdp");
-  candidates.push_back("/work/shared/realdp");
-  for (const std::string& c : candidates) {
-    if (std::filesystem::is_directory(std::filesystem::path(c) /
-                                      "canon_r6m2_rf50")) {
-      return std::filesystem::canonical(c).string();
-    }
-  }
-  return "";
-}
-
 inline nlohmann::json ReadJson(const std::string& path) {
   std::ifstream file(path);
   EXPECT_TRUE(file.good()) << path;

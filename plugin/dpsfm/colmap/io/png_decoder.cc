@@ -1,0 +1,259 @@
+#include "dpsfm/colmap/io/png_decoder.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include <libdeflate.h>
+
+namespace dpsfm {
+namespace {
+
+constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
+// libpng's default limits on either side (PNG_USER_WIDTH_MAX and
+// PNG_USER_HEIGHT_MAX); larger files are left to OpenImageIO.
+constexpr uint32_t kMaxSide = 1000000;
+
+uint32_t BigEndian32(const unsigned char* p) {
+  return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) |
+         (uint32_t{p[2]} << 8) | uint32_t{p[3]};
+}
+
+// What the chunks say: the header's fields and where the compressed pixel
+// data lie (the IDAT chunks' payloads, in order).
+struct PngLayout {
+  int width = 0;
+  int height = 0;
+  int bytes_per_sample = 0;                     // 1 or 2
+  int channels = 0;                             // 1 (grey) or 3 (RGB)
+  std::vector<std::pair<size_t, size_t>> idat;  // offset, length
+};
+
+bool ReadHeader(const unsigned char* data, PngLayout* layout) {
+  const uint32_t width = BigEndian32(data);
+  const uint32_t height = BigEndian32(data + 4);
+  const int bit_depth = data[8];
+  const int colour_type = data[9];
+  const int compression = data[10];
+  const int filter = data[11];
+  const int interlace = data[12];
+  if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide) {
+    return false;
+  }
+  if ((bit_depth != 8 && bit_depth != 16) ||
+      (colour_type != 0 && colour_type != 2) || compression != 0 ||
+      filter != 0 || interlace != 0) {
+    return false;
+  }
+  layout->width = static_cast<int>(width);
+  layout->height = static_cast<int>(height);
+  layout->bytes_per_sample = bit_depth / 8;
+  layout->channels = colour_type == 2 ? 3 : 1;
+  return true;
+}
+
+// Walks the chunks up to IEND, checking every CRC. False for anything this
+// reader leaves to OpenImageIO: a palette, transparency, a critical chunk it
+// does not know, IDAT chunks apart, or any chunk out of place or damaged.
+bool ReadLayout(const std::string& bytes, PngLayout* layout) {
+  const auto* s = reinterpret_cast<const unsigned char*>(bytes.data());
+  if (bytes.size() < 8 || bytes.compare(0, 8, kSignature, 8) != 0) {
+    return false;
+  }
+  size_t at = 8;
+  bool header = false;
+  bool previous_idat = false;
+  while (at + 12 <= bytes.size()) {
+    const uint32_t length = BigEndian32(s + at);
+    if (length > bytes.size() - at - 12) return false;
+    const unsigned char* type = s + at + 4;
+    const unsigned char* data = s + at + 8;
+    if (libdeflate_crc32(0, type, length + 4) != BigEndian32(data + length)) {
+      return false;
+    }
+    const std::string name(reinterpret_cast<const char*>(type), 4);
+    if (!header) {
+      if (name != "IHDR" || length != 13 || !ReadHeader(data, layout)) {
+        return false;
+      }
+      header = true;
+    } else if (name == "IDAT") {
+      if (!layout->idat.empty() && !previous_idat) return false;
+      layout->idat.emplace_back(at + 8, length);
+    } else if (name == "IEND") {
+      return !layout->idat.empty();
+    } else if ((type[0] & 0x20) == 0 || name == "tRNS") {
+      return false;  // critical (PLTE, a second IHDR, unknown) or tRNS
+    }
+    previous_idat = name == "IDAT";
+    at += 12 + static_cast<size_t>(length);
+  }
+  return false;  // no IEND
+}
+
+// The IDAT payloads moved together at the first one's place: the zlib stream
+// they split. Returns its length.
+size_t GatherStream(const PngLayout& layout, std::string* bytes) {
+  char* base = &(*bytes)[0];
+  size_t end = layout.idat.front().first;
+  for (const auto& [offset, length] : layout.idat) {
+    std::memmove(base + end, base + offset, length);
+    end += length;
+  }
+  return end - layout.idat.front().first;
+}
+
+// The Paeth predictor (PNG 1.2, section 6.6) of a byte from its left, upper
+// and upper-left neighbours, written without branches.
+inline uint8_t Paeth(int a, int b, int c) {
+  const int pa = std::abs(b - c);
+  const int pb = std::abs(a - c);
+  const int pc = std::abs(a + b - 2 * c);
+  const int ab = pb < pa ? b : a;
+  return static_cast<uint8_t>(pc < std::min(pa, pb) ? c : ab);
+}
+
+// Reverses one row's filter (PNG 1.2, section 9) in place, given the row
+// above as unfiltered (zeros above the first). False for an unknown filter.
+// `Bpp` (bytes per pixel) is a constant so that each byte's dependence on
+// the one a pixel before it stays in registers.
+template <int Bpp>
+bool Unfilter(int filter,
+              size_t row_bytes,
+              const uint8_t* prior,
+              uint8_t* row) {
+  switch (filter) {
+    case 0:
+      return true;
+    case 1: {  // Sub, a pixel at a time with the one before in registers
+      uint8_t left[Bpp];
+      std::memcpy(left, row, Bpp);
+      for (size_t i = Bpp; i < row_bytes; i += Bpp) {
+        for (int c = 0; c < Bpp; ++c) left[c] = row[i + c] += left[c];
+      }
+      return true;
+    }
+    case 2:  // Up
+      for (size_t i = 0; i < row_bytes; ++i) row[i] += prior[i];
+      return true;
+    case 3:  // Average
+      for (int i = 0; i < Bpp; ++i) row[i] += prior[i] >> 1;
+      for (size_t i = Bpp; i < row_bytes; ++i) {
+        row[i] += (row[i - Bpp] + prior[i]) >> 1;
+      }
+      return true;
+    case 4: {  // Paeth, with the left and upper-left pixels in registers
+      int left[Bpp];
+      int upper_left[Bpp];
+      for (int c = 0; c < Bpp; ++c) {
+        left[c] = row[c] += prior[c];
+        upper_left[c] = prior[c];
+      }
+      for (size_t i = Bpp; i < row_bytes; i += Bpp) {
+        for (int c = 0; c < Bpp; ++c) {
+          const int upper = prior[i + c];
+          left[c] = row[i + c] += Paeth(left[c], upper, upper_left[c]);
+          upper_left[c] = upper;
+        }
+      }
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
+// One unfiltered row in PNG's order (big-endian samples, R, G, B) written as
+// OpenCV holds it (native samples, B, G, R) at `out`, which may lie before
+// `row` in the same buffer, never after it: each pixel is read whole before
+// it is written, and written no further than where the next one starts.
+template <typename T, int Channels>
+void StoreRow(const uint8_t* row, int width, uint8_t* out) {
+  constexpr int kBytes = Channels * static_cast<int>(sizeof(T));
+  for (int x = 0; x < width; ++x, row += kBytes, out += kBytes) {
+    T v[Channels];
+    for (int c = 0; c < Channels; ++c) {
+      v[c] = sizeof(T) == 1
+                 ? row[c]
+                 : static_cast<T>((row[2 * c] << 8) | row[2 * c + 1]);
+    }
+    if (Channels == 3) std::swap(v[0], v[2]);
+    std::memcpy(out, v, kBytes);
+  }
+}
+
+// Unfilters the inflated rows (each a filter byte, then the row) and stores
+// each at its place in the frame, from the buffer's start. False for an
+// unknown filter.
+template <typename T, int Channels>
+bool UnfilterRows(int width, int height, uint8_t* buffer) {
+  constexpr int kBpp = Channels * static_cast<int>(sizeof(T));
+  const size_t row_bytes = static_cast<size_t>(width) * kBpp;
+  std::vector<uint8_t> prior(row_bytes, 0);
+  for (int y = 0; y < height; ++y) {
+    uint8_t* row = buffer + y * (row_bytes + 1);
+    if (!Unfilter<kBpp>(row[0], row_bytes, prior.data(), row + 1)) {
+      return false;
+    }
+    std::memcpy(prior.data(), row + 1, row_bytes);
+    StoreRow<T, Channels>(row + 1, width, buffer + y * row_bytes);
+  }
+  return true;
+}
+
+bool UnfilterFrame(const PngLayout& layout, uint8_t* buffer) {
+  const int w = layout.width;
+  const int h = layout.height;
+  if (layout.bytes_per_sample == 1) {
+    return layout.channels == 1 ? UnfilterRows<uint8_t, 1>(w, h, buffer)
+                                : UnfilterRows<uint8_t, 3>(w, h, buffer);
+  }
+  return layout.channels == 1 ? UnfilterRows<uint16_t, 1>(w, h, buffer)
+                              : UnfilterRows<uint16_t, 3>(w, h, buffer);
+}
+
+}  // namespace
+
+PngDecoding DecodePng(std::string* bytes, cv::Mat* pixels) {
+  PngLayout layout;
+  if (!ReadLayout(*bytes, &layout)) return PngDecoding::kNotDecoded;
+  const size_t row_bytes = static_cast<size_t>(layout.width) * layout.channels *
+                           layout.bytes_per_sample;
+  const size_t stream_bytes = layout.height * (row_bytes + 1);
+
+  // The frame's own matrix is the inflate buffer (with the rows' filter
+  // bytes, a few rows more than the frame): each row is unfiltered where it
+  // was inflated and stored at its place in the frame, which never lies
+  // after it, so a frame is held once.
+  const int type = CV_MAKETYPE(layout.bytes_per_sample == 1 ? CV_8U : CV_16U,
+                               layout.channels);
+  const int spare_rows =
+      static_cast<int>((layout.height + row_bytes - 1) / row_bytes);
+  cv::Mat storage(layout.height + spare_rows, layout.width, type);
+
+  const size_t compressed = GatherStream(layout, bytes);
+  std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)>
+      decompressor(libdeflate_alloc_decompressor(),
+                   libdeflate_free_decompressor);
+  size_t inflated = 0;
+  const libdeflate_result result =
+      libdeflate_zlib_decompress(decompressor.get(),
+                                 bytes->data() + layout.idat.front().first,
+                                 compressed,
+                                 storage.data,
+                                 stream_bytes,
+                                 &inflated);
+  std::string().swap(*bytes);
+  if (result != LIBDEFLATE_SUCCESS || inflated != stream_bytes ||
+      !UnfilterFrame(layout, storage.data)) {
+    return PngDecoding::kFailed;
+  }
+  *pixels = storage.rowRange(0, layout.height);
+  return PngDecoding::kDecoded;
+}
+
+}  // namespace dpsfm

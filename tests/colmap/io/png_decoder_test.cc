@@ -1,0 +1,366 @@
+// The libdeflate PNG reader against an independent truth: frames filtered
+// and compressed here (zlib, with the PNG filters written forwards) must come
+// back as the pixels they were made from, and as OpenImageIO (libpng) decodes
+// the same bytes; every file it does not take must be left as it was.
+#include "dpsfm/colmap/io/png_decoder.h"
+
+#include <zlib.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "dpsfm/colmap/io/dp_images.h"
+#include "dpsfm/colmap/util/input_error.h"
+#include "tests/test_utils.h"
+
+namespace dpsfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string BigEndian32(uint32_t v) {
+  return {static_cast<char>(v >> 24),
+          static_cast<char>(v >> 16),
+          static_cast<char>(v >> 8),
+          static_cast<char>(v)};
+}
+
+std::string Chunk(const std::string& type, const std::string& data) {
+  const std::string body = type + data;
+  const uint32_t crc =
+      crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size());
+  return BigEndian32(data.size()) + body + BigEndian32(crc);
+}
+
+std::string Header(
+    int width, int height, int bit_depth, int colour_type, int interlace = 0) {
+  std::string data = BigEndian32(width) + BigEndian32(height);
+  data += static_cast<char>(bit_depth);
+  data += static_cast<char>(colour_type);
+  data += std::string(2, '\0');  // compression, filter method
+  data += static_cast<char>(interlace);
+  return Chunk("IHDR", data);
+}
+
+std::string Compress(const std::string& raw) {
+  uLongf size = compressBound(raw.size());
+  std::string out(size, '\0');
+  EXPECT_EQ(compress2(reinterpret_cast<Bytef*>(&out[0]),
+                      &size,
+                      reinterpret_cast<const Bytef*>(raw.data()),
+                      raw.size(),
+                      6),
+            Z_OK);
+  out.resize(size);
+  return out;
+}
+
+// The PNG filters as an encoder applies them (PNG 1.2, section 6), on rows
+// of bytes in file order; the predictor of the Paeth filter as the
+// specification writes it.
+int PaethPredictor(int a, int b, int c) {
+  const int p = a + b - c;
+  const int pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+  if (pa <= pb && pa <= pc) return a;
+  if (pb <= pc) return b;
+  return c;
+}
+
+std::string FilterRow(int filter,
+                      int bpp,
+                      const std::string& row,
+                      const std::string& prior) {
+  std::string out(row.size(), '\0');
+  for (size_t i = 0; i < row.size(); ++i) {
+    const int x = static_cast<uint8_t>(row[i]);
+    const int a =
+        i >= static_cast<size_t>(bpp) ? static_cast<uint8_t>(row[i - bpp]) : 0;
+    const int b = static_cast<uint8_t>(prior[i]);
+    const int c = i >= static_cast<size_t>(bpp)
+                      ? static_cast<uint8_t>(prior[i - bpp])
+                      : 0;
+    int predicted = 0;
+    if (filter == 1) predicted = a;
+    if (filter == 2) predicted = b;
+    if (filter == 3) predicted = (a + b) / 2;
+    if (filter == 4) predicted = PaethPredictor(a, b, c);
+    out[i] = static_cast<char>((x - predicted) & 0xFF);
+  }
+  return out;
+}
+
+// A frame (CV_8U or CV_16U, grey or B, G, R) in PNG's order: rows of
+// big-endian samples, R, G, B.
+std::vector<std::string> RowsInFileOrder(const cv::Mat& frame) {
+  std::vector<std::string> rows;
+  for (int y = 0; y < frame.rows; ++y) {
+    std::string row;
+    for (int x = 0; x < frame.cols; ++x) {
+      for (int k = 0; k < frame.channels(); ++k) {
+        const int i = x * frame.channels() + frame.channels() - 1 - k;
+        if (frame.depth() == CV_8U) {
+          row += static_cast<char>(frame.ptr<uint8_t>(y)[i]);
+        } else {
+          const uint16_t v = frame.ptr<uint16_t>(y)[i];
+          row += static_cast<char>(v >> 8);
+          row += static_cast<char>(v & 0xFF);
+        }
+      }
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+struct PngParts {
+  std::string before_idat;  // ancillary chunks after IHDR
+  int filter = -1;          // one filter for every row; -1: row y gets y % 5
+  size_t idat_size = 97;    // the compressed stream cut into chunks this big
+  std::string after_idat;   // chunks between the last IDAT and IEND
+};
+
+// The zlib stream of a frame's filtered rows (each a filter byte, then the
+// row).
+std::string FilteredStream(const cv::Mat& frame, int filter) {
+  const std::vector<std::string> rows = RowsInFileOrder(frame);
+  const int bpp = static_cast<int>(frame.elemSize());
+  std::string raw;
+  std::string prior(rows[0].size(), '\0');
+  for (size_t y = 0; y < rows.size(); ++y) {
+    const int f = filter >= 0 ? filter : static_cast<int>(y % 5);
+    raw += static_cast<char>(f);
+    raw += FilterRow(f, bpp, rows[y], prior);
+    prior = rows[y];
+  }
+  return Compress(raw);
+}
+
+std::string IdatChunks(const std::string& stream, size_t size) {
+  std::string chunks = Chunk("IDAT", "");  // an empty one first
+  for (size_t at = 0; at < stream.size(); at += size) {
+    chunks += Chunk("IDAT", stream.substr(at, size));
+  }
+  return chunks;
+}
+
+std::string EncodePng(const cv::Mat& frame, const PngParts& parts = {}) {
+  const int depth = frame.depth() == CV_8U ? 8 : 16;
+  const int colour_type = frame.channels() == 3 ? 2 : 0;
+  return std::string("\x89PNG\r\n\x1a\n", 8) +
+         Header(frame.cols, frame.rows, depth, colour_type) +
+         parts.before_idat +
+         IdatChunks(FilteredStream(frame, parts.filter), parts.idat_size) +
+         parts.after_idat + Chunk("IEND", "");
+}
+
+cv::Mat RandomFrame(
+    int width, int height, int depth, int channels, unsigned seed) {
+  cv::Mat frame(height, width, CV_MAKETYPE(depth, channels));
+  cv::RNG rng(seed);
+  rng.fill(frame, cv::RNG::UNIFORM, 0, depth == CV_8U ? 256 : 65536);
+  // Smooth runs too, so that the filters' predictions are mostly right.
+  if (height > 2) frame.row(1).copyTo(frame.row(2));
+  return frame;
+}
+
+// OpenImageIO's decode of the bytes, colour in B, G, R order; empty if it
+// fails.
+cv::Mat DecodedByOpenImageIO(const std::string& bytes) {
+  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
+  std::unique_ptr<OIIO::ImageInput> input =
+      OIIO::ImageInput::open("frame.png", nullptr, &memory);
+  if (!input) {
+    OIIO::geterror();
+    return cv::Mat();
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  const int depth = spec.format == OIIO::TypeDesc::UINT8 ? CV_8U : CV_16U;
+  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels));
+  if (!input->read_image(
+          0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, pixels.data)) {
+    input->geterror();
+    return cv::Mat();
+  }
+  if (spec.nchannels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
+  return pixels;
+}
+
+bool SameBits(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) return false;
+  for (int y = 0; y < a.rows; ++y) {
+    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
+      return false;
+    }
+  }
+  return true;
+}
+
+TEST(DecodePng, EveryFilterAtEveryDepthAsMadeAndAsOpenImageIO) {
+  const std::vector<cv::Size> sizes = {{1, 1}, {7, 5}, {33, 21}};
+  unsigned seed = 1;
+  for (const int depth : {CV_8U, CV_16U}) {
+    for (const int channels : {1, 3}) {
+      for (const cv::Size& size : sizes) {
+        for (const int filter : {-1, 0, 1, 2, 3, 4}) {
+          const cv::Mat frame =
+              RandomFrame(size.width, size.height, depth, channels, seed++);
+          PngParts parts;
+          parts.filter = filter;
+          // Chunks libpng reads (gamma, significant bits, text) and leaves
+          // the pixels alone for.
+          parts.before_idat = Chunk("gAMA", BigEndian32(45455)) +
+                              Chunk("sBIT", std::string(channels, '\x0c')) +
+                              Chunk("tEXt", std::string("Software\0test", 13));
+          parts.after_idat = Chunk("tEXt", std::string("Comment\0x", 9));
+          parts.idat_size = 1 + seed % 50;
+          std::string bytes = EncodePng(frame, parts);
+          const cv::Mat oiio = DecodedByOpenImageIO(bytes);
+          cv::Mat pixels;
+          SCOPED_TRACE(::testing::Message()
+                       << "depth " << depth << " channels " << channels << " "
+                       << size << " filter " << filter);
+          ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
+          EXPECT_TRUE(bytes.empty());
+          EXPECT_TRUE(SameBits(pixels, frame));
+          EXPECT_TRUE(SameBits(pixels, oiio));
+        }
+      }
+    }
+  }
+}
+
+TEST(DecodePng, OneLargeIdatChunkAndWideRows) {
+  // One IDAT chunk, as some writers make them, and rows longer than the
+  // frame is high (a single spare row holds the filter bytes).
+  const cv::Mat frame = RandomFrame(3001, 2, CV_16U, 3, 7);
+  PngParts parts;
+  parts.idat_size = 1 << 30;
+  std::string bytes = EncodePng(frame, parts);
+  cv::Mat pixels;
+  ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
+  EXPECT_TRUE(SameBits(pixels, frame));
+  // And a frame much higher than wide: one spare row per row of filter
+  // bytes the frame's own rows cannot hold.
+  const cv::Mat tall = RandomFrame(1, 300, CV_8U, 1, 8);
+  bytes = EncodePng(tall);
+  ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
+  EXPECT_TRUE(SameBits(pixels, tall));
+}
+
+TEST(DecodePng, LeavesEveryOtherFileAsItWas) {
+  const cv::Mat frame = RandomFrame(9, 6, CV_8U, 3, 3);
+  const std::string signature("\x89PNG\r\n\x1a\n", 8);
+  const std::string idat = IdatChunks(FilteredStream(frame, -1), 40);
+  const std::string end = Chunk("IEND", "");
+  std::string bad_crc = Chunk("tEXt", std::string("a\0b", 3));
+  bad_crc[bad_crc.size() - 1] ^= 1;
+  std::string bad_idat_crc = Chunk("IDAT", Compress(std::string(61, '\0')));
+  bad_idat_crc[bad_idat_crc.size() - 1] ^= 1;
+  const std::string header = Header(9, 6, 8, 2);
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"interlaced", signature + Header(9, 6, 8, 2, 1) + idat + end},
+      {"palette",
+       signature + Header(9, 6, 8, 3) + Chunk("PLTE", std::string(9, '\x10')) +
+           idat + end},
+      {"4-bit grey", signature + Header(9, 6, 4, 0) + idat + end},
+      {"RGBA", signature + Header(9, 6, 8, 6) + idat + end},
+      {"grey and alpha", signature + Header(9, 6, 16, 4) + idat + end},
+      {"transparent colour",
+       signature + header + Chunk("tRNS", std::string(6, '\0')) + idat + end},
+      {"suggested palette",
+       signature + header + Chunk("PLTE", std::string(9, '\x10')) + idat + end},
+      {"unknown critical chunk",
+       signature + header + Chunk("ABCD", "x") + idat + end},
+      {"ancillary CRC wrong", signature + header + bad_crc + idat + end},
+      {"IDAT CRC wrong", signature + header + bad_idat_crc + end},
+      {"IDAT chunks apart",
+       signature + header + Chunk("IDAT", "") +
+           Chunk("tEXt", std::string("a\0b", 3)) + idat + end},
+      {"no IEND", signature + header + idat},
+      {"no IDAT", signature + header + end},
+      {"IHDR not first", signature + Chunk("tEXt", "a") + header + idat + end},
+      {"truncated", (signature + header + idat).substr(0, 60)},
+      {"zero width", signature + Header(0, 6, 8, 2) + idat + end},
+      {"JPEG", std::string("\xFF\xD8\xFF\xE0", 4) + std::string(60, '\0')},
+      {"empty", ""},
+  };
+  for (const auto& [name, file] : files) {
+    std::string bytes = file;
+    cv::Mat pixels;
+    EXPECT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kNotDecoded) << name;
+    EXPECT_EQ(bytes, file) << name;
+    EXPECT_TRUE(pixels.empty()) << name;
+  }
+}
+
+TEST(DecodePng, CorruptPixelDataIsLeftToOpenImageIOToWord) {
+  const cv::Mat frame = RandomFrame(9, 6, CV_16U, 1, 4);
+  const std::string signature("\x89PNG\r\n\x1a\n", 8);
+  const std::string header = Header(9, 6, 16, 0);
+  const std::string end = Chunk("IEND", "");
+  const int row_bytes = 9 * 2;
+  std::string unknown_filter(6 * (row_bytes + 1), '\0');
+  unknown_filter[3 * (row_bytes + 1)] = 5;
+  std::string stream = FilteredStream(frame, 2);
+  std::string damaged = stream;
+  damaged[damaged.size() / 2] ^= 0x55;
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"unknown filter", Compress(unknown_filter)},
+      {"a row short", Compress(std::string(5 * (row_bytes + 1), '\0'))},
+      {"a row too many", Compress(std::string(7 * (row_bytes + 1), '\0'))},
+      {"stream damaged", damaged},
+      {"stream cut", stream.substr(0, stream.size() - 6)},
+  };
+  test::TempDir dir;
+  for (const auto& [name, compressed] : files) {
+    const std::string file =
+        signature + header + IdatChunks(compressed, 30) + end;
+    std::string bytes = file;
+    cv::Mat pixels;
+    EXPECT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kFailed) << name;
+    EXPECT_TRUE(pixels.empty()) << name;
+    // ReadDPFrameFile makes of it what OpenImageIO does: its pixels where
+    // it decodes the file, an error naming the file where it does not.
+    const fs::path path = fs::path(dir.path()) / "frame.png";
+    test::WriteTextFile(path.string(), file);
+    const cv::Mat oiio = DecodedByOpenImageIO(file);
+    if (oiio.empty()) {
+      EXPECT_THROW(ReadDPFrameFile(path.string()), InputError) << name;
+    } else {
+      EXPECT_TRUE(SameBits(ReadDPFrameFile(path.string()).pixels, oiio))
+          << name;
+    }
+  }
+}
+
+TEST(DecodePng, RealCapturesAsOpenImageIO) {
+  const std::string real = test::RealDpDir();
+  if (real.empty()) GTEST_SKIP() << "no real DP captures (../shared/realdp)";
+  int frames = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(real)) {
+    if (entry.path().extension() != ".png" || frames >= 8) continue;
+    std::string bytes = test::ReadTextFile(entry.path().string());
+    const cv::Mat oiio = DecodedByOpenImageIO(bytes);
+    cv::Mat pixels;
+    ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded)
+        << entry.path();
+    EXPECT_TRUE(SameBits(pixels, oiio)) << entry.path();
+    ++frames;
+  }
+  EXPECT_EQ(frames, 8);
+}
+
+}  // namespace
+}  // namespace dpsfm
