@@ -30,6 +30,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../tests/core/synthetic_dp.h"
+#include "bench_timing.h"
 #include "dpsfm/core/blur/blur_estimation.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/view_budget.h"
@@ -43,11 +44,7 @@ double PeakMemoryMb() {
   return usage.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-double Now() {
-  return std::chrono::duration<double>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+using dpsfm::bench::Now;
 
 // PatchBlurEstimator on its own: setup time for 111x111 patches at |r| <= 20
 // (default BlurEstimationOptions), and the mean Estimate time over 8 patches

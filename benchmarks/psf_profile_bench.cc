@@ -22,6 +22,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "../tests/core/synthetic_dp.h"
+#include "bench_timing.h"
 #include "dpsfm/core/calibration/psf_calibration.h"
 #include "dpsfm/core/calibration/shape_calibration.h"
 #include "dpsfm/core/calibration/target_calibration.h"
@@ -34,11 +35,7 @@ using namespace dpsfm;
 constexpr int kWidth = 640;
 constexpr int kHeight = 480;
 
-double Now() {
-  return std::chrono::duration<double>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+using bench::Now;
 
 // A simulated sensor: a profile, or two blended across the frame (the split
 // changes linearly from `psf` at the left edge to `right_edge` at the right).

@@ -17,6 +17,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "bench_timing.h"
 #include "dpsfm/core/optics/kernel_grid.h"
 #include "dpsfm/core/optics/real_dft.h"
 
@@ -24,23 +25,16 @@ namespace {
 
 using namespace dpsfm;
 
-double Now() {
-  return std::chrono::duration<double>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+using bench::Now;
 
 // Microseconds per call of `work`, the median of `rounds` rounds.
 template <typename Work>
 double MedianMicroseconds(int rounds, int calls, Work work) {
-  std::vector<double> us;
-  for (int r = 0; r < rounds; ++r) {
+  return bench::MedianOf(rounds, [&] {
     const double start = Now();
     for (int i = 0; i < calls; ++i) work();
-    us.push_back(1e6 * (Now() - start) / calls);
-  }
-  std::nth_element(us.begin(), us.begin() + rounds / 2, us.end());
-  return us[rounds / 2];
+    return 1e6 * (Now() - start) / calls;
+  });
 }
 
 const char* PassName(RealDft::ColumnPass pass) {
