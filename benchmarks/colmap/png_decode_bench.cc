@@ -23,8 +23,8 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
+#include "../../tests/colmap/io/frame_oracle.h"
 #include "../bench_timing.h"
 #include "dpsfm/colmap/io/png_decoder.h"
 
@@ -73,34 +73,6 @@ std::string EncodeWithFilter(const cv::Mat& frame, int filter) {
   bytes << file.rdbuf();
   std::filesystem::remove(path);
   return bytes.str();
-}
-
-// OpenImageIO's decode from memory, colour in B, G, R order, as the plugin
-// decoded every frame before the PNG reader.
-cv::Mat DecodeWithOpenImageIO(const std::string& bytes) {
-  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
-  std::unique_ptr<OIIO::ImageInput> input =
-      OIIO::ImageInput::open("frame.png", nullptr, &memory);
-  if (!input) return cv::Mat();
-  const OIIO::ImageSpec& spec = input->spec();
-  const int depth = spec.format == OIIO::TypeDesc::UINT8 ? CV_8U : CV_16U;
-  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels));
-  if (!input->read_image(
-          0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, pixels.data)) {
-    return cv::Mat();
-  }
-  if (spec.nchannels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
-  return pixels;
-}
-
-bool SameBits(const cv::Mat& a, const cv::Mat& b) {
-  if (a.empty() || a.size() != b.size() || a.type() != b.type()) return false;
-  for (int y = 0; y < a.rows; ++y) {
-    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
-      return false;
-    }
-  }
-  return true;
 }
 
 struct Filter {
@@ -162,7 +134,7 @@ int main(int argc, char** argv) {
       });
       const double theirs_s = bench::MedianOf(rounds, [&] {
         const double start = Now();
-        theirs = DecodeWithOpenImageIO(file);
+        theirs = test::DecodedByOpenImageIO(file);
         return Now() - start;
       });
       std::printf("| %s | %s | %.3f | %.3f | %.2f | %s |\n",
@@ -171,7 +143,7 @@ int main(int argc, char** argv) {
                   ours_s,
                   theirs_s,
                   theirs_s / ours_s,
-                  SameBits(ours, theirs) ? "yes" : "NO");
+                  test::SameBits(ours, theirs) ? "yes" : "NO");
     }
   }
   return 0;

@@ -16,13 +16,12 @@
 #include <utility>
 #include <vector>
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
-#include <opencv2/imgproc.hpp>
+#include <opencv2/core.hpp>
 
 #include "dpsfm/colmap/io/dp_images.h"
 #include "dpsfm/colmap/util/input_error.h"
+#include "tests/colmap/io/frame_oracle.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -175,38 +174,6 @@ cv::Mat RandomFrame(
   return frame;
 }
 
-// OpenImageIO's decode of the bytes, colour in B, G, R order; empty if it
-// fails.
-cv::Mat DecodedByOpenImageIO(const std::string& bytes) {
-  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
-  std::unique_ptr<OIIO::ImageInput> input =
-      OIIO::ImageInput::open("frame.png", nullptr, &memory);
-  if (!input) {
-    OIIO::geterror();
-    return cv::Mat();
-  }
-  const OIIO::ImageSpec& spec = input->spec();
-  const int depth = spec.format == OIIO::TypeDesc::UINT8 ? CV_8U : CV_16U;
-  cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels));
-  if (!input->read_image(
-          0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, pixels.data)) {
-    input->geterror();
-    return cv::Mat();
-  }
-  if (spec.nchannels == 3) cv::cvtColor(pixels, pixels, cv::COLOR_RGB2BGR);
-  return pixels;
-}
-
-bool SameBits(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size() || a.type() != b.type()) return false;
-  for (int y = 0; y < a.rows; ++y) {
-    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
-      return false;
-    }
-  }
-  return true;
-}
-
 TEST(DecodePng, EveryFilterAtEveryDepthAsMadeAndAsOpenImageIO) {
   const std::vector<cv::Size> sizes = {{1, 1}, {7, 5}, {33, 21}};
   unsigned seed = 1;
@@ -226,15 +193,15 @@ TEST(DecodePng, EveryFilterAtEveryDepthAsMadeAndAsOpenImageIO) {
           parts.after_idat = Chunk("tEXt", std::string("Comment\0x", 9));
           parts.idat_size = 1 + seed % 50;
           std::string bytes = EncodePng(frame, parts);
-          const cv::Mat oiio = DecodedByOpenImageIO(bytes);
+          const cv::Mat oiio = test::DecodedByOpenImageIO(bytes);
           cv::Mat pixels;
           SCOPED_TRACE(::testing::Message()
                        << "depth " << depth << " channels " << channels << " "
                        << size << " filter " << filter);
           ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
           EXPECT_TRUE(bytes.empty());
-          EXPECT_TRUE(SameBits(pixels, frame));
-          EXPECT_TRUE(SameBits(pixels, oiio));
+          EXPECT_TRUE(test::SameBits(pixels, frame));
+          EXPECT_TRUE(test::SameBits(pixels, oiio));
         }
       }
     }
@@ -250,13 +217,13 @@ TEST(DecodePng, OneLargeIdatChunkAndWideRows) {
   std::string bytes = EncodePng(frame, parts);
   cv::Mat pixels;
   ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
-  EXPECT_TRUE(SameBits(pixels, frame));
+  EXPECT_TRUE(test::SameBits(pixels, frame));
   // And a frame much higher than wide: one spare row per row of filter
   // bytes the frame's own rows cannot hold.
   const cv::Mat tall = RandomFrame(1, 300, CV_8U, 1, 8);
   bytes = EncodePng(tall);
   ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded);
-  EXPECT_TRUE(SameBits(pixels, tall));
+  EXPECT_TRUE(test::SameBits(pixels, tall));
 }
 
 TEST(DecodePng, LeavesEveryOtherFileAsItWas) {
@@ -335,11 +302,11 @@ TEST(DecodePng, CorruptPixelDataIsLeftToOpenImageIOToWord) {
     // it decodes the file, an error naming the file where it does not.
     const fs::path path = fs::path(dir.path()) / "frame.png";
     test::WriteTextFile(path.string(), file);
-    const cv::Mat oiio = DecodedByOpenImageIO(file);
+    const cv::Mat oiio = test::DecodedByOpenImageIO(file);
     if (oiio.empty()) {
       EXPECT_THROW(ReadDPFrameFile(path.string()), InputError) << name;
     } else {
-      EXPECT_TRUE(SameBits(ReadDPFrameFile(path.string()).pixels, oiio))
+      EXPECT_TRUE(test::SameBits(ReadDPFrameFile(path.string()).pixels, oiio))
           << name;
     }
   }
@@ -352,11 +319,11 @@ TEST(DecodePng, RealCapturesAsOpenImageIO) {
   for (const auto& entry : fs::recursive_directory_iterator(real)) {
     if (entry.path().extension() != ".png" || frames >= 8) continue;
     std::string bytes = test::ReadTextFile(entry.path().string());
-    const cv::Mat oiio = DecodedByOpenImageIO(bytes);
+    const cv::Mat oiio = test::DecodedByOpenImageIO(bytes);
     cv::Mat pixels;
     ASSERT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kDecoded)
         << entry.path();
-    EXPECT_TRUE(SameBits(pixels, oiio)) << entry.path();
+    EXPECT_TRUE(test::SameBits(pixels, oiio)) << entry.path();
     ++frames;
   }
   EXPECT_EQ(frames, 8);

@@ -20,6 +20,7 @@
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "dpsfm/core/scale/view_patches.h"
 #include "dpsfm/core/util/check.h"
+#include "tests/colmap/io/frame_oracle.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -439,11 +440,6 @@ cv::Mat HalveByArea(const cv::Mat& frame) {
   cv::Mat out;
   cv::resize(frame, out, frame.size() / 2, 0, 0, cv::INTER_AREA);
   return out;
-}
-
-bool SameBits(const cv::Mat& a, const cv::Mat& b) {
-  return a.size() == b.size() && a.type() == b.type() &&
-         cv::norm(a, b, cv::NORM_INF) == 0;
 }
 
 TEST(LoadDPFrames, SixteenBitSumFrameAndSwap) {

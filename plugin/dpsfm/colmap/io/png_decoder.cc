@@ -165,7 +165,7 @@ bool Unfilter(int filter,
   switch (filter) {
     case 0:
       return true;
-    case 1: {  // Sub, a pixel at a time with the one before in registers
+    case 1: {  // Sub, a pixel at a time
       uint8_t left[Bpp];
       std::memcpy(left, row, Bpp);
       for (size_t i = Bpp; i < row_bytes; i += Bpp) {
