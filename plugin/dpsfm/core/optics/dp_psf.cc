@@ -17,25 +17,28 @@ namespace dpsfm {
 namespace {
 
 // The disk of radius R cut into the pieces each kernel pixel integrates:
-// for pixel rows i in [i_begin, half] (kernel coordinates, centre = 0; row
-// i covers y in [i - 0.5, i + 0.5]), `subsamples` midpoint sub-rows y each,
-// and every pixel column j that the chord of half length a = sqrt(R^2 -
-// y^2) at y reaches, calls piece(i, j, lo, hi, a) with [lo, hi] = [j - 0.5,
-// j + 0.5] cut to the chord. A profile integrates its weight along x over
-// [lo, hi] exactly and multiplies by the sub-row height 1 / subsamples.
+// for pixel rows i in [0, half] (kernel coordinates, centre = 0; row i
+// covers y in [i - 0.5, i + 0.5]), `subsamples` midpoint sub-rows y each,
+// and every pixel column j >= first_column that the chord of half length
+// a = sqrt(R^2 - y^2) at y reaches, calls piece(i, j, lo, hi, a) with
+// [lo, hi] = [j - 0.5, j + 0.5] cut to the chord. A profile integrates its
+// weight along x over [lo, hi] exactly and multiplies by the sub-row height
+// 1 / subsamples. Rows below the centre are the profiles' mirror images
+// (MirrorRowsBelowCentre); first_column = 0 leaves out columns left of the
+// centre too, for a profile that mirrors them (MirrorColumnsLeftOfCentre).
 template <typename Piece>
 void ForEachChordPiece(
-    double radius, int half, int subsamples, int i_begin, Piece piece) {
+    double radius, int half, int subsamples, int first_column, Piece piece) {
   const double r2 = radius * radius;
   const double dy = 1.0 / subsamples;
-  for (int i = i_begin; i <= half; ++i) {
+  for (int i = 0; i <= half; ++i) {
     for (int s = 0; s < subsamples; ++s) {
       const double y = i - 0.5 + (s + 0.5) * dy;
       const double y2 = y * y;
       if (y2 >= r2) continue;
       const double a = std::sqrt(r2 - y2);  // half chord
       const int j_begin =
-          std::max(-half, static_cast<int>(std::floor(-a + 0.5)));
+          std::max(first_column, static_cast<int>(std::floor(-a + 0.5)));
       const int j_end = std::min(half, static_cast<int>(std::ceil(a - 0.5)));
       for (int j = j_begin; j <= j_end; ++j) {
         const double lo = std::max(j - 0.5, -a);
@@ -64,8 +67,8 @@ DPKernels AssignBySign(double signed_radius_px,
   return kernels;
 }
 
-// Profiles symmetric in y integrate the kernel rows i >= 0 (ForEachChordPiece
-// from i_begin 0) and copy them onto the rows below the centre, so the
+// Profiles symmetric in y integrate the kernel rows i >= 0
+// (ForEachChordPiece) and copy them onto the rows below the centre, so the
 // kernel is exactly symmetric: `weights` is side x side, row-major, side =
 // 2 half + 1.
 void MirrorRowsBelowCentre(int half, std::vector<double>* weights) {
@@ -74,6 +77,27 @@ void MirrorRowsBelowCentre(int half, std::vector<double>* weights) {
     std::copy(weights->begin() + (half + i) * side,
               weights->begin() + (half + i + 1) * side,
               weights->begin() + (half - i) * side);
+  }
+}
+
+// A pair of kernels each the other's mirror image in x (`plus` leans
+// towards +x, `minus` towards -x) integrated on the columns j >= 0 of rows
+// i >= 0 (ForEachChordPiece from first_column 0): the columns left of the
+// centre are copied from the other kernel's right of it. A piece's
+// integral and its mirror piece's are the same numbers with the split part
+// negated, added in the same order, so the copies are what integrating
+// them would give, to the bit, at half the work.
+void MirrorColumnsLeftOfCentre(int half,
+                               std::vector<double>* plus,
+                               std::vector<double>* minus) {
+  const int side = 2 * half + 1;
+  for (int i = half; i < side; ++i) {
+    double* p = plus->data() + i * side + half;
+    double* m = minus->data() + i * side + half;
+    for (int j = 1; j <= half; ++j) {
+      p[-j] = m[j];
+      m[-j] = p[j];
+    }
   }
 }
 
@@ -96,7 +120,7 @@ cv::Mat IntegrateTranslatingDisk(double radius,
   ForEachChordPiece(radius,
                     half_size,
                     subsamples,
-                    0,
+                    /*first_column=*/-half_size,
                     [&](int i, int j, double lo, double hi, double a) {
                       // Integral of (x + a) dx over [lo, hi].
                       weights[(i + half_size) * side + j + half_size] +=
@@ -254,8 +278,8 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
   const double b = params_.rim_brightness;
   const double inv_r2 = radius > 0 ? 1 / (radius * radius) : 0;
   // Weight towards +x; the view leaning -x is its mirror image. The profile
-  // is symmetric in y: rows i >= 0 are integrated and mirrored (as the
-  // translating disk's).
+  // is symmetric in y, and each view the other's mirror image in x: the
+  // quadrant i, j >= 0 is integrated and mirrored.
   std::vector<double> plus(side * side, 0.0), minus(side * side, 0.0);
   const double dy = 1.0 / subsamples_per_pixel_;
   Antiderivatives at_lo, at_hi;
@@ -263,7 +287,7 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
       radius,
       half,
       subsamples_per_pixel_,
-      0,
+      /*first_column=*/0,
       [&](int i, int j, double lo, double hi, double a) {
         // Exact along x, with the weight 1 + b (x^2 + y^2) /
         // R^2 (y^2 = R^2 - a^2): (1 / 2) integral of w (1 +-
@@ -283,6 +307,7 @@ DPKernels SplitProfilePsf::Kernels(double signed_radius_px) const {
         plus[(i + half) * side + j + half] += base + split;
         minus[(i + half) * side + j + half] += base - split;
       });
+  MirrorColumnsLeftOfCentre(half, &plus, &minus);
   MirrorRowsBelowCentre(half, &plus);
   MirrorRowsBelowCentre(half, &minus);
   cv::Mat towards_plus_x(side, side, CV_32FC1);
