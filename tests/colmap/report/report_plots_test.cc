@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -717,6 +718,51 @@ TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {
           .written;
   ASSERT_EQ(twin_paths.size(), 4u);
   EXPECT_NE(twin_paths[2], twin_paths[3]);
+}
+
+TEST(ReportPlots, PicturesDrawnOnManyThreadsAreTheSameFilesInTheSameOrder) {
+  test::TempDir dir;
+  const DPScaleResult result = RealisticResult(4);
+  // Each overlay its own frame, so that a picture drawn from another
+  // overlay's values (a job reading the loop's variables after the loop)
+  // shows in the bytes.
+  std::vector<OverlayImage> overlays;
+  for (int view = 0; view < 4; ++view) {
+    overlays.push_back(
+        {view, cv::Mat(800, 1200, CV_32FC1, cv::Scalar(0.1 + 0.2 * view))});
+  }
+  std::filesystem::create_directories(dir / "one");
+  std::filesystem::create_directories(dir / "three");
+  const ReportPlotFiles one =
+      WriteReportPlots(result, overlays, dir / "one/report.json", 33, 1);
+  const ReportPlotFiles three =
+      WriteReportPlots(result, overlays, dir / "three/report.json", 33, 3);
+  ASSERT_EQ(one.written.size(), 6u);
+  ASSERT_EQ(three.written.size(), one.written.size());
+  EXPECT_TRUE(three.failures.empty());
+  std::set<std::string> distinct;
+  for (size_t k = 0; k < one.written.size(); ++k) {
+    const std::filesystem::path a = one.written[k], b = three.written[k];
+    EXPECT_EQ(a.filename(), b.filename());
+    EXPECT_EQ(b.parent_path(), dir / "three");
+    const std::string bytes = test::ReadTextFile(a);
+    EXPECT_EQ(bytes, test::ReadTextFile(b)) << b;
+    distinct.insert(bytes);
+  }
+  // Every picture its own: the overlays differ from each other.
+  EXPECT_EQ(distinct.size(), one.written.size());
+
+  // Failures in the pictures' order too.
+  const ReportPlotFiles failed = WriteReportPlots(
+      result, overlays, dir / "missing/dir/report.json", 33, 3);
+  EXPECT_TRUE(failed.written.empty());
+  ASSERT_EQ(failed.failures.size(), 6u);
+  EXPECT_EQ(failed.failures[0].plot, "blur_fit");
+  EXPECT_EQ(failed.failures[1].plot, "loss");
+  for (int view = 0; view < 4; ++view) {
+    EXPECT_EQ(failed.failures[2 + view].plot,
+              "patches_" + PlotFileComponent(result.views[view].name));
+  }
 }
 
 TEST(ReportPlots, PicturesThatCannotBeWrittenAreReportedWithTheReason) {

@@ -521,15 +521,17 @@ std::string ScaleLine(const DPScaleResult& result) {
 
 // The pictures next to the report (none without one). A picture that could
 // not be written is a warning, never an error: the scale does not depend on
-// it.
+// it. Drawn on the estimate's threads.
 ReportPlotFiles WritePlots(const ScaleRunOptions& options,
-                           const ScaleRun& run) {
+                           const ScaleRun& run,
+                           int num_threads) {
   if (options.report_path.empty()) return {};
   const ReportPlotFiles plots =
       WriteReportPlots(run.result,
                        run.overlay_images,
                        options.report_path,
-                       run.summaries.empty() ? 0 : run.summaries[0].patch_size);
+                       run.summaries.empty() ? 0 : run.summaries[0].patch_size,
+                       num_threads);
   for (const std::string& plot : plots.written) {
     LOG(INFO) << "Plot: " << plot;
   }
@@ -678,7 +680,8 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   // Without a rescale to follow, the report is complete now.
   const bool rescale = result.success && !options.dry_run;
   timings.total = total_timer.ElapsedSeconds();
-  const ReportPlotFiles plots = WritePlots(options, run);
+  const ReportPlotFiles plots =
+      WritePlots(options, run, core_options.num_threads);
   if (!options.report_path.empty() && !rescale) {
     WriteJsonFile(options.report_path,
                   RunReport(run, sources, reader, profile.source, plots, plan));

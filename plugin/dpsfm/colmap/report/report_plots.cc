@@ -5,6 +5,8 @@
 #include <optional>
 #include <set>
 
+#include "colmap/util/threading.h"
+
 #include "dpsfm/colmap/report/plot_canvas.h"
 #include "dpsfm/colmap/report/plot_result.h"
 
@@ -21,18 +23,36 @@ std::string DropExtension(std::string name, const char* separators) {
   return name;
 }
 
-// Renders and writes one picture; records its path, or why it was not
-// written.
-void WritePlot(const std::string& plot_name,
-               const std::string& path,
-               const std::function<cv::Mat()>& render,
-               ReportPlotFiles* files) {
-  std::string error;
-  if (plot::RenderPng(render, path, &error)) {
-    files->written.push_back(path);
-  } else {
-    files->failures.push_back({plot_name, path, error});
+// One picture to render and write.
+struct PlotJob {
+  std::string name;  // as in PlotFailure::plot
+  std::string path;
+  std::function<cv::Mat()> render;
+};
+
+// Renders and writes the pictures, `num_threads` at a time (each picture's
+// drawing and PNG encoding is independent of the others'); records their
+// paths in the jobs' order, or why one was not written.
+ReportPlotFiles RunPlotJobs(const std::vector<PlotJob>& jobs, int num_threads) {
+  const int num_jobs = static_cast<int>(jobs.size());
+  std::vector<std::string> errors(num_jobs);
+  std::vector<char> written(num_jobs, 0);
+#ifdef _OPENMP
+  const int threads = colmap::GetEffectiveNumThreads(num_threads);
+#pragma omp parallel for schedule(dynamic) num_threads(threads)
+#endif
+  for (int k = 0; k < num_jobs; ++k) {
+    written[k] = plot::RenderPng(jobs[k].render, jobs[k].path, &errors[k]);
   }
+  ReportPlotFiles files;
+  for (int k = 0; k < num_jobs; ++k) {
+    if (written[k]) {
+      files.written.push_back(jobs[k].path);
+    } else {
+      files.failures.push_back({jobs[k].name, jobs[k].path, errors[k]});
+    }
+  }
+  return files;
 }
 
 // The overlay's patch side in DP-frame pixels: the working-frame side times
@@ -72,19 +92,16 @@ ReportPlotFiles WriteReportPlots(
     const DPScaleResult& result,
     const std::vector<OverlayImage>& overlay_images,
     const std::string& report_path,
-    int working_patch_size) {
-  ReportPlotFiles files;
+    int working_patch_size,
+    int num_threads) {
   const std::string stem = DropExtension(report_path, "/");
-  WritePlot(
-      "blur_fit",
-      stem + "_blur_fit.png",
-      [&result] { return RenderBlurFitPlot(result); },
-      &files);
-  WritePlot(
-      "loss",
-      stem + "_loss.png",
-      [&result] { return RenderLossCurvePlot(result); },
-      &files);
+  std::vector<PlotJob> jobs;
+  jobs.push_back({"blur_fit", stem + "_blur_fit.png", [&result] {
+                    return RenderBlurFitPlot(result);
+                  }});
+  jobs.push_back({"loss", stem + "_loss.png", [&result] {
+                    return RenderLossCurvePlot(result);
+                  }});
 
   const std::map<int, double> frame_per_working =
       plot::FramePerWorkingPixel(result);
@@ -101,16 +118,15 @@ ReportPlotFiles WriteReportPlots(
     used_names.insert(component);
     const double patch_size =
         OverlayPatchSide(working_patch_size, view, frame, frame_per_working);
-    WritePlot(
-        "patches_" + component,
-        stem + "_patches_" + component + ".png",
-        [&] {
-          return RenderPatchOverlay(
-              image, view_name, view, result, patch_size, frame);
-        },
-        &files);
+    // The loop's values by copy: the jobs run after the loop.
+    jobs.push_back({"patches_" + component,
+                    stem + "_patches_" + component + ".png",
+                    [&result, &image, view_name, view, patch_size, frame] {
+                      return RenderPatchOverlay(
+                          image, view_name, view, result, patch_size, frame);
+                    }});
   }
-  return files;
+  return RunPlotJobs(jobs, num_threads);
 }
 
 }  // namespace dpsfm

@@ -48,12 +48,15 @@ struct ReportPlotFiles {
 // DefaultPatchGeometry of the DP frame); it is converted to DP-frame pixels
 // with the view's resize factor, recovered from its patches (radius_px /
 // radius_frame_px). An exception while drawing or writing one picture costs
-// that picture only and is recorded among the failures.
+// that picture only and is recorded among the failures. The pictures are
+// drawn and written on `num_threads` threads (-1: all cores); the paths
+// and failures come in the order above whatever the count.
 ReportPlotFiles WriteReportPlots(
     const DPScaleResult& result,
     const std::vector<OverlayImage>& overlay_images,
     const std::string& report_path,
-    int working_patch_size);
+    int working_patch_size,
+    int num_threads = 1);
 
 // The <view> part of an overlay's file name (see WriteReportPlots).
 std::string PlotFileComponent(const std::string& view_name);
