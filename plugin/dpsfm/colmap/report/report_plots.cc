@@ -6,7 +6,6 @@
 #include <set>
 
 #include "colmap/util/threading.h"
-
 #include "dpsfm/colmap/report/plot_canvas.h"
 #include "dpsfm/colmap/report/plot_result.h"
 
