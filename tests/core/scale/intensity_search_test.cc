@@ -282,6 +282,9 @@ TEST(SearchScaleByIntensity, RecoversScaleOnNoiselessPatches) {
   const IntensitySearchResult result = SearchScaleByIntensity(
       scene.views, scene.patches, scale * 1.12, psf, options);
   ASSERT_TRUE(result.success) << result.failure_reason;
+  // Every loss the search asks for can be evaluated: a count above 0 is a
+  // real failure, never the top node of a patch's prepared radii.
+  EXPECT_EQ(result.num_failed_evaluations, 0);
   EXPECT_FALSE(result.at_boundary);
   EXPECT_NEAR(result.scale / scale, 1.0, 0.003);
   EXPECT_LE(result.scale_ci_low, scale * 1.003);

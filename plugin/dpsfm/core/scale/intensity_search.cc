@@ -344,9 +344,12 @@ void CapNoiseAtViewMedian(size_t num_views,
 // above (it is signal misfit plus noise), and near the patch's true radius
 // the bound is the noise alone. The pair estimate can read DP disparity as
 // noise; the bound cannot exceed what the data show. Radii: the patch's
-// grid nodes (they span every radius its candidates reach, where the
-// minimum lies for a patch that fits), or every 0.5 px of the supported
-// range on the exact path. *failed counts loss evaluations that threw.
+// grid nodes that start a prepared interval, and the grid's last node (they
+// span every radius its candidates reach, where the minimum lies for a
+// patch that fits), or every 0.5 px of the supported range on the exact
+// path. A node that only ends an interval has no loss of its own on the
+// grid (GridLoss reads the interval above it): it is not evaluated, rather
+// than counted as a failure. *failed counts loss evaluations that threw.
 void TightenNoiseByFit(const IntensitySearchOptions& options,
                        std::vector<Prepared>* prepared,
                        int* failed) {
@@ -360,7 +363,10 @@ void TightenNoiseByFit(const IntensitySearchOptions& options,
     std::vector<double> radii;
     if (p.grid != nullptr) {
       for (const auto& entry : p.stats) {
-        radii.push_back(p.grid->Radius(entry.first));
+        const int node = entry.first;
+        if (entry.second.has_next || node + 1 == p.grid->NumNodes()) {
+          radii.push_back(p.grid->Radius(node));
+        }
       }
     } else {
       const int half = static_cast<int>(std::floor(p.max_abs_radius / 0.5));
