@@ -3,7 +3,6 @@
 // tests and benchmarks/colmap/png_decode_bench.
 #pragma once
 
-#include <cstring>
 #include <memory>
 #include <string>
 
@@ -11,6 +10,8 @@
 #include <OpenImageIO/imageio.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "dpsfm/core/util/matrices.h"
 
 namespace dpsfm {
 namespace test {
@@ -39,15 +40,10 @@ inline cv::Mat DecodedByOpenImageIO(const std::string& bytes) {
 }
 
 // Whether two matrices hold the same bits: neither empty, the same size and
-// type, and every byte of every row equal (so 0.0 and -0.0 differ).
+// type, and every byte of every row equal (so 0.0 and -0.0 differ; the
+// core's SameBytes, with an empty decode never a match).
 inline bool SameBits(const cv::Mat& a, const cv::Mat& b) {
-  if (a.empty() || a.size() != b.size() || a.type() != b.type()) return false;
-  for (int y = 0; y < a.rows; ++y) {
-    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) {
-      return false;
-    }
-  }
-  return true;
+  return !a.empty() && SameBytes(a, b);
 }
 
 }  // namespace test
