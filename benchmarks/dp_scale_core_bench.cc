@@ -18,7 +18,6 @@
 // (0 = the automatic working resolution).
 #include <sys/resource.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

@@ -11,7 +11,6 @@
 //
 //   psf_profile_bench [--scenes N] [--views V] [--noise SIGMA] [--only NAME]
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

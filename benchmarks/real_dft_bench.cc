@@ -9,7 +9,6 @@
 //
 //   real_dft_bench [--rounds N]
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>

@@ -7,8 +7,6 @@
 // asserts.
 //
 //   png_decode_bench [--rounds N] [--width W] [--height H]
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
