@@ -14,6 +14,7 @@
 #include <fftw3.h>
 
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/vector_clones.h"
 
 namespace dpsfm {
 namespace {
@@ -56,16 +57,9 @@ fftwf_complex* ThreadWork(size_t count) {
 }
 
 // The spectrum products are element-wise loops that the compiler
-// vectorises: with AVX2 four complex numbers at a time where the x86-64
-// baseline (SSE2) does two, 1.7-2.4x faster at the searches' sizes. The
-// clones compute the same IEEE operations in the same order (AVX2 brings no
-// FMA to contract them into), so the bits do not depend on the clone; the
-// loader picks one for the machine (GNU ifunc).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define DPSFM_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define DPSFM_VECTOR_CLONES
-#endif
+// vectorises (DPSFM_VECTOR_CLONES): with AVX2 four complex numbers at a
+// time where the x86-64 baseline (SSE2) does two, 1.7-2.4x faster at the
+// searches' sizes.
 
 // po = pa pb over n / 2 interleaved complex numbers, as cv::mulSpectrums
 // computes it; unaliased, as below.

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <opencv2/imgproc.hpp>
 
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/statistics.h"
+#include "dpsfm/core/util/vector_clones.h"
 
 namespace dpsfm {
 namespace intensity {
@@ -45,33 +47,90 @@ struct NodeMoments {
   double sum_a = 0, sum_b = 0, aa = 0, bb = 0, ab = 0;
   double pa_a = 0, pb_b = 0, pa_b = 0, pb_a = 0;  // with the previous node
 };
+
+// Four doubles, and the four floats they are converted from.
+typedef double Lanes __attribute__((vector_size(32)));
+typedef float LaneFloats __attribute__((vector_size(16)));
+
+// Four consecutive floats from p as doubles, into *lanes (not returned: a
+// 32-byte vector return would depend on the clone's ABI).
+inline void LoadLanes(const float* p, Lanes* lanes) {
+  LaneFloats floats;
+  std::memcpy(&floats, p, sizeof(floats));
+  *lanes = __builtin_convertvector(floats, Lanes);
+}
+
+// MomentsOf on count values of x, y, px, py (px, py taken against x, y
+// and dropped when !previous). Each sum is kept in four partial sums over
+// interleaved values, added in a fixed order at the end: one chain of
+// additions per sum was latency-bound (5.5 us a 33 x 33 interior, against
+// 1.2 us with AVX2 and 2.4 us on the baseline), and the order of additions
+// is the same for either clone.
+DPSFM_VECTOR_CLONES NodeMoments MomentsOfValues(const float* x,
+                                                const float* y,
+                                                const float* px,
+                                                const float* py,
+                                                size_t count,
+                                                bool previous) {
+  Lanes sum_a{}, sum_b{}, aa{}, bb{}, ab{}, pa_a{}, pb_b{}, pa_b{}, pb_a{};
+  size_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    Lanes u, v, pu, pv;
+    LoadLanes(x + i, &u);
+    LoadLanes(y + i, &v);
+    LoadLanes(px + i, &pu);
+    LoadLanes(py + i, &pv);
+    sum_a += u;
+    sum_b += v;
+    aa += u * u;
+    bb += v * v;
+    ab += u * v;
+    pa_a += pu * u;
+    pb_b += pv * v;
+    pa_b += pu * v;
+    pb_a += pv * u;
+  }
+  for (; i < count; ++i) {
+    const double u = x[i], v = y[i], pu = px[i], pv = py[i];
+    sum_a[0] += u;
+    sum_b[0] += v;
+    aa[0] += u * u;
+    bb[0] += v * v;
+    ab[0] += u * v;
+    pa_a[0] += pu * u;
+    pb_b[0] += pv * v;
+    pa_b[0] += pu * v;
+    pb_a[0] += pv * u;
+  }
+  auto total = [](const Lanes& s) { return (s[0] + s[1]) + (s[2] + s[3]); };
+  NodeMoments m;
+  m.sum_a = total(sum_a);
+  m.sum_b = total(sum_b);
+  m.aa = total(aa);
+  m.bb = total(bb);
+  m.ab = total(ab);
+  if (previous) {
+    m.pa_a = total(pa_a);
+    m.pb_b = total(pb_b);
+    m.pa_b = total(pa_b);
+    m.pb_a = total(pb_a);
+  }
+  return m;
+}
+
 NodeMoments MomentsOf(const cv::Mat& a,
                       const cv::Mat& b,
                       const cv::Mat& pa,
                       const cv::Mat& pb) {
-  NodeMoments m;
-  const float* x = a.ptr<float>();
-  const float* y = b.ptr<float>();
   // Without a previous node the terms with it are taken against the node
   // itself and dropped.
   const bool previous = !pa.empty();
-  const float* px = previous ? pa.ptr<float>() : x;
-  const float* py = previous ? pb.ptr<float>() : y;
-  const size_t count = a.total();
-  for (size_t i = 0; i < count; ++i) {
-    const double u = x[i], v = y[i], pu = px[i], pv = py[i];
-    m.sum_a += u;
-    m.sum_b += v;
-    m.aa += u * u;
-    m.bb += v * v;
-    m.ab += u * v;
-    m.pa_a += pu * u;
-    m.pb_b += pv * v;
-    m.pa_b += pu * v;
-    m.pb_a += pv * u;
-  }
-  if (!previous) m.pa_a = m.pb_b = m.pa_b = m.pb_a = 0;
-  return m;
+  return MomentsOfValues(a.ptr<float>(),
+                         b.ptr<float>(),
+                         previous ? pa.ptr<float>() : a.ptr<float>(),
+                         previous ? pb.ptr<float>() : b.ptr<float>(),
+                         a.total(),
+                         previous);
 }
 
 // What the L2-family losses need of one channel at one radius: the mean
