@@ -1,5 +1,6 @@
 #include "dpsfm/core/util/statistics.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -45,23 +46,32 @@ inline uint32_t OrderedBits(float value) {
 
 float UpperMedianBySelection(std::vector<float>* values) {
   const size_t n = values->size();
-  // Below ~128 values std::nth_element is as fast (the counts, 16 KB, are
-  // cleared every call): 0.8 us against 1.5 at 64 values, even at 128.
-  constexpr size_t kSmall = 128;
+  // Below ~32 values std::nth_element is as fast (at 40 values it takes
+  // 0.7 us, this 0.25 us; at 225, as the screening's subsampled patches
+  // give them, 3.3 against 1.3 us).
+  constexpr size_t kSmall = 32;
   if (n < kSmall) return UpperMedianInPlace(values);
   constexpr int kShift = 20;  // 12 leading bits: 4096 ranges
-  std::array<uint32_t, size_t{1} << (32 - kShift)> counts{};
+  // The counts stay zero between calls: each call clears the ranges it
+  // used (a patch's values span a few hundred of them, non-negative ones
+  // all above the 2048 negative ranges), rather than all 16 KB.
+  thread_local std::array<uint32_t, size_t{1} << (32 - kShift)> counts{};
   float* v = values->data();
   bool any_nan = false;
+  uint32_t first = static_cast<uint32_t>(counts.size()), last = 0;
   for (size_t i = 0; i < n; ++i) {
-    ++counts[OrderedBits(v[i]) >> kShift];
+    const uint32_t range = OrderedBits(v[i]) >> kShift;
+    ++counts[range];
+    first = std::min(first, range);
+    last = std::max(last, range);
     any_nan |= std::isnan(v[i]);
   }
-  if (any_nan) return UpperMedianInPlace(values);
   // The range that holds rank n / 2, and how many values lie below it.
   const size_t k = n / 2;
-  size_t range = 0, below = 0;
+  size_t range = first, below = 0;
   while (below + counts[range] <= k) below += counts[range++];
+  std::fill(counts.begin() + first, counts.begin() + last + 1, 0u);
+  if (any_nan) return UpperMedianInPlace(values);
   // Its values to the front (in place: each is written at or before where
   // it was read), then the rank within them.
   size_t m = 0;
