@@ -14,7 +14,7 @@
 #include <fftw3.h>
 
 #include "dpsfm/core/util/check.h"
-#include "dpsfm/core/util/vector_clones.h"
+#include "dpsfm/core/util/lanes.h"
 
 namespace dpsfm {
 namespace {
