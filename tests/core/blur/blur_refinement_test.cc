@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/util/matrices.h"
 #include "tests/core/synthetic_dp.h"
 
 namespace dpsfm {
@@ -45,22 +46,43 @@ double BlurredInteriorSum(const BlurTables& t,
   return cv::sum(Convolve(positive, kernel)(t.interior))[0];
 }
 
-TEST(BlurRefinement, EqualisedGainsAndLossesAgainstSpatialConvolutions) {
-  const TranslatingDiskPsf psf;
+// The tables of the translating disk for 71 px patches to |r| <= 8.
+std::unique_ptr<BlurTables> DiskTables() {
   BlurEstimationOptions options;
   options.max_radius_px = 8;
-  const std::unique_ptr<BlurTables> t =
-      internal::MakeBlurTables(psf, options, cv::Size(71, 71), 1);
-  // A textured pair at r = 4 with unequal gains, as views minus an offset.
-  test::RenderOptions render;
-  render.left_gain = 1.2;
-  render.right_gain = 0.8;
-  const cv::Mat sharp = test::MakeTexture(cv::Size(71, 71), 17);
-  const test::DPPair pair = test::RenderDP(sharp, psf, 4.0, render);
-  const double offset = 0.3;
+  return internal::MakeBlurTables(
+      TranslatingDiskPsf(), options, cv::Size(71, 71), 1);
+}
+
+// A textured pair at `radius` with unequal gains, as views minus `offset`.
+struct Views {
   cv::Mat gl, gr;
-  pair.left.convertTo(gl, CV_32F, 1.0, -offset);
-  pair.right.convertTo(gr, CV_32F, 1.0, -offset);
+};
+Views RenderViews(double radius,
+                  double left_gain,
+                  double right_gain,
+                  int seed,
+                  double offset) {
+  test::RenderOptions render;
+  render.left_gain = left_gain;
+  render.right_gain = right_gain;
+  const test::DPPair pair =
+      test::RenderDP(test::MakeTexture(cv::Size(71, 71), seed),
+                     TranslatingDiskPsf(),
+                     radius,
+                     render);
+  Views views;
+  pair.left.convertTo(views.gl, CV_32F, 1.0, -offset);
+  pair.right.convertTo(views.gr, CV_32F, 1.0, -offset);
+  return views;
+}
+
+TEST(BlurRefinement, EqualisedGainsAndLossesAgainstSpatialConvolutions) {
+  const std::unique_ptr<BlurTables> t = DiskTables();
+  const double offset = 0.3;
+  const Views views = RenderViews(4.0, 1.2, 0.8, 17, offset);
+  const cv::Mat& gl = views.gl;
+  const cv::Mat& gr = views.gr;
   BlurRefinement refinement(*t, gl, gr, offset, 0.0);
   const int node = t->half_nodes + static_cast<int>(std::round(4.0 / t->step));
   ASSERT_DOUBLE_EQ(t->Radius(node), 4.0);
@@ -104,6 +126,37 @@ TEST(BlurRefinement, EqualisedGainsAndLossesAgainstSpatialConvolutions) {
         << "node " << n;
   }
   EXPECT_GT(t->grid->NumSpectrumClasses(), 1);
+}
+
+// A prepared patch hands its integral images to every search of it: the
+// equalisation they give must be the one the refinement makes itself, to
+// the bit, before and after the gains first move.
+TEST(BlurRefinement, GivenIntegralsEqualiseAsTakenOnes) {
+  const std::unique_ptr<BlurTables> t = DiskTables();
+  const double offset = 0.25;
+  const Views views = RenderViews(-3.0, 1.15, 0.9, 5, offset);
+  const cv::Mat& gl = views.gl;
+  const cv::Mat& gr = views.gr;
+  BlurRefinement taken(*t, gl, gr, offset, 0.0);
+  BlurRefinement given(*t,
+                       gl,
+                       gr,
+                       offset,
+                       0.0,
+                       BlurRefinement::PositiveIntegral(gl, offset),
+                       BlurRefinement::PositiveIntegral(gr, offset));
+  for (const double radius : {-3.0, -2.5, -3.25}) {
+    taken.EqualiseGain(radius);
+    given.EqualiseGain(radius);
+    ASSERT_TRUE(SameBytes(taken.Left(), given.Left())) << radius;
+    ASSERT_TRUE(SameBytes(taken.Right(), given.Right())) << radius;
+  }
+  // The gains moved (else the test shows nothing).
+  EXPECT_FALSE(SameBytes(taken.Left(), gl));
+  const int node = t->half_nodes - 12;
+  taken.Evaluate(node);
+  given.Evaluate(node);
+  EXPECT_EQ(taken.RawLoss(node), given.RawLoss(node));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "dpsfm/core/blur/blur_estimation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -140,14 +141,8 @@ void PreferInFocus(const BlurTables& t,
     const double pos = best->radius / t.step + t.half_nodes;
     const int n0 = std::min(t.num_nodes - 2, static_cast<int>(pos));
     const double s = pos - n0;
-    const int half = t.border;
-    cv::Mat dl = (1 - s) * EmbedKernel(t.grid->LeftKernel(n0), half) +
-                 s * EmbedKernel(t.grid->LeftKernel(n0 + 1), half) -
-                 EmbedKernel(t.grid->LeftKernel(zero), half);
-    cv::Mat dr = (1 - s) * EmbedKernel(t.grid->RightKernel(n0), half) +
-                 s * EmbedKernel(t.grid->RightKernel(n0 + 1), half) -
-                 EmbedKernel(t.grid->RightKernel(zero), half);
-    const double d = dl.dot(dl) + dr.dot(dr);
+    const std::array<double, 3>& q = t.in_focus_distance[n0];
+    const double d = q[0] + 2 * s * q[1] + s * s * q[2];
     const double threshold =
         3 * 2 * sigma2 * std::sqrt(t.noise_gain[zero] * d * inv_m);
     if (zero_corrected - best->corrected <= threshold) {
@@ -302,6 +297,12 @@ PreparedBlurPatch PatchBlurEstimator::Prepare(const cv::Mat& left,
   patch.gl = views.gl;
   patch.gr = views.gr;
   patch.offset = views.offset;
+  if (options.normalize_gain) {
+    patch.integral_left =
+        BlurRefinement::PositiveIntegral(views.gl, views.offset);
+    patch.integral_right =
+        BlurRefinement::PositiveIntegral(views.gr, views.offset);
+  }
   patch.sigma2_hp = PatchNoiseVariance(views.gl, views.gr, options);
   patch.coarse_band_terms = internal::CoarseBandTerms(t, views.gl, views.gr);
   return patch;
@@ -322,7 +323,13 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(
       internal::CoarseSearch(t, patch.coarse_band_terms, sigma2_hp);
 
   // ---- Exact refinement. ----
-  BlurRefinement refinement(t, patch.gl, patch.gr, patch.offset, sigma2_hp);
+  BlurRefinement refinement(t,
+                            patch.gl,
+                            patch.gr,
+                            patch.offset,
+                            sigma2_hp,
+                            patch.integral_left,
+                            patch.integral_right);
   Minimum best = RefineCoarseMinima(t, coarse, &refinement);
   // Final values with the final noise estimate.
   const double sigma2 = refinement.CurrentSigma2();

@@ -155,6 +155,10 @@ struct PreparedBlurPatch {
   PatchBlurEstimate early;
   cv::Mat gl, gr;  // the gain-equalised views minus `offset`
   double offset = 0;
+  // With normalize_gain, the integral images of gl and gr + offset: every
+  // search of the patch (one per profile in a profile fit) equalises the
+  // gains on them first.
+  cv::Mat integral_left, integral_right;
   double sigma2_hp = 0;  // the patch's noise variance (inf without a floor)
   std::vector<float> coarse_band_terms;
   cv::Size patch_size, dft_size;  // the geometry it was prepared for

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dpsfm/core/blur/blur_search_internal.h"
+#include "dpsfm/core/util/lanes.h"
 
 namespace dpsfm {
 namespace internal {
@@ -36,11 +37,7 @@ double BlurredSum(const cv::Mat& integral,
 }
 
 double Dot(const std::vector<float>& a, const std::vector<float>& b) {
-  double sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    sum += static_cast<double>(a[i]) * b[i];
-  }
-  return sum;
+  return DotInLanes(a.data(), b.data(), a.size());
 }
 
 }  // namespace
@@ -49,11 +46,15 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
                                const cv::Mat& gl,
                                const cv::Mat& gr,
                                double offset,
-                               double sigma2_hp)
+                               double sigma2_hp,
+                               const cv::Mat& integral_left,
+                               const cv::Mat& integral_right)
     : t_(t),
       options_(t.options),
       gl_(gl),
       gr_(gr),
+      given_integral_left_(integral_left),
+      given_integral_right_(integral_right),
       offset_(offset),
       sigma2_hp_(sigma2_hp),
       inv_m_(1.0 / t.num_interior),
@@ -61,6 +62,15 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
       evals_(t.num_nodes) {
   left_positive_ = gl_ + offset_;
   right_positive_ = gr_ + offset_;
+}
+
+cv::Mat BlurRefinement::PositiveIntegral(const cv::Mat& view, double offset) {
+  // The same arithmetic as the constructor's positive views, so that a
+  // given integral is the one EqualiseGain would take, to the bit.
+  const cv::Mat positive = view + offset;
+  cv::Mat integral;
+  cv::integral(positive, integral, CV_64F);
+  return integral;
 }
 
 void BlurRefinement::Evaluate(int n) {
@@ -179,8 +189,13 @@ int BlurRefinement::NearestNode(double radius) const {
 
 void BlurRefinement::EqualiseGain(double radius) {
   cv::Mat integral_left, integral_right;
-  cv::integral(left_positive_, integral_left, CV_64F);
-  cv::integral(right_positive_, integral_right, CV_64F);
+  if (!gains_moved_ && !given_integral_left_.empty()) {
+    integral_left = given_integral_left_;
+    integral_right = given_integral_right_;
+  } else {
+    cv::integral(left_positive_, integral_left, CV_64F);
+    cv::integral(right_positive_, integral_right, CV_64F);
+  }
   // Interior sums are linear in the kernels: interpolate like them.
   const double pos = std::max(
       0.0, std::min(t_.num_nodes - 1.0, radius / t_.step + t_.half_nodes));
@@ -196,6 +211,7 @@ void BlurRefinement::EqualiseGain(double radius) {
   const double half_log_ratio = 0.5 * std::log(a / b);
   left_positive_ *= std::exp(-half_log_ratio);
   right_positive_ *= std::exp(half_log_ratio);
+  gains_moved_ = true;
   // Into new matrices: gl_ and gr_ may share the caller's (a prepared
   // patch searched with many profiles, from several threads).
   cv::Mat gl, gr;

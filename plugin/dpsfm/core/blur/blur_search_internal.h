@@ -6,6 +6,7 @@
 // (blur_estimation.cc) runs in turn. Not part of the API.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -42,6 +43,11 @@ struct BlurTables {
   // kernels.
   std::vector<double> noise_gain;
   std::vector<double> noise_cross;
+  // Per interval n (nodes n, n + 1), how far its interpolated kernels lie
+  // from those at r = 0, summed over both views: |(1 - s) h(n) + s h(n+1) -
+  // h(0)|^2 = c0 + 2 s c1 + s^2 c2 with (c0, c1, c2) = in_focus_distance[n]
+  // (the blur search's preference for focus).
+  std::vector<std::array<double, 3>> in_focus_distance;
 
   // Coarse search.
   std::vector<int> coarse_nodes;
@@ -104,12 +110,20 @@ class BlurRefinement {
     int lo = 0, hi = 0;  // evaluated node range
   };
 
-  // gl, gr: the gain-equalised views minus `offset`.
+  // gl, gr: the gain-equalised views minus `offset`; integral_left,
+  // integral_right: their PositiveIntegral, when the caller has them (a
+  // prepared patch searched under many profiles), else empty.
   BlurRefinement(const BlurTables& t,
                  const cv::Mat& gl,
                  const cv::Mat& gr,
                  double offset,
-                 double sigma2_hp);
+                 double sigma2_hp,
+                 const cv::Mat& integral_left = cv::Mat(),
+                 const cv::Mat& integral_right = cv::Mat());
+
+  // The integral image (CV_64F) of view + offset, which EqualiseGain
+  // integrates until it first moves the gains.
+  static cv::Mat PositiveIntegral(const cv::Mat& view, double offset);
 
   const cv::Mat& Left() const { return gl_; }
   const cv::Mat& Right() const { return gr_; }
@@ -168,6 +182,10 @@ class BlurRefinement {
   const BlurEstimationOptions& options_;
   cv::Mat gl_, gr_;
   cv::Mat left_positive_, right_positive_;
+  // PositiveIntegral of the views as given (empty: not given), valid until
+  // the gains move.
+  cv::Mat given_integral_left_, given_integral_right_;
+  bool gains_moved_ = false;
   const double offset_;
   const double sigma2_hp_;
   const double inv_m_;

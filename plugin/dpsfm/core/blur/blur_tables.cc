@@ -143,6 +143,34 @@ void TabulateKernels(const std::vector<float>& multiplicity,
       });
 }
 
+// BlurTables::in_focus_distance: differences of the kernels embedded in one
+// frame, in double.
+void TabulateInFocusDistances(BlurTables* t) {
+  const DPKernelGrid& grid = *t->grid;
+  auto embedded = [&](const cv::Mat& kernel) {
+    cv::Mat wide;
+    EmbedKernel(kernel, t->border).convertTo(wide, CV_64F);
+    return wide;
+  };
+  const int zero = t->half_nodes;
+  const cv::Mat zero_left = embedded(grid.LeftKernel(zero));
+  const cv::Mat zero_right = embedded(grid.RightKernel(zero));
+  cv::Mat left = embedded(grid.LeftKernel(0));
+  cv::Mat right = embedded(grid.RightKernel(0));
+  t->in_focus_distance.resize(t->num_nodes - 1);
+  for (int n = 0; n + 1 < t->num_nodes; ++n) {
+    const cv::Mat next_left = embedded(grid.LeftKernel(n + 1));
+    const cv::Mat next_right = embedded(grid.RightKernel(n + 1));
+    const cv::Mat dl = left - zero_left, dr = right - zero_right;
+    const cv::Mat sl = next_left - left, sr = next_right - right;
+    t->in_focus_distance[n] = {dl.dot(dl) + dr.dot(dr),
+                               dl.dot(sl) + dr.dot(sr),
+                               sl.dot(sl) + sr.dot(sr)};
+    left = next_left;
+    right = next_right;
+  }
+}
+
 // The coarse loss's noise gains, window and normaliser.
 void SetCoarseNormalisation(BlurTables* t) {
   const int nr = t->dft_size.height;
@@ -180,6 +208,7 @@ std::unique_ptr<BlurTables> MakeBlurTables(const DPPsfModel& psf,
   SelectCoarseNodes(t.get());
   TabulateKernels(multiplicity, num_threads, t.get());
   SetCoarseNormalisation(t.get());
+  TabulateInFocusDistances(t.get());
   return t;
 }
 
