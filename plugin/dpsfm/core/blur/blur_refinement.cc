@@ -59,14 +59,17 @@ BlurRefinement::BlurRefinement(const BlurTables& t,
       sigma2_hp_(sigma2_hp),
       inv_m_(1.0 / t.num_interior),
       spectra_(t.grid->NumSpectrumClasses()),
-      evals_(t.num_nodes) {
+      evals_(t.num_nodes) {}
+
+void BlurRefinement::MakePositiveViews() {
+  if (!left_positive_.empty()) return;
   left_positive_ = gl_ + offset_;
   right_positive_ = gr_ + offset_;
 }
 
 cv::Mat BlurRefinement::PositiveIntegral(const cv::Mat& view, double offset) {
-  // The same arithmetic as the constructor's positive views, so that a
-  // given integral is the one EqualiseGain would take, to the bit.
+  // The same arithmetic as MakePositiveViews, so that a given integral is
+  // the one EqualiseGain would take, to the bit.
   const cv::Mat positive = view + offset;
   cv::Mat integral;
   cv::integral(positive, integral, CV_64F);
@@ -193,6 +196,7 @@ void BlurRefinement::EqualiseGain(double radius) {
     integral_left = given_integral_left_;
     integral_right = given_integral_right_;
   } else {
+    MakePositiveViews();
     cv::integral(left_positive_, integral_left, CV_64F);
     cv::integral(right_positive_, integral_right, CV_64F);
   }
@@ -209,6 +213,7 @@ void BlurRefinement::EqualiseGain(double radius) {
   }
   if (!(a > 0 && b > 0) || std::abs(a / b - 1) < 1e-7) return;
   const double half_log_ratio = 0.5 * std::log(a / b);
+  MakePositiveViews();
   left_positive_ *= std::exp(-half_log_ratio);
   right_positive_ *= std::exp(half_log_ratio);
   gains_moved_ = true;

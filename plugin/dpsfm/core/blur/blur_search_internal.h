@@ -177,10 +177,14 @@ class BlurRefinement {
     cv::Mat left, right;
   };
   const ViewSpectra& TransformedViews(int c);
+  void MakePositiveViews();
 
   const BlurTables& t_;
   const BlurEstimationOptions& options_;
   cv::Mat gl_, gr_;
+  // The views + offset, which the gains scale: made when first needed (a
+  // search whose integrals are given and whose gains never move does not
+  // need them).
   cv::Mat left_positive_, right_positive_;
   // PositiveIntegral of the views as given (empty: not given), valid until
   // the gains move.
