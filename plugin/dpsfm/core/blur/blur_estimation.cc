@@ -14,7 +14,21 @@
 
 namespace dpsfm {
 
-const char* const kBlurAtSearchBound = "blur at the search bound";
+const char* const kBlurAtSearchBound = "blur beyond the search bound";
+const char* const kBlurUndetermined =
+    "blur not determined (its loss curve is within the patch's noise)";
+
+const char* BlurEvidenceName(BlurEvidence evidence) {
+  switch (evidence) {
+    case BlurEvidence::kMeasured:
+      return "measured";
+    case BlurEvidence::kBeyondBound:
+      return "beyond the bound";
+    case BlurEvidence::kUndetermined:
+      return "undetermined";
+  }
+  return "undetermined";
+}
 
 namespace {
 
@@ -192,6 +206,22 @@ double RiseAwayFromMinimum(const BlurTables& t,
   return rise;
 }
 
+// The coarse node of least loss on the other sign of `radius` (-1: none, or
+// radius 0).
+int OppositeSignNode(const BlurTables& t,
+                     const CoarseCurve& coarse,
+                     double radius) {
+  int node = -1;
+  double least = kInf;
+  for (size_t i = 0; i < coarse.loss.size(); ++i) {
+    if (t.Radius(t.coarse_nodes[i]) * radius < 0 && coarse.loss[i] < least) {
+      least = coarse.loss[i];
+      node = t.coarse_nodes[i];
+    }
+  }
+  return node;
+}
+
 // Sign ambiguity: the best coarse loss on the other sign, against the
 // coarse loss at the estimate (limits the rise; sets opposite_sign_loss).
 void CompareOppositeSign(const BlurTables& t,
@@ -239,6 +269,8 @@ bool BlurEstimationOptions::Check(std::string* failure) const {
       fit_quality_offset_px > 0 && fit_quality_offset_px < max_radius_px,
       fit_quality_offset_px);
   DPSFM_CHECK_OPTION_GE(max_refinement_evaluations, 3);
+  DPSFM_CHECK_OPTION_VALUE(std::isfinite(min_evidence_z) && min_evidence_z >= 0,
+                           min_evidence_z);
   return true;
 }
 
@@ -254,7 +286,8 @@ bool operator==(const BlurEstimationOptions& a,
                     o.min_texture,
                     o.min_fit_quality,
                     o.fit_quality_offset_px,
-                    o.max_refinement_evaluations);
+                    o.max_refinement_evaluations,
+                    o.min_evidence_z);
   };
   return fields(a) == fields(b);
 }
@@ -353,8 +386,18 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(
   result.fit_quality = std::min(1.0, std::max(1e-6, result.fit_quality));
 
   result.at_bound = std::abs(best.radius) > t.bound - 0.5 * t.step;
-  if (result.at_bound) {
+  internal::WeighBlurEvidence(t,
+                              sigma2,
+                              best,
+                              OppositeSignNode(t, coarse, best.radius),
+                              &refinement,
+                              &result);
+  if (result.evidence == BlurEvidence::kBeyondBound) {
     result.reject_reason = kBlurAtSearchBound;
+    return result;
+  }
+  if (result.evidence == BlurEvidence::kUndetermined) {
+    result.reject_reason = kBlurUndetermined;
     return result;
   }
   if (result.fit_quality < options.min_fit_quality) {

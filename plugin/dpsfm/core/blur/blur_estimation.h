@@ -37,6 +37,7 @@
 //   the noise-only loss difference.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,8 +48,29 @@
 
 namespace dpsfm {
 
-// The reject reason of a patch whose blur lies at the search bound.
+// The reject reason of a patch whose blur lies beyond the search bound (its
+// loss still falls into the bound by more than noise explains).
 extern const char* const kBlurAtSearchBound;
+// The reject reason of a patch whose loss curve does not determine a blur:
+// no rise on both sides of its minimum (nor into the bound) beyond what the
+// patch's noise gives.
+extern const char* const kBlurUndetermined;
+
+// What a patch's loss curve says about its blur, weighed against what noise
+// alone gives for that patch (PatchBlurEstimate::evidence).
+enum class BlurEvidence {
+  // A minimum the data determine: the corrected loss rises on both sides of
+  // it (and towards the other sign's best) by more than noise explains.
+  kMeasured,
+  // The minimum at the search bound, the loss still falling into it by more
+  // than noise explains: the blur lies beyond the bound.
+  kBeyondBound,
+  // Neither: a flat or noise-shaped curve, or a minimum at the bound the
+  // data do not pull there.
+  kUndetermined,
+};
+
+const char* BlurEvidenceName(BlurEvidence evidence);
 
 struct BlurEstimationOptions {
   // Search bound on |r| in pixels of the (possibly resized) DP frame. 20 is
@@ -99,6 +121,13 @@ struct BlurEstimationOptions {
   // the walk usually needs 3-5.
   int max_refinement_evaluations = 24;
 
+  // How many standard deviations of its noise a rise of the corrected loss
+  // must reach to count as evidence (BlurEvidence): on each side of a
+  // minimum for kMeasured, into the bound for kBeyondBound. The rise is
+  // taken at 1, 2 and 4 px from the minimum, each against the noise of the
+  // loss difference there.
+  double min_evidence_z = 3.5;
+
   bool Check(std::string* failure = nullptr) const;
 };
 
@@ -120,6 +149,15 @@ struct PatchBlurEstimate {
   double corrected_loss = 0;
   // True if the minimum lies at the search bound (then valid is false).
   bool at_bound = false;
+  // What the loss curve says (valid only when kMeasured).
+  BlurEvidence evidence = BlurEvidence::kUndetermined;
+  // Standard error of radius_px from the loss curve (px; +inf unless
+  // kMeasured): the curve's curvature against the noise of its slope, the
+  // residual at the minimum counted as noise where it exceeds the floor.
+  double radius_se_px = std::numeric_limits<double>::infinity();
+  // Significance of the weaker rise (in noise standard deviations): both
+  // sides for a minimum inside the bound, the inner side at the bound.
+  double evidence_z = 0;
   // Confidence in (0, 1], higher = better: C / (C + R) with C the rise of the
   // corrected loss fit_quality_offset_px away from the minimum (the weaker
   // side) and R the loss at the minimum. Near 1: the patch pins r well below

@@ -132,6 +132,8 @@ class BlurRefinement {
   void Evaluate(int n);
 
   double RawLoss(int n) const { return evals_[n].energy * inv_m_; }
+  // The residual at an evaluated node n, row by row over the interior.
+  const std::vector<float>& Residual(int n) const { return evals_[n].residual; }
 
   // Noise variance: the patch estimate, tightened by the fit: E[L(r)] =
   // S(r) + sigma^2 a(r) with S >= 0, so every L(r) / a(r) bounds sigma^2
@@ -197,6 +199,17 @@ class BlurRefinement {
   std::vector<NodeEval> evals_;
   cv::Mat product_, residual_image_;
 };
+
+// The evidence of a patch's loss curve (blur_evidence.cc): sets
+// result->evidence, radius_se_px and evidence_z from the exact loss around
+// `best` (evaluating the nodes it needs), with `opposite_node` the coarse
+// search's best node on the other sign of best.radius (-1: none).
+void WeighBlurEvidence(const BlurTables& t,
+                       double sigma2,
+                       const BlurRefinement::Minimum& best,
+                       int opposite_node,
+                       BlurRefinement* refinement,
+                       PatchBlurEstimate* result);
 
 }  // namespace internal
 }  // namespace dpsfm

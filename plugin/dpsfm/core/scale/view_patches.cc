@@ -263,7 +263,9 @@ std::vector<char> GrowthSample(const ViewBlurSearch& search) {
 
 int PatchesAtSearchBound(const ViewBlurSearch& search) {
   int count = 0;
-  for (const PatchBlurEstimate& e : search.estimates) count += e.at_bound;
+  for (const PatchBlurEstimate& e : search.estimates) {
+    count += e.evidence == BlurEvidence::kBeyondBound;
+  }
   return count;
 }
 
