@@ -350,7 +350,7 @@ TEST(RefusalAccount, TheDisagreementInFullWithTheOtherCauses) {
       << account[2];
   EXPECT_EQ(account[3],
             "patches over all views: 1134 tried, 173 usable (173 across a "
-            "depth edge, 114 blur at the search bound)");
+            "depth edge, 114 blur beyond the search bound)");
   // 114 of 1134 >= 5 %: ceil(max(1.6 x 4.93, 6.93)) = 8.
   EXPECT_EQ(account[4],
             "114 of 1134 patches have more blur than the search bound of "

@@ -73,7 +73,7 @@ TEST(PatchAccount, LeadingCauseRejectionsAndBoundByHand) {
   // Reasons summed over the views, in the order of their names, without the
   // unsearched ones.
   EXPECT_EQ(account.rejections,
-            (Counts{{"blur at the search bound", 8},
+            (Counts{{"blur beyond the search bound", 8},
                     {"with texture too weak for the noise", 55},
                     {"without depth", 2}}));
   // 8 of 100 >= 5 %; the larger bound ceil(max(1.6 x 10, 10 + 2)) = 16.

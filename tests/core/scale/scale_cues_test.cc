@@ -59,25 +59,52 @@ TEST(CombineScaleCues, AgreeingCuesWeighByTheirWidth) {
   EXPECT_NEAR(c.ci_high, 1.1032521, 1e-6);
 }
 
-// DP 0.81 [0.75, 0.88] and focus 0.95 [0.82, 1.10] overlap, but their
-// estimates are 1.87 sigmas of their difference apart: they disagree, and
-// the interval covers both, [0.75, 1.10], around sqrt(0.81 x 0.95). A
-// narrow interval around either cue (or their overlap, [0.82, 0.88]) would
-// have missed the other's estimate.
+// DP 0.78 [0.72, 0.80] (sigma ln(0.80 / 0.72) / 3.92 = 0.026878) and focus
+// 0.95 [0.82, 1.10] (sigma 0.074947) are ln(0.95 / 0.78) = 0.197165 apart,
+// 2.48 sigmas of their difference, and neither interval holds the other's
+// estimate: they disagree, and the interval covers both, [0.72, 1.10],
+// around sqrt(0.78 x 0.95) = 0.860814.
 TEST(CombineScaleCues, DisagreeingCuesAreCoveredBoth) {
   const CombinedScale c =
-      CombineScaleCues(Cue(0.81, 0.75, 0.88), Cue(0.95, 0.82, 1.10));
+      CombineScaleCues(Cue(0.78, 0.72, 0.80), Cue(0.95, 0.82, 1.10));
   EXPECT_EQ(c.agreement, CueAgreement::kDisagree);
-  EXPECT_NEAR(c.scale, 0.8772114910, 1e-9);
-  EXPECT_DOUBLE_EQ(c.ci_low, 0.75);
+  EXPECT_NEAR(c.scale, 0.8608136, 1e-6);
+  EXPECT_DOUBLE_EQ(c.ci_low, 0.72);
   EXPECT_DOUBLE_EQ(c.ci_high, 1.10);
   EXPECT_NE(c.how.find("DISAGREE"), std::string::npos) << c.how;
   // The same the other way round.
   const CombinedScale swapped =
-      CombineScaleCues(Cue(0.95, 0.82, 1.10), Cue(0.81, 0.75, 0.88));
+      CombineScaleCues(Cue(0.95, 0.82, 1.10), Cue(0.78, 0.72, 0.80));
   EXPECT_EQ(swapped.agreement, CueAgreement::kDisagree);
-  EXPECT_DOUBLE_EQ(swapped.ci_low, 0.75);
+  EXPECT_DOUBLE_EQ(swapped.ci_low, 0.72);
   EXPECT_DOUBLE_EQ(swapped.ci_high, 1.10);
+}
+
+// DP 0.81 [0.75, 0.88] and focus 0.95 [0.82, 1.10] are 1.87 sigmas of their
+// difference apart, within its 95 % range: they agree. sigma_dp =
+// ln(0.88 / 0.75) / 3.92 = 0.040794, sigma_focus = ln(1.10 / 0.82) / 3.92 =
+// 0.074947: the inverse-variance mean 0.840045 with [0.783093, 0.901139].
+TEST(CombineScaleCues, OverlappingIntervalsAgree) {
+  const CombinedScale c =
+      CombineScaleCues(Cue(0.81, 0.75, 0.88), Cue(0.95, 0.82, 1.10));
+  EXPECT_EQ(c.agreement, CueAgreement::kAgree);
+  EXPECT_NEAR(c.scale, 0.8400452, 1e-6);
+  EXPECT_NEAR(c.ci_low, 0.7830933, 1e-6);
+  EXPECT_NEAR(c.ci_high, 0.9011390, 1e-6);
+}
+
+// Intervals that touch are not enough: a narrow DP cue 0.06155 [0.05989,
+// 0.06321] (a wrong profile taken on trust) reaches into the focus cue's
+// 0.07313 [0.062, 0.08426], but the estimates are ln(0.07313 / 0.06155) =
+// 0.172389 apart, 2.17 sigmas of their difference (sigmas 0.013753 and
+// 0.078207), and neither interval holds the other's estimate. Fusing them
+// would answer about 0.0619 [0.0599, 0.0632], missing the focus's truth.
+TEST(CombineScaleCues, TouchingIntervalsOfDistantEstimatesDisagree) {
+  const CombinedScale c = CombineScaleCues(Cue(0.06155, 0.05989, 0.06321),
+                                           Cue(0.07313, 0.062, 0.08426));
+  EXPECT_EQ(c.agreement, CueAgreement::kDisagree);
+  EXPECT_DOUBLE_EQ(c.ci_low, 0.05989);
+  EXPECT_DOUBLE_EQ(c.ci_high, 0.08426);
 }
 
 // A wide cue whose estimate lies outside a narrow one's interval, but whose

@@ -318,8 +318,11 @@ std::string DisagreementAdviceText(const CueRefusal& cues,
 
 std::string DisagreementCauseText(const CueRefusal& cues) {
   return "the DP data and the recorded focus disagree: " + Num(cues.dp.scale) +
-         " against " + Num(cues.focus.scale) + " (together " +
-         Percent(cues.width) + " wide, limit " + Percent(cues.limit) + ")";
+         " in [" + Num(cues.dp.ci_low) + ", " + Num(cues.dp.ci_high) +
+         "] against " + Num(cues.focus.scale) + " in [" +
+         Num(cues.focus.ci_low) + ", " + Num(cues.focus.ci_high) +
+         "], intervals that share no value (together " + Percent(cues.width) +
+         " wide, limit " + Percent(cues.limit) + ")";
 }
 
 namespace {

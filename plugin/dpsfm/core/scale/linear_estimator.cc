@@ -52,6 +52,11 @@ double WeightedL1Fit1D(const std::vector<double>& gamma,
 
 }  // namespace
 
+double ReadingWeight(double radius_se_px) {
+  if (!(radius_se_px > 0) || !std::isfinite(radius_se_px)) return 1;
+  return 1 / std::hypot(radius_se_px, kRadiusErrorFloorPx);
+}
+
 bool IrlsOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GT(max_iterations, 0);
   DPSFM_CHECK_OPTION_GT(epsilon, 0);
@@ -94,8 +99,12 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
   IrlsResult result;
   if (n <= 0 || num_rows < m) return result;
 
+  DPSFM_CHECK(system.row_weight.empty() ||
+              static_cast<int>(system.row_weight.size()) == num_rows);
   auto row_weight = [&](int k) {
-    return row_weights == nullptr ? 1.0 : (*row_weights)[k];
+    const double precision =
+        system.row_weight.empty() ? 1.0 : system.row_weight[k];
+    return precision * (row_weights == nullptr ? 1.0 : (*row_weights)[k]);
   };
 
   // Column scaling: unit (weighted) L2 norm per column.
@@ -224,7 +233,8 @@ DPLinearSystem BuildSystem(const std::vector<LinearViewData>& views,
       system.AddRow(
           static_cast<int>(c),
           MakeLinearRow(
-              view.lens, view.pixel_pitch_mm, sample.radius_px, sample.depth));
+              view.lens, view.pixel_pitch_mm, sample.radius_px, sample.depth),
+          ReadingWeight(sample.radius_se_px));
     }
   }
   return system;

@@ -19,15 +19,19 @@ namespace dpsfm {
 // The sparse system. Row k belongs to view row_view[k] and has two non-zeros:
 // `gamma` in that view's column and `minus_l` in the last (shared) column.
 // Unknowns x = [gbar_1 .. gbar_n, sbar] (see lens_model.h).
+// Each row's L1 term is multiplied by its weight: the precision of its blur
+// reading (LinearSample::radius_se_px), 1 when none is known.
 struct DPLinearSystem {
   int num_views = 0;
   std::vector<int> row_view;
   std::vector<LinearRow> rows;
+  std::vector<double> row_weight;
 
   int NumRows() const { return static_cast<int>(rows.size()); }
-  void AddRow(int view, const LinearRow& row) {
+  void AddRow(int view, const LinearRow& row, double weight = 1) {
     row_view.push_back(view);
     rows.push_back(row);
+    row_weight.push_back(weight);
   }
 };
 
@@ -70,7 +74,18 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
 struct LinearSample {
   double depth = 0;      // z' in model units (> 0)
   double radius_px = 0;  // signed blur radius (> 0 farther than focus)
+  // Standard error of radius_px from its loss curve (px; 0 = unknown): the
+  // row's L1 term is weighted by 1 / sqrt(se^2 + kRadiusErrorFloorPx^2).
+  double radius_se_px = 0;
 };
+
+// What a blur reading can never be more precise than, whatever its curve
+// says (px): the kernel grid's shape error and the model's (a real lens is
+// not a thin lens, a patch not one depth) are not in the curve's noise.
+constexpr double kRadiusErrorFloorPx = 0.1;
+
+// The weight of a reading of standard error se in the L1 fit.
+double ReadingWeight(double radius_se_px);
 
 struct LinearViewData {
   std::string name;

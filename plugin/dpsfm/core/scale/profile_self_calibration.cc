@@ -148,6 +148,7 @@ int DPScaleEstimator::ReestimateStoredPatches(
             GreyOfStoredCrop(st.left), GreyOfStoredCrop(st.right));
         if (e.valid && !e.at_bound && std::isfinite(e.radius_px)) {
           s.radius_px = e.radius_px;
+          s.radius_se_px = e.radius_se_px;
           s.radius_frame_px = e.radius_px / v.summary.resize_factor;
           s.fit_quality = e.fit_quality;
           s.selected = true;

@@ -10,12 +10,6 @@ namespace dpsfm {
 namespace {
 
 constexpr double kZ95 = 1.959964;
-// Cues further apart than this many sigmas of their difference disagree.
-// One sigma, not two: the DP cue's interval is only as honest as the
-// profile's transfer term, and on the R6 II scenes a DP interval 1.4 sigmas
-// from the recorded focus's still missed the truth; fusing it would have
-// given a narrow interval that missed it too (docs/psf-profiles.md).
-constexpr double kMaxAgreeingSigmas = 1;
 
 // The log-scale sigma of a 95 % interval.
 double LogSigma(const ScaleCue& cue) {
@@ -55,12 +49,14 @@ CombinedScale CombineScaleCues(const ScaleCue& dp, const ScaleCue& focus) {
   // How far apart the estimates are, in sigmas of their difference.
   const double z = std::abs(std::log(dp.scale) - std::log(focus.scale)) /
                    std::hypot(sigma_dp, sigma_focus);
-  // One interval inside the other: the wider cue says little, but nothing
-  // against the narrower one.
-  const bool nested =
-      (dp.Contains(focus.ci_low) && dp.Contains(focus.ci_high)) ||
-      (focus.Contains(dp.ci_low) && focus.Contains(dp.ci_high));
-  if (nested || z <= kMaxAgreeingSigmas) {
+  // Consistent: either interval holds the other's estimate, or the
+  // difference passes its own 95 % test. Intervals that merely touch are
+  // not enough: a narrow cue that is wrong (a profile taken on trust) can
+  // reach into a wide one's edge, and fusing them would answer with the
+  // narrow one's error (scale_estimator_test, the sharper split).
+  const bool consistent =
+      dp.Contains(focus.scale) || focus.Contains(dp.scale) || z <= kZ95;
+  if (consistent) {
     out.agreement = CueAgreement::kAgree;
     const double wd = 1 / (sigma_dp * sigma_dp);
     const double wf = 1 / (sigma_focus * sigma_focus);
@@ -71,9 +67,11 @@ CombinedScale CombineScaleCues(const ScaleCue& dp, const ScaleCue& focus) {
     out.ci_low = std::exp(mean - kZ95 * sigma);
     out.ci_high = std::exp(mean + kZ95 * sigma);
     how << "the cues agree (" << Describe("DP", dp) << ", "
-        << Describe("recorded focus", focus) << ": "
-        << (nested ? "one interval inside the other"
-                   : "estimates within one sigma of their difference")
+        << Describe("recorded focus", focus)
+        << ": "
+        << (dp.Contains(focus.scale) || focus.Contains(dp.scale)
+                ? "one interval holds the other's estimate"
+                : "estimates within the 95 % range of their difference")
         << "): their inverse-variance mean in log scale, with its interval";
   } else {
     out.agreement = CueAgreement::kDisagree;
@@ -83,7 +81,8 @@ CombinedScale CombineScaleCues(const ScaleCue& dp, const ScaleCue& focus) {
     how << "the cues DISAGREE (" << Describe("DP", dp) << ", "
         << Describe("recorded focus", focus) << ": " << std::setprecision(2)
         << z
-        << " sigmas apart): an interval covering both, around their "
+        << " sigmas of their difference apart, neither interval holding "
+           "the other's estimate): an interval covering both, around their "
            "geometric mean";
   }
   out.how = how.str();

@@ -25,7 +25,7 @@ struct ScaleCue {
 
 enum class CueAgreement {
   kOneCue,    // only one cue was there
-  kAgree,     // within one sigma of each other, or nested intervals
+  kAgree,     // consistent: see CombineScaleCues
   kDisagree,  // otherwise
 };
 
@@ -43,11 +43,11 @@ struct CombinedScale {
 // 95 % interval is read as a normal in log-scale (sigma = its log width /
 // 3.92):
 // - one cue: its estimate and interval;
-// - two that agree (their estimates at most one sigma of their difference
-//   apart, or one interval inside the other: a wide cue says little, but
-//   nothing against a narrow one): the inverse-variance mean of the
-//   log-scales and its 95 % interval (independent errors: the profile's
-//   transfer against the record's accuracy);
+// - two that agree (either interval holds the other's estimate, or the
+//   estimates lie within 1.96 sigmas of their difference): the
+//   inverse-variance mean of the log-scales (independent errors: the
+//   profile's transfer against the record's accuracy) and its 95 %
+//   interval;
 // - two that disagree: the geometric mean of the two estimates, with the
 //   hull of both intervals (it holds the truth whenever either does).
 // Throws std::invalid_argument when neither cue is valid.

@@ -281,7 +281,8 @@ bool DPScaleEstimator::LinearStage(
     linear_views[i].lens = v.lens;
     linear_views[i].pixel_pitch_mm = v.working_pitch_mm;
     for (const PatchSample& s : samples[i]) {
-      if (s.selected) linear_views[i].samples.push_back({s.depth, s.radius_px});
+      if (s.selected) linear_views[i].samples.push_back(
+            {s.depth, s.radius_px, s.radius_se_px});
     }
   }
   LinearEstimatorOptions linear_options = options_.linear;

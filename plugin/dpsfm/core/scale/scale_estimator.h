@@ -302,6 +302,9 @@ struct PatchSample {
   double depth_spread = 0;     // (p90 - p10) / median of z' inside
   double radius_px = 0;        // signed estimate, working-frame pixels
   double radius_frame_px = 0;  // the same in DP-frame pixels
+  // Standard error of radius_px from the patch's loss curve (working-frame
+  // px; PatchBlurEstimate::radius_se_px).
+  double radius_se_px = 0;
   double confidence = 0;
   double fit_quality = 0;
   double texture = 0;

@@ -400,6 +400,7 @@ std::vector<PatchSample> ViewSamples(
     s.depth = c.depth.median;
     s.depth_spread = c.depth.relative_spread;
     s.radius_px = e.radius_px;
+    s.radius_se_px = e.radius_se_px;
     s.radius_frame_px = e.radius_px / geometry.resize_factor;
     s.fit_quality = e.fit_quality;
     s.texture = e.texture;
