@@ -150,38 +150,6 @@ TEST(SearchBoundReached, OnlyAnAutomaticBoundTheBlurReachesWhileGrowthsLast) {
   EXPECT_FALSE(SearchBoundReached(100, 50, 0, explicit_bound));
 }
 
-// Patches on the thin lens's line r = 2 - 6 / z' (focus at z' = 3), one
-// far off it; the grid's patch depths run 1.0, 1.1, ..., 3.0 (5 % and
-// 95 %: 1.1 and 2.9 by linear interpolation). By hand: |2 - 6 / 1.1| =
-// 3.4545, |2 - 6 / 2.9| = 0.0690, so 3.4545 px.
-TEST(ExpectedMaxBlur, TheLineThroughInverseDepthOverTheDepthRange) {
-  std::vector<PatchCandidate> candidates;
-  for (int i = 0; i <= 20; ++i) {
-    PatchCandidate c;
-    c.depth.ok = true;
-    c.depth.median = 1.0 + 0.1 * i;
-    candidates.push_back(c);
-  }
-  PatchCandidate no_depth;  // not counted
-  no_depth.reject = "without depth";
-  no_depth.depth.median = 0.1;
-  candidates.push_back(no_depth);
-  std::vector<PatchSample> usable;
-  for (double z : {1.5, 1.7, 2.0, 2.2, 2.5, 2.8, 3.0}) {
-    PatchSample s;
-    s.depth = z;
-    s.radius_px = 2 - 6 / z;
-    usable.push_back(s);
-  }
-  PatchSample outlier;
-  outlier.depth = 2.0;
-  outlier.radius_px = 9;
-  usable.push_back(outlier);
-  EXPECT_NEAR(ExpectedMaxBlur(candidates, usable), 6 / 1.1 - 2, 1e-9);
-  usable.resize(5);  // fewer than 6: undetermined
-  EXPECT_EQ(ExpectedMaxBlur(candidates, usable), 0);
-}
-
 // Twice the bound, up to a half pixel: 2 x 4.3 = 8.6 -> 9.
 TEST(SearchBoundCap, TwiceTheBoundUpToAHalfPixel) {
   EXPECT_DOUBLE_EQ(SearchBoundCap(5), 10);
@@ -189,57 +157,55 @@ TEST(SearchBoundCap, TwiceTheBoundUpToAHalfPixel) {
   EXPECT_DOUBLE_EQ(SearchBoundCap(8.5), 17);
 }
 
-TEST(GrownSearchBound, ToTheExpectedBlurWhileTheCropsFit) {
+// Beyond-the-bound patches say the blur runs past the bound, not how far:
+// the bound goes to its cap, 2 x 5 = 10 px, while the crops fit twice into
+// the frame's short side, else to LargerSearchBound(5) = max(1.6 x 5, 7) =
+// 8 px, else it stays. The 5 px geometry's patch is 2 x 5 + 21 = 31 px;
+// the disk's kernels need a border of about the bound, so the crops are
+// about 51 px at 10 px and 47 px at 8 px.
+TEST(GrownSearchBound, ToTheCapWhileTheCropsFit) {
   const DPPsfField field =
       DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   BlurEstimationOptions blur;
   const PatchGeometry g = PatchGeometryForRadius(5, 1);
-  const cv::Size frame(768, 512);
-  // 1.2 x 6.5 = 7.8 -> 8 (a half pixel up).
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 6.5, frame, field, blur), 8);
-  // At most twice the bound: 1.2 x 20 = 24 -> 10.
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 20, frame, field, blur), 10);
-  // No expected blur: LargerSearchBound(5) = 8.
-  EXPECT_DOUBLE_EQ(GrownSearchBound(g, 0, frame, field, blur), 8);
-  // 1.2 x 4 = 4.8 < 5: the patches at the bound are not the depth range's
-  // blur; the bound stays.
-  EXPECT_EQ(GrownSearchBound(g, 4, frame, field, blur), 0);
-  // The 5 px geometry's patch is 2 x 5 + 21 = 31 px, and at 8 px the
-  // disk's kernels need a border of about 9 px: crops of ~49 px do not fit
-  // twice into 90 px.
-  EXPECT_EQ(GrownSearchBound(g, 6.5, cv::Size(90, 90), field, blur), 0);
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, cv::Size(768, 512), field, blur), 10);
+  const int crop_cap = g.patch_size + 2 * BlurSearchBorder(field, blur, 10);
+  const int crop_larger = g.patch_size + 2 * BlurSearchBorder(field, blur, 8);
+  ASSERT_LT(crop_larger, crop_cap);
+  const int between = 2 * crop_larger + 1;  // the larger fits, the cap not
+  EXPECT_DOUBLE_EQ(
+      GrownSearchBound(g, cv::Size(between, between), field, blur), 8);
+  EXPECT_EQ(GrownSearchBound(g, cv::Size(2 * crop_larger - 1, 600), field,
+                             blur),
+            0);
 }
 
 // By hand, bound 5 px (cap 10), share 0.05: of 100 searched, two standard
-// errors above 5 % is 5 + 2 sqrt(0.05 x 0.95 / 100) x 100 = 9.36 patches.
-// The cap needs ceil(2 x 1.2 x E / 1.15) / 2 >= 10, E > 9.104 px.
-TEST(EarlyGrownSearchBound, OnlyWhenTheShareSettlesItAtTheCap) {
+// errors above 5 % is 5 + 2 sqrt(0.05 x 0.95 / 100) x 100 = 9.36 patches
+// beyond the bound.
+TEST(EarlyGrownSearchBound, OnlyWhenTheShareSettlesIt) {
   const DPPsfField field =
       DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   BlurEstimationOptions blur;
   const PatchGeometry g = PatchGeometryForRadius(5, 1);
   const cv::Size frame(768, 512);
   DPScaleOptions options;
-  auto early = [&](int searched, int at_bound, int growths, double blur_px) {
+  auto early = [&](int searched, int beyond, int growths) {
     return EarlyGrownSearchBound(
-        searched, at_bound, growths, blur_px, g, frame, field, blur, options);
+        searched, beyond, growths, g, frame, field, blur, options);
   };
-  EXPECT_DOUBLE_EQ(early(100, 10, 0, 9.6), 10);
-  EXPECT_EQ(early(100, 9, 0, 9.6), 0);  // within two standard errors
-  EXPECT_DOUBLE_EQ(early(100, 10, 0, 9.2), 10);
-  EXPECT_EQ(early(100, 10, 0, 9.0), 0);  // 9.5 px: the cap not certain
-  EXPECT_EQ(early(100, 10, 0, 0), 0);    // no expected blur
-  EXPECT_EQ(early(100, 10, 1, 9.6), 0);  // growth spent
-  EXPECT_EQ(early(0, 0, 0, 9.6), 0);     // nothing searched
+  EXPECT_DOUBLE_EQ(early(100, 10, 0), 10);
+  EXPECT_EQ(early(100, 9, 0), 0);   // within two standard errors
+  EXPECT_EQ(early(100, 10, 1), 0);  // growth spent
+  EXPECT_EQ(early(0, 0, 0), 0);     // nothing searched
   DPScaleOptions explicit_bound = options;
   explicit_bound.max_radius_px = 5;
   EXPECT_EQ(EarlyGrownSearchBound(
-                100, 50, 0, 20, g, frame, field, blur, explicit_bound),
+                100, 50, 0, g, frame, field, blur, explicit_bound),
             0);
-  // The crops at 10 px do not fit twice into 90 px: the whole search
-  // decides (and keeps the bound).
+  // No grown bound's crops fit twice into 60 px: the bound stays.
   EXPECT_EQ(EarlyGrownSearchBound(
-                100, 50, 0, 20, g, cv::Size(90, 90), field, blur, options),
+                100, 50, 0, g, cv::Size(60, 60), field, blur, options),
             0);
 }
 

@@ -142,10 +142,9 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   // 1 to 4, for each search bound: the patch grid with each patch's depth
   // (patch_grid.h), the screening, the blur-search share, the blur search,
   // and the usable patches as samples (the others counted by reason). An
-  // automatic bound that the view's blur reaches is grown to the blur its
-  // depth range implies and the view searched again (SearchBoundReached,
-  // ExpectedMaxBlur, GrownSearchBound), as soon as a share of its patches
-  // settles it (EarlyGrownSearchBound).
+  // automatic bound whose patches' blur lies beyond it is grown and the
+  // view searched again (SearchBoundReached, GrownSearchBound), as soon as
+  // a share of its patches settles it (EarlyGrownSearchBound).
   for (;;) {
     blur.max_radius_px = geometry.max_radius_px;
     border = BlurSearchBorder(field_, blur, geometry.max_radius_px);
@@ -182,14 +181,11 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
     if (SearchBoundMayGrow(summary.search_bound_growths, options_)) {
       const std::vector<char> share = GrowthSample(search);
       search_patches(&share);
-      std::map<std::string, int> share_reasons;
-      std::vector<int> share_index;
       if (search.num_searched > 0) {
         grown = EarlyGrownSearchBound(
             search.num_searched,
             PatchesAtSearchBound(search),
             summary.search_bound_growths,
-            ExpectedMaxBlur(candidates, samples(&share_reasons, &share_index)),
             geometry,
             working.left.size(),
             field_,
@@ -210,11 +206,7 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
                               options_)) {
         break;
       }
-      grown = GrownSearchBound(geometry,
-                               ExpectedMaxBlur(candidates, data->samples),
-                               working.left.size(),
-                               field_,
-                               blur);
+      grown = GrownSearchBound(geometry, working.left.size(), field_, blur);
       if (!(grown > 0)) break;
     }
     // The patches stay as they were (an explicit max_radius_px keeps them

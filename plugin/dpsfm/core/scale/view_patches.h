@@ -152,8 +152,8 @@ constexpr int kGrowthSampleStep = 4;
 constexpr int kMinGrowthSample = 40;
 std::vector<char> GrowthSample(const ViewBlurSearch& search);
 
-// Searched patches whose blur sits at the search bound (their estimate is
-// the bound, not the blur).
+// Searched patches whose blur lies beyond the search bound
+// (BlurEvidence::kBeyondBound; their estimate is the bound, not the blur).
 int PatchesAtSearchBound(const ViewBlurSearch& search);
 
 // The next search bound after `bound_px`: 1.6 times it (at least 2 px
@@ -176,43 +176,33 @@ bool SearchBoundReached(int num_searched,
                         int growths,
                         const DPScaleOptions& options);
 
-// The largest blur the view's depth range implies. The thin lens makes a
-// patch's blur linear in its inverse depth (eq. solution01: r = k (1/g' -
-// 1/z'), k from the scale, the lens and the profile), so a robust line
-// (Theil-Sen) through the usable patches' (1/z', r), extended over the
-// 5-95 % range of the grid's patch depths, gives the largest |r| to
-// expect. 0 when fewer than 6 usable patches, or all at one depth.
-double ExpectedMaxBlur(const std::vector<PatchCandidate>& candidates,
-                       const std::vector<PatchSample>& usable);
-
 // The most a bound of `bound_px` grows to: twice it, up to a half pixel.
 double SearchBoundCap(double bound_px);
 
-// The bound to search the view again with, or 0 to keep its search: 1.2
-// times the expected blur (ExpectedMaxBlur; LargerSearchBound when there is
-// none), at most twice the bound, up to a half pixel, if it exceeds the
-// bound and the crops (the
+// The bound to search the view again with, or 0 to keep its search: its
+// cap (SearchBoundCap), else LargerSearchBound, the first whose crops (the
 // same patch, the larger bound's kernel border) fit twice into the working
-// frame's short side.
+// frame's short side. Patches beyond the bound are evidence (BlurEvidence::
+// kBeyondBound: the loss still falls into it by more than noise explains)
+// that the blur runs past it, but not of how far, so the bound goes as far
+// as the search affords rather than to an extrapolation of the usable
+// patches, whose half-pixel steps moved answers.
 double GrownSearchBound(const PatchGeometry& geometry,
-                        double expected_max_blur_px,
                         const cv::Size& working_size,
                         const DPPsfField& field,
                         const BlurEstimationOptions& blur);
 
 // The grown bound when the search of a share of the view's patches
 // (GrowthSample) settles it, else 0 and the whole search decides (as
-// SearchBoundReached and GrownSearchBound do): the share's patches at the
-// bound exceed search_bound_share of them by two standard errors, and the
-// bound grows to its cap (twice the bound) even with 15 % less blur
-// expected than the share's usable patches imply. A view whose blur runs
-// well past its bound then searches a quarter of its patches at that bound
-// instead of all before it is searched again; the answer is the same
-// whenever the whole search would have grown the bound to the cap too.
+// SearchBoundReached and GrownSearchBound do): the share's patches beyond
+// the bound exceed search_bound_share of them by two standard errors. A
+// view whose blur runs well past its bound then searches a quarter of its
+// patches at that bound instead of all before it is searched again; the
+// answer is the same as the whole search's, which would have grown the
+// bound too.
 double EarlyGrownSearchBound(int num_searched,
-                             int num_at_bound,
+                             int num_beyond_bound,
                              int growths,
-                             double expected_max_blur_px,
                              const PatchGeometry& geometry,
                              const cv::Size& working_size,
                              const DPPsfField& field,
