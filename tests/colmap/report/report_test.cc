@@ -235,7 +235,7 @@ TEST(MakeReport, SearchBoundSection) {
   b.max_radius_px = 13;
   b.views_grown = 1;
   b.patches_searched = 240;
-  b.patches_at_bound = 3;
+  b.patches_beyond_bound = 3;
   b.profile_covered_radius_px = 4.93;
   b.samples = 17;
   b.samples_beyond_coverage = 5;
@@ -245,14 +245,14 @@ TEST(MakeReport, SearchBoundSection) {
   summary.initial_max_radius_px = 4.93;
   summary.max_radius_px = 13;
   summary.search_bound_growths = 2;
-  summary.patches_at_bound = 3;
+  summary.patches_beyond_bound = 3;
   summary.patches_searched = 240;
   const nlohmann::json r = MakeReport(result, {}, {summary}, RunTimings());
   const nlohmann::json& s = r["search_bound"];
   EXPECT_DOUBLE_EQ(s["initial_px"].get<double>(), 4.93);
   EXPECT_DOUBLE_EQ(s["px"].get<double>(), 13);
   EXPECT_EQ(s["views_grown"], 1);
-  EXPECT_EQ(s["patches_at_bound"], 3);
+  EXPECT_EQ(s["patches_beyond_bound"], 3);
   EXPECT_EQ(s["limits_answer"], false);
   EXPECT_EQ(s["patches_beyond_coverage"], 5);
   EXPECT_DOUBLE_EQ(s["extrapolation_uncertainty"].get<double>(), 0.053);

@@ -988,7 +988,7 @@ TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
     EXPECT_DOUBLE_EQ(s.max_radius_px, 5) << s.name;
     EXPECT_EQ(s.search_bound_growths, 0) << s.name;
     // The premise: the blur lies beyond 5 px for many patches.
-    EXPECT_GE(s.patches_at_bound, 0.05 * s.patches_searched) << s.name;
+    EXPECT_GE(s.patches_beyond_bound, 0.05 * s.patches_searched) << s.name;
   }
   EXPECT_TRUE(clipped.result.search_bound.limits);
 
@@ -1018,7 +1018,7 @@ TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
     EXPECT_GE(s.max_radius_px, 0.9 * true_max) << s.name;
     EXPECT_LE(s.max_radius_px, std::min(10.0, 1.5 * true_max + 0.5))
         << s.name;
-    EXPECT_LT(s.patches_at_bound, 0.05 * s.patches_searched)
+    EXPECT_LT(s.patches_beyond_bound, 0.05 * s.patches_searched)
         << s.name << ": bound " << s.max_radius_px << ", true " << true_max;
   }
   const DPScaleResult& r = grown.result;

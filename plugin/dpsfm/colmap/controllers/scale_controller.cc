@@ -423,38 +423,43 @@ std::vector<std::string> FrameWarnings(const DPScaleResult& result) {
 }
 
 // The search bound as the views ended with it (DPScaleResult::
-// search_bound), for the log and the report: a successful run whose blur
-// still reaches the bound, and a measured profile extended beyond the blur
-// it was calibrated over, are warnings.
+// search_bound), for the log and the report: a successful run whose
+// patches' blur still lies beyond the bound is a warning, with the option
+// that searches farther.
 std::vector<std::string> SearchBoundWarnings(const DPScaleResult& result) {
   const SearchBoundAccount& b = result.search_bound;
   std::vector<std::string> warnings;
-  std::ostringstream s;
   if (result.success && b.limits) {
-    s << b.patches_at_bound << " of " << b.patches_searched
-      << " searched patches sit at the blur-search bound ("
+    std::ostringstream s;
+    s << b.patches_beyond_bound << " of " << b.patches_searched
+      << " searched patches have blur beyond the blur-search bound ("
       << std::setprecision(3) << b.max_radius_px << " px"
       << (b.views_grown > 0 ? ", grown from " : "");
     if (b.views_grown > 0) s << b.initial_max_radius_px << " px";
-    s << "): their blur lies beyond it and the answer rests on the patches "
-         "nearer the focus; --DPScaleEstimator.max_radius_px "
-      << b.larger_radius_px
-      << " searches farther";
-    warnings.push_back(s.str());
-    s.str("");
-  }
-  if (b.samples_beyond_coverage > 0) {
-    s << b.samples_beyond_coverage << " of " << b.samples
-      << " selected patches have more blur than the DP profile's "
-         "calibration covered ("
-      << std::setprecision(3) << b.profile_covered_radius_px
-      << " px); there its measured kernels are magnified copies, and the "
-         "interval carries +-"
-      << std::fixed << std::setprecision(1)
-      << 100 * b.extrapolation_uncertainty << " % for it";
+    s << "): the answer rests on the patches nearer the focus; "
+         "--DPScaleEstimator.max_radius_px "
+      << b.larger_radius_px << " searches farther";
     warnings.push_back(s.str());
   }
   return warnings;
+}
+
+// A measured profile extended beyond the blur it was calibrated over: the
+// interval already carries it, and there is nothing to do about it short
+// of calibrating with more blur, so it is said, not warned.
+std::string ProfileCoverageNote(const DPScaleResult& result) {
+  const SearchBoundAccount& b = result.search_bound;
+  if (!(b.samples_beyond_coverage > 0)) return "";
+  std::ostringstream s;
+  s << b.samples_beyond_coverage << " of " << b.samples
+    << " selected patches have more blur than the DP profile's calibration "
+       "covered ("
+    << std::setprecision(3) << b.profile_covered_radius_px
+    << " px); there its measured kernels are magnified copies, and the "
+       "interval carries +-"
+    << std::fixed << std::setprecision(1) << 100 * b.extrapolation_uncertainty
+    << " % for it";
+  return s.str();
 }
 
 // Step 6: what the estimate found, per view and overall.
@@ -493,6 +498,8 @@ void LogResult(const DPScaleResult& result) {
   for (const std::string& warning : SearchBoundWarnings(result)) {
     LOG(WARNING) << warning;
   }
+  const std::string coverage = ProfileCoverageNote(result);
+  if (!coverage.empty()) LOG(INFO) << "DP profile: " << coverage;
 }
 
 // What the run does with the profile before the scale, for the log.

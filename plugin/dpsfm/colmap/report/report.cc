@@ -203,7 +203,8 @@ void AddViewSummary(const DPViewSummary& s, nlohmann::json* entry) {
   e["search_bound"] = {{"initial_px", s.initial_max_radius_px},
                        {"px", s.max_radius_px},
                        {"growths", s.search_bound_growths},
-                       {"patches_at_bound", s.patches_at_bound},
+                       {"patches_beyond_bound", s.patches_beyond_bound},
+                       {"patches_undetermined", s.patches_undetermined},
                        {"patches_searched", s.patches_searched}};
   nlohmann::json rejections = nlohmann::json::object();
   for (const auto& rejection : s.rejections) {
@@ -279,6 +280,7 @@ nlohmann::json PatchesSection(const DPScaleResult& result) {
          {"y", patch.y},
          {"depth_model", patch.depth},
          {"radius_px", Number(patch.radius_px)},
+         {"radius_se_px", Number(patch.radius_se_px)},
          {"predicted_radius_px", Number(patch.predicted_radius_px)},
          {"confidence", Number(patch.confidence)},
          {"used", patch.used}});
@@ -296,7 +298,8 @@ nlohmann::json SearchBoundSection(const DPScaleResult& result) {
                             {"px", b.max_radius_px},
                             {"views_grown", b.views_grown},
                             {"patches_searched", b.patches_searched},
-                            {"patches_at_bound", b.patches_at_bound},
+                            {"patches_beyond_bound", b.patches_beyond_bound},
+                            {"patches_undetermined", b.patches_undetermined},
                             {"limits_answer", b.limits}};
   section["profile_covered_px"] = b.profile_covered_radius_px > 0
                                       ? Number(b.profile_covered_radius_px)

@@ -23,8 +23,8 @@
 // is counted as noise too: sigma^2 is raised to L(r0) / a(r0).
 //
 // A minimum inside the bound is measured when the rise on each side (the
-// best of 1, 2 and 4 px away) and towards the other sign's best coarse node
-// reach min_evidence_z; its standard error is the larger of the two sides'.
+// best of 1, 2 and 4 px away), to the same blur on the other side of focus
+// and towards the other sign's best coarse node reach min_evidence_z; its standard error is the larger of the two sides'.
 // A minimum at the bound is beyond it when the rise from the bound inwards
 // reaches min_evidence_z. Everything else is undetermined.
 #include <algorithm>
@@ -178,6 +178,12 @@ void WeighBlurEvidence(const BlurTables& t,
   const EvidenceCurve::SideRise lower = curve.Side(-1);
   const EvidenceCurve::SideRise upper = curve.Side(1);
   double z = std::min(lower.z, upper.z);
+  // The sign: the same blur on the other side of focus (the kernels' mirror
+  // image), and the other sign's best coarse node where that lies farther.
+  const int mirror = refinement->NearestNode(-best.radius);
+  if (std::abs(t.Radius(mirror) - best.radius) >= 0.999 * t.step) {
+    z = std::min(z, curve.RiseTo(mirror).z);
+  }
   if (opposite_node >= 0 &&
       std::abs(t.Radius(opposite_node) - best.radius) >
           kEvidenceOffsetsPx.back()) {

@@ -95,8 +95,9 @@ void DPScaleEstimator::IntensityStage(
     // The DP data alone left the scale open: the intensity stage reads the
     // same profile, the very thing that is uncertain here.
     result->intensity_status =
-        "skipped: the DP data alone leave the scale open; it comes from "
-        "the recorded focus";
+        "skipped: the answer combines the DP data with the recorded focus "
+        "(the DP data alone are wider than the limit), and this stage would "
+        "read the same profile whose uncertainty widened them";
   } else if (!options_.intensity_refinement) {
     result->intensity_status = "disabled; linear estimate kept";
   } else {

@@ -320,6 +320,47 @@ double PredictedBlurRange(const LinearViewData& view,
   return rmax - rmin;
 }
 
+// Each view's readings with the scatter their standard errors do not
+// explain added to them (in quadrature): the spread of the residuals of the
+// view's unweighted fit (1.4826 x their median absolute value) beyond the
+// readings' median standard error. The curve's standard error is the
+// noise's alone; a real scene adds what no single patch's curve can see
+// (depth errors, a kernel that differs across the frame). Where that
+// dominates, the readings weigh nearly alike, as in the paper's fit; where
+// noise dominates, by their precision.
+std::vector<LinearViewData> WithMisfitInErrors(
+    const std::vector<LinearViewData>& views,
+    const LinearEstimatorOptions& options) {
+  std::vector<LinearViewData> out = views;
+  for (size_t i = 0; i < out.size(); ++i) {
+    std::vector<LinearSample>& samples = out[i].samples;
+    std::vector<double> se2;
+    for (const LinearSample& s : samples) {
+      if (s.radius_se_px > 0 && std::isfinite(s.radius_se_px)) {
+        se2.push_back(s.radius_se_px * s.radius_se_px);
+      }
+    }
+    if (se2.size() != samples.size() ||
+        static_cast<int>(samples.size()) < options.min_samples_per_view) {
+      continue;
+    }
+    DPLinearSystem system = BuildSystem(views, {static_cast<int>(i)});
+    system.row_weight.clear();
+    const IrlsResult fit = SolveL1Irls(system, options.irls);
+    if (!fit.success) continue;
+    std::vector<double> abs_res(fit.residuals.size());
+    for (int k = 0; k < fit.residuals.size(); ++k) {
+      abs_res[k] = std::abs(fit.residuals[k]);
+    }
+    const double spread = 1.4826 * Median(abs_res);
+    const double misfit2 = std::max(0.0, spread * spread - Median(se2));
+    for (LinearSample& s : samples) {
+      s.radius_se_px = std::sqrt(s.radius_se_px * s.radius_se_px + misfit2);
+    }
+  }
+  return out;
+}
+
 // View i's own solve and the checks on its result (a positive scale, a
 // physical focus, enough predicted blur range, residuals small against
 // it). True when the view is eligible for the joint solve.
@@ -532,9 +573,10 @@ void BootstrapScaleInterval(const std::vector<LinearViewData>& views,
 
 }  // namespace
 
-LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& views,
+LinearEstimate EstimateScaleLinear(const std::vector<LinearViewData>& given,
                                    const LinearEstimatorOptions& options) {
   DPSFM_CHECK_OPTIONS(options, "LinearEstimatorOptions");
+  const std::vector<LinearViewData> views = WithMisfitInErrors(given, options);
   LinearEstimate estimate;
   const int num_views = static_cast<int>(views.size());
   estimate.views.resize(num_views);

@@ -74,8 +74,11 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
 struct LinearSample {
   double depth = 0;      // z' in model units (> 0)
   double radius_px = 0;  // signed blur radius (> 0 farther than focus)
-  // Standard error of radius_px from its loss curve (px; 0 = unknown): the
-  // row's L1 term is weighted by 1 / sqrt(se^2 + kRadiusErrorFloorPx^2).
+  // Standard error of radius_px from its loss curve (px; 0 = unknown). The
+  // row's L1 term is weighted by ReadingWeight of it, after the view's
+  // scatter that the standard errors do not explain is added to them (the
+  // spread of an unweighted fit's residuals beyond their median standard
+  // error, in quadrature).
   double radius_se_px = 0;
 };
 

@@ -199,9 +199,10 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       sample_candidate.clear();
       data->samples = samples(&rejections, &sample_candidate);
       summary.patches_with_depth = with_depth;
-      summary.patches_at_bound = PatchesAtSearchBound(search);
+      summary.patches_beyond_bound = PatchesAtSearchBound(search);
+      summary.patches_undetermined = PatchesUndetermined(search);
       if (!SearchBoundReached(search.num_searched,
-                              summary.patches_at_bound,
+                              summary.patches_beyond_bound,
                               summary.search_bound_growths,
                               options_)) {
         break;
@@ -371,10 +372,11 @@ SearchBoundAccount DPScaleEstimator::AccountForSearchBound() const {
     b.max_radius_px = std::max(b.max_radius_px, v->summary.max_radius_px);
     b.views_grown += v->summary.search_bound_growths > 0;
     b.patches_searched += v->summary.patches_searched;
-    b.patches_at_bound += v->summary.patches_at_bound;
+    b.patches_beyond_bound += v->summary.patches_beyond_bound;
+    b.patches_undetermined += v->summary.patches_undetermined;
   }
   b.limits = b.patches_searched > 0 &&
-             !(b.patches_at_bound <
+             !(b.patches_beyond_bound <
                options_.search_bound_share * b.patches_searched);
   b.larger_radius_px = std::ceil(LargerSearchBound(b.max_radius_px));
   b.profile_covered_radius_px = options_.profile_covered_radius_px;

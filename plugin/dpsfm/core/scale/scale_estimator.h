@@ -282,11 +282,14 @@ struct DPViewSummary {
   int patches_with_depth = 0;
   int patches_searched = 0;  // blur search run (see blur_search_factor)
   // The search bound the geometry gave, how often it grew
-  // (DPScaleOptions::search_bound_share) and the searched patches at the
-  // final bound (max_radius_px).
+  // (DPScaleOptions::search_bound_share), and the searched patches at the
+  // final bound (max_radius_px) by what their loss curves say
+  // (BlurEvidence): beyond the bound, and undetermined (within the patch's
+  // noise; left out).
   double initial_max_radius_px = 0;
   int search_bound_growths = 0;
-  int patches_at_bound = 0;
+  int patches_beyond_bound = 0;
+  int patches_undetermined = 0;
   int patches_valid = 0;     // usable blur estimates
   int patches_kept = 0;      // top-T_c
   double seconds = 0;
@@ -346,9 +349,10 @@ struct SearchBoundAccount {
   double max_radius_px = 0;          // the largest bound searched
   int views_grown = 0;               // views searched again with a larger one
   int patches_searched = 0;          // at the final bounds, all views
-  int patches_at_bound = 0;
-  // At least search_bound_share of the searched patches still sit at the
-  // bound (their blur lies beyond it): the answer rests on the patches
+  int patches_beyond_bound = 0;      // BlurEvidence::kBeyondBound
+  int patches_undetermined = 0;      // BlurEvidence::kUndetermined
+  // At least search_bound_share of the searched patches still lie beyond
+  // the bound: the answer rests on the patches
   // nearer the focus, and a larger bound may move it.
   bool limits = false;
   // The bound that would search farther (LargerSearchBound, whole px).
