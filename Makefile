@@ -9,7 +9,7 @@
 #   DPSFM_BUILD_TYPE      Release (default)
 #   DPSFM_JOBS            parallel jobs (default: the number of cores)
 #   CTEST_ARGS            more arguments for ctest (make test), e.g. -R Rescale
-.PHONY: example test build deps bench cost accuracy profiles real large \
+.PHONY: example test build deps bench cost accuracy profiles real stability large \
         clean-cache test-3.10 test-installed check-colmap-main
 
 DPSFM_COLMAP_VERSION ?= 4.1.1
@@ -77,6 +77,11 @@ profiles: build
 
 # Real DP captures (../shared/realdp): calibration from their flat planes,
 # then r_s per scene and profile mode (a table; gates nothing).
+# How far answers move for an explicit bound 1 px either side of the
+# automatic one and for one thread against all (a table; gates nothing).
+stability: build
+	bash scripts/run_stability_bench.sh
+
 real: build
 	bash scripts/run_real_bench.sh
 

@@ -32,13 +32,22 @@ realdp_calibration_set() {
   done
 }
 
+# The RF 50 mm F1.8 STM's entrance pupil, in mm in front of the focal-plane
+# mark at ~1 m focus: its patent prescription (lens/lens_web.json) traced
+# paraxially, whole-group focus. Scene depths (SfM, a depth camera
+# registered to the frame) are measured from the entrance pupil; the planes'
+# distances from the mark.
+REALDP_ENTRANCE_PUPIL_MM=39.9
+
 # realdp_calibrate COLMAP CAL: the camera's profile from CAL (as made by
 # realdp_calibration_set) into CAL/r6m2_rf50_f4.dpsf, with the calibrator's
-# defaults (its transfer term included), the log in CAL/log.
+# defaults (its transfer term included) and the lens's entrance pupil, the
+# log in CAL/log.
 realdp_calibrate() {
   local colmap="$1" cal="$2"
   "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
     --targets_path "$cal/targets.csv" --output_path "$cal/r6m2_rf50_f4.dpsf" \
     --DPPsfCalibrator.camera "Canon / Canon EOS R6m2" \
-    --DPPsfCalibrator.lens "RF50mm F1.8 STM" >"$cal/log" 2>&1
+    --DPPsfCalibrator.lens "RF50mm F1.8 STM" \
+    --DPPsfCalibrator.entrance_pupil_mm "$REALDP_ENTRANCE_PUPIL_MM" >"$cal/log" 2>&1
 }

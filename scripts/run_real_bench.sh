@@ -8,14 +8,17 @@
 # inverse sRGB, as DPRSplit output would be). The camera's DP profile is
 # calibrated from the flat-plane captures (0.6 m and 1.5 m at f/4 and f/20,
 # focus unknown) in each encoding with `colmap dp_psf_calibrator`, with
-# and without its transfer term. `colmap dp_scale_estimator` then runs per
+# and without its transfer term; the calibrated profile takes the target
+# distances from the lens's entrance pupil (39.9 mm in front of the
+# focal-plane mark: the RF 50 mm's patent prescription traced paraxially,
+# whole-group focus at ~0.95 m), the origin of the scenes' depths.
+# `colmap dp_scale_estimator` then runs per
 # scene and mode: the defaults (auto profile) without and with the
 # recorded "1 m" focus in lens.csv, the calibrated profile without and
 # with it, the paper's translating disk (checked against the data) without
 # and with it, and the planes' own profile (no transfer term), with the
-# target distances from the thin lens's position and from the lens's
-# entrance pupil (39.9 mm in front of the focal-plane mark: the RF 50 mm's
-# patent prescription traced paraxially, whole-group focus at ~0.95 m).
+# target distances from the thin lens's position and from the entrance
+# pupil.
 # Prints per run r_s = s_est / s_true, its 95 % interval, and the two
 # cues; per encoding and mode the answers, how many
 # are within 10 %, how many intervals hold the truth, the confidently
@@ -45,7 +48,7 @@ start=$SECONDS
 # The frames as given (8-bit sRGB) and as 16-bit linear light (their inverse
 # sRGB, as DPRSplit output would be): the answers must agree.
 encodings=(srgb8 linear16)
-pupil_mm=39.9
+pupil_mm=$REALDP_ENTRANCE_PUPIL_MM
 calibrate() {  # encoding
   local enc="$1" cal="$out/calibration/$1"
   realdp_calibration_set "$realdp" "$out/bin/dpsfm_make_realdp_workspace" "$cal" "$enc"

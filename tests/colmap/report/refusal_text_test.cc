@@ -438,8 +438,8 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
             texture +
                 "no view passed selection: 9 views with blur range <= 2 px "
                 "(too little blur). Search farther: "
-                "--DPScaleEstimator.max_radius_px 16 (8 of 100 patches at "
-                "the 10 px bound)");
+                "--DPScaleEstimator.max_radius_px 16 (8 of 100 patches "
+                "beyond the 10 px bound)");
   refusal.linear_failure.cause = LinearFailureCause::kNonPositiveScale;
   ExpectShortLine(RefusalLine(refusal),
                   texture + "the joint linear fit gives s <= 0");
@@ -455,7 +455,7 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
             texture +
                 "too few usable patches for a scale (8 in the joint solve, "
                 "need 10). Search farther: --DPScaleEstimator.max_radius_px "
-                "16 (8 of 100 patches at the 10 px bound)");
+                "16 (8 of 100 patches beyond the 10 px bound)");
   account = RefusalAccount(refusal);
   EXPECT_EQ(account.front(),
             "too few usable patches for a scale (8 in the joint solve, need "
@@ -475,8 +475,20 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
   EXPECT_EQ(RefusalLine(refusal),
             "the scale's interval could not be measured (num_bootstrap is "
             "0). Search farther: --DPScaleEstimator.max_radius_px 16 (8 of "
-            "100 patches at the 10 px bound); add views with more depth "
+            "100 patches beyond the 10 px bound); add views with more depth "
             "range and texture");
+  // A bound at twice the blur a measured profile's calibration covered: a
+  // larger one would read its patches through guessed kernels, so the fix
+  // is a calibration with more blur, never a larger bound.
+  refusal.patches.profile_covered_radius_px = 5;
+  EXPECT_EQ(RefusalLine(refusal),
+            "the scale's interval could not be measured (num_bootstrap is "
+            "0). A DP profile calibrated with more blur (a plane farther "
+            "from the focus): 8 of 100 patches beyond the 10 px bound; add "
+            "views with more depth range and texture");
+  refusal.patches.profile_covered_radius_px = 6;  // 10 < 2 x 6 - 0.5
+  EXPECT_NE(RefusalLine(refusal).find("max_radius_px 16"), std::string::npos);
+  refusal.patches.profile_covered_radius_px = 0;
 
   refusal.open = CalibratedOpen(false);
   refusal.open.width = (3.39 - 0.28) / 0.39;  // 797.4 %

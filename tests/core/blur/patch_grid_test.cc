@@ -19,26 +19,42 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // A 40 x 30 frame, patches of 10 every 8 px with a border of 3: interiors
 // start at 3 and fit while start + 10 + 3 <= size, so x in {3, 11, 19, 27}
 // (35 + 13 > 40) and y in {3, 11} (19 + 13 > 30): 4 x 2 = 8, row by row.
+// 40 x 30, patches of 10 every 8 px with a border of 3: the lattice is
+// centred (a patch at (40 - 10) / 2 = 15 across, (30 - 10) / 2 = 10 down),
+// and keeps the positions whose crop fits: x = 7, 15, 23 (31 + 10 + 3 > 40;
+// -1 < 3), y = 10 (18 + 10 + 3 > 30, 2 < 3).
 TEST(MakePatchGrid, PositionsAndCountByHand) {
   const std::vector<PatchCandidate> grid =
       MakePatchGrid(cv::Size(40, 30), 10, 8, 3);
-  ASSERT_EQ(grid.size(), 8u);
-  const int xs[] = {3, 11, 19, 27};
-  const int ys[] = {3, 11};
-  for (int row = 0; row < 2; ++row) {
-    for (int col = 0; col < 4; ++col) {
-      const PatchCandidate& c = grid[row * 4 + col];
-      EXPECT_EQ(c.interior, cv::Rect(xs[col], ys[row], 10, 10))
-          << "row " << row << ", col " << col;
-      EXPECT_EQ(c.reject, "");
-      EXPECT_FALSE(c.depth.ok);
-    }
+  ASSERT_EQ(grid.size(), 3u);
+  const int xs[] = {7, 15, 23};
+  for (int col = 0; col < 3; ++col) {
+    const PatchCandidate& c = grid[col];
+    EXPECT_EQ(c.interior, cv::Rect(xs[col], 10, 10, 10)) << "col " << col;
+    EXPECT_EQ(c.reject, "");
+    EXPECT_FALSE(c.depth.ok);
   }
-  // The last crop (interior plus border) ends exactly on the right edge.
-  EXPECT_EQ(PatchCrop(grid.back().interior, 3), cv::Rect(24, 8, 16, 16));
+  EXPECT_EQ(PatchCrop(grid.back().interior, 3), cv::Rect(20, 7, 16, 16));
   // 16 x 16 holds exactly one patch with its border; 15 x 16 none.
   EXPECT_EQ(MakePatchGrid(cv::Size(16, 16), 10, 8, 3).size(), 1u);
   EXPECT_EQ(MakePatchGrid(cv::Size(15, 16), 10, 8, 3).size(), 0u);
+}
+
+// A wider border (a larger search bound) drops positions at the edges and
+// moves none: every patch of the wider grid is one of the narrower grid's.
+TEST(MakePatchGrid, AWiderBorderMovesNoPatch) {
+  const cv::Size size(768, 512);
+  const std::vector<PatchCandidate> narrow = MakePatchGrid(size, 31, 17, 9);
+  const std::vector<PatchCandidate> wide = MakePatchGrid(size, 31, 17, 17);
+  ASSERT_LT(wide.size(), narrow.size());
+  ASSERT_GT(wide.size(), 0.8 * narrow.size());
+  for (const PatchCandidate& w : wide) {
+    EXPECT_TRUE(std::any_of(narrow.begin(), narrow.end(),
+                            [&](const PatchCandidate& n) {
+                              return n.interior == w.interior;
+                            }))
+        << w.interior;
+  }
 }
 
 // Twenty values 1..20: the upper median is the value of rank 20 / 2 = 10

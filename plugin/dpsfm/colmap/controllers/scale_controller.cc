@@ -436,9 +436,20 @@ std::vector<std::string> SearchBoundWarnings(const DPScaleResult& result) {
       << std::setprecision(3) << b.max_radius_px << " px"
       << (b.views_grown > 0 ? ", grown from " : "");
     if (b.views_grown > 0) s << b.initial_max_radius_px << " px";
-    s << "): the answer rests on the patches nearer the focus; "
-         "--DPScaleEstimator.max_radius_px "
-      << b.larger_radius_px << " searches farther";
+    s << "): the answer rests on the patches nearer the focus; ";
+    if (b.profile_covered_radius_px > 0 &&
+        b.max_radius_px >= 2 * b.profile_covered_radius_px - 0.5) {
+      // Beyond twice the covered blur the profile's kernels are a guess:
+      // a larger bound reads those patches, wrongly (refusal.h,
+      // PatchAccount::BoundAtProfileCoverage).
+      s << "that is twice the blur the DP profile's calibration covered ("
+        << b.profile_covered_radius_px
+        << " px), and a calibration capture farther from the focus would "
+           "cover them";
+    } else {
+      s << "--DPScaleEstimator.max_radius_px " << b.larger_radius_px
+        << " searches farther";
+    }
     warnings.push_back(s.str());
   }
   return warnings;

@@ -202,10 +202,16 @@ std::string PatchFixesText(const PatchAccount& account) {
   std::ostringstream s;
   s << "; " << account.at_search_bound << " of " << account.tried
     << " patches have more blur than the search bound of "
-    << std::setprecision(3) << account.max_radius_px
-    << " px: let the search reach farther with "
-       "--DPScaleEstimator.max_radius_px "
-    << account.LargerSearchBound();
+    << std::setprecision(3) << account.max_radius_px << " px: ";
+  if (account.BoundAtProfileCoverage()) {
+    s << "twice the blur the DP profile's calibration covered ("
+      << account.profile_covered_radius_px
+      << " px); a calibration capture farther from the focus would cover "
+         "them";
+  } else {
+    s << "let the search reach farther with --DPScaleEstimator.max_radius_px "
+      << account.LargerSearchBound();
+  }
   return s.str();
 }
 
@@ -343,10 +349,16 @@ const char kWiderLimitFix[] =
 std::string SearchBoundFix(const PatchAccount& patches) {
   if (!patches.SearchBoundLimits()) return "";
   std::ostringstream s;
-  s << "search farther: --DPScaleEstimator.max_radius_px "
-    << patches.LargerSearchBound() << " (" << patches.at_search_bound << " of "
-    << patches.tried << " patches at the " << Num(patches.max_radius_px)
-    << " px bound)";
+  if (patches.BoundAtProfileCoverage()) {
+    s << "a DP profile calibrated with more blur (a plane farther from the "
+         "focus): ";
+  } else {
+    s << "search farther: --DPScaleEstimator.max_radius_px "
+      << patches.LargerSearchBound() << " (";
+  }
+  s << patches.at_search_bound << " of " << patches.tried
+    << " patches beyond the " << Num(patches.max_radius_px) << " px bound"
+    << (patches.BoundAtProfileCoverage() ? "" : ")");
   return s.str();
 }
 

@@ -37,13 +37,32 @@ DepthStats DepthStatsOf(std::vector<float>* values) {
   return stats;
 }
 
+namespace {
+
+// The lattice positions along one axis of `length` px: patch starts c + k
+// stride (c centres one patch), those whose crop (patch plus border on both
+// sides) fits. The lattice does not depend on the border, so a larger search
+// bound (a wider border) only drops positions at the edges.
+std::vector<int> LatticeStarts(int length, int patch, int stride, int border) {
+  std::vector<int> starts;
+  const int centre = (length - patch) / 2;
+  int first = centre - (centre - border >= 0 ? (centre - border) / stride : 0) *
+                           stride;
+  for (int x = first; x + patch + border <= length; x += stride) {
+    if (x - border >= 0) starts.push_back(x);
+  }
+  return starts;
+}
+
+}  // namespace
+
 std::vector<PatchCandidate> MakePatchGrid(const cv::Size& size,
                                           int patch,
                                           int stride,
                                           int border) {
   std::vector<PatchCandidate> candidates;
-  for (int y = border; y + patch + border <= size.height; y += stride) {
-    for (int x = border; x + patch + border <= size.width; x += stride) {
+  for (const int y : LatticeStarts(size.height, patch, stride, border)) {
+    for (const int x : LatticeStarts(size.width, patch, stride, border)) {
       PatchCandidate c;
       c.interior = cv::Rect(x, y, patch, patch);
       candidates.push_back(c);

@@ -46,7 +46,9 @@ inline cv::Rect PatchCrop(const cv::Rect& interior, int border) {
 }
 
 // Interiors of `patch` px every `stride` px, each with `border` px of frame
-// around it, over a working frame of `size`.
+// around it, over a working frame of `size`, on a lattice centred in the
+// frame whatever the border (a larger search bound drops edge positions and
+// moves none).
 std::vector<PatchCandidate> MakePatchGrid(const cv::Size& size,
                                           int patch,
                                           int stride,

@@ -52,6 +52,11 @@ bool PatchAccount::SearchBoundLimits() const {
   return tried > 0 && !(at_search_bound < 0.05 * tried) && max_radius_px > 0;
 }
 
+bool PatchAccount::BoundAtProfileCoverage() const {
+  return profile_covered_radius_px > 0 &&
+         max_radius_px >= 2 * profile_covered_radius_px - 0.5;
+}
+
 int PatchAccount::LargerSearchBound() const {
   return static_cast<int>(std::ceil(dpsfm::LargerSearchBound(max_radius_px)));
 }

@@ -28,10 +28,13 @@ struct PatchAccount {
   std::vector<std::pair<std::string, int>> rejections;
   // Patches whose texture was too weak for the noise.
   int texture_too_weak = 0;
-  // Patches whose blur lies at the search bound, and the largest bound of
-  // the views (px of the working frame, DPScaleOptions' blur.max_radius_px).
+  // Patches whose blur lies beyond the search bound, and the largest bound
+  // of the views (px of the working frame, DPScaleOptions' blur.max_radius_px).
   int at_search_bound = 0;
   double max_radius_px = 0;
+  // The blur a measured profile's calibration covered
+  // (DPScaleOptions::profile_covered_radius_px; 0: none).
+  double profile_covered_radius_px = 0;
 
   // At least half the patches had texture too weak for the noise: the
   // leading cause (the views' other symptoms, e.g. a small blur range,
@@ -44,6 +47,12 @@ struct PatchAccount {
   // up. A bound 1.6 times larger reaches the blur of points about that much
   // farther from the focal plane (in inverse depth).
   int LargerSearchBound() const;
+  // The bound already reaches twice the blur the profile's calibration
+  // covered: beyond it the profile's magnified kernels are a guess (on the
+  // R6 II's box/002 a 16 px bound read the near boxes' ~7 px blur as 12 px
+  // and moved the answer 33 % low), so the fix is a calibration capture
+  // with more blur, not a larger bound.
+  bool BoundAtProfileCoverage() const;
 };
 
 // Per view: (tried, usable, (reason, count) pairs).

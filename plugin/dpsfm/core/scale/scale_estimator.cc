@@ -344,7 +344,9 @@ PatchAccount DPScaleEstimator::AccountForPatches() const {
                       v->summary.rejections,
                       v->summary.max_radius_px});
   }
-  return AccountPatches(counts);
+  PatchAccount account = AccountPatches(counts);
+  account.profile_covered_radius_px = options_.profile_covered_radius_px;
+  return account;
 }
 
 double DPScaleEstimator::LensGeometryTerm(

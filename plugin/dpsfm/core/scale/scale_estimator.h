@@ -65,26 +65,27 @@ struct DPView {
 
 struct DPScaleOptions {
   // --- Patch geometry, in pixels of the working frame (the DP frame resized
-  // by resize_factor). 0 = automatic from DefaultPatchGeometry.
+  // by resize_factor). 0 = automatic from DefaultPatchGeometry. An explicit
+  // max_radius_px sets how far the blur search reaches (and turns its
+  // growth off), not the patches: they are the automatic bound's.
   int patch_size = 0;
   int stride = 0;
   double max_radius_px = 0;
   double resize_factor = 0;
-  // With max_radius_px automatic: the bound is at least this (e.g. the
-  // blur a calibrated profile was measured at: the frame-size rule assumes
-  // full-resolution pixels and reads ~3.5 px for 512 px frames of a
-  // downsampled full-frame sensor whose scenes blur up to ~8 px), with the
-  // patch and stride that go with it. 0 = the frame-size rule alone.
+  // The automatic bound is at least this (e.g. the blur a calibrated
+  // profile was measured at: the frame-size rule assumes full-resolution
+  // pixels and reads ~3.5 px for 512 px frames of a downsampled full-frame
+  // sensor whose scenes blur up to ~8 px), with the patch and stride that
+  // go with it, which an explicit max_radius_px keeps. 0 = the frame-size
+  // rule alone.
   double min_auto_radius_px = 0;
   // With max_radius_px automatic, the bound is the view's own: when at
-  // least this share of a view's searched patches sit at the bound (their
-  // blur lies beyond it, and dropping them would keep only the patches
-  // nearer the focus: on the R6 II's box/002, 114 of 289 at 4.93 px moved
-  // the answer by 7 %), the view is searched again with 1.2 times the
-  // largest blur its depth range implies through the thin lens
-  // (ExpectedMaxBlur), at most twice the bound, up to
-  // max_search_bound_growths times. A result that
-  // still has this share at the bound says so (DPScaleResult::
+  // least this share of a view's searched patches lie beyond the bound
+  // (BlurEvidence::kBeyondBound: dropping them keeps only the patches
+  // nearer the focus; on the R6 II's box/002, 114 of 289 at 4.93 px moved
+  // the answer by 7 %), the view is searched again with twice the bound
+  // (GrownSearchBound), up to max_search_bound_growths times. A result
+  // that still has this share beyond the bound says so (DPScaleResult::
   // search_bound).
   double search_bound_share = 0.05;
   int max_search_bound_growths = 1;

@@ -39,8 +39,9 @@ PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
       options.resize_factor > 0
           ? DefaultPatchGeometry(frame_size, options.resize_factor)
           : DefaultPatchGeometry(frame_size);
-  if (options.max_radius_px <= 0 &&
-      geometry.max_radius_px < options.min_auto_radius_px) {
+  // An explicit bound keeps the patches the automatic one starts with: it
+  // sets how far the search reaches, not which patches there are.
+  if (geometry.max_radius_px < options.min_auto_radius_px) {
     geometry = PatchGeometryForRadius(options.min_auto_radius_px,
                                       geometry.resize_factor);
   }
