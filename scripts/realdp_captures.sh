@@ -38,6 +38,10 @@ realdp_calibration_set() {
 # registered to the frame) are measured from the entrance pupil; the planes'
 # distances from the mark.
 REALDP_ENTRANCE_PUPIL_MM=39.9
+# Where the lens's front would put the planes if "from the camera" meant
+# from it: the RF mount's 20 mm flange, the lens's 40.5 mm, and the ~2.6 mm
+# its group moves out to focus at ~1 m (f^2 / (g - f)), in front of the mark.
+REALDP_LENS_FRONT_MM=63
 
 # realdp_calibrate COLMAP CAL: the camera's profile from CAL (as made by
 # realdp_calibration_set) into CAL/r6m2_rf50_f4.dpsf, with the calibrator's

@@ -67,14 +67,21 @@ calibrate() {  # encoding
     --targets_path "$cal/targets.csv" --output_path "$cal/planes_pupil.dpsf" \
     --DPPsfCalibrator.transfer_uncertainty 0 \
     --DPPsfCalibrator.entrance_pupil_mm "$pupil_mm" >"$cal/planes_pupil.log" 2>&1 || true
-  log "  planes only: $(grep -o 'strength [0-9.]* R' "$cal/planes_only.dpsf" | head -n 1); with the entrance pupil at $pupil_mm mm: $(grep -o 'strength [0-9.]* R' "$cal/planes_pupil.dpsf" | head -n 1)"
+  # The same, were the planes' distances taken from the lens's front.
+  awk -F, -v front="$REALDP_LENS_FRONT_MM" 'BEGIN { OFS = "," }
+    NR > 1 { $2 = $2 + front / 1000 } { print }' "$cal/targets.csv" >"$cal/targets_front.csv"
+  "$colmap" dp_psf_calibrator --dp_image_path "$cal/dp" \
+    --targets_path "$cal/targets_front.csv" --output_path "$cal/planes_front.dpsf" \
+    --DPPsfCalibrator.transfer_uncertainty 0 \
+    --DPPsfCalibrator.entrance_pupil_mm "$pupil_mm" >"$cal/planes_front.log" 2>&1 || true
+  log "  planes only: $(grep -o 'strength [0-9.]* R' "$cal/planes_only.dpsf" | head -n 1); with the entrance pupil at $pupil_mm mm: $(grep -o 'strength [0-9.]* R' "$cal/planes_pupil.dpsf" | head -n 1); from the lens front: $(grep -o 'strength [0-9.]* R' "$cal/planes_front.dpsf" | head -n 1)"
 }
 for enc in "${encodings[@]}"; do calibrate "$enc"; done
 
 scenes=(casual/orbbec/001 casual/orbbec/002 casual/orbbec/003
         casual/iphone/001 casual/iphone/002 box/001 box/002)
 modes=(defaults defaults_focus calibrated calibrated_focus translating_disk
-       translating_disk_focus planes_only planes_pupil)
+       translating_disk_focus planes_only planes_pupil planes_front)
 results="$out/results.tsv"
 : >"$results"
 for enc in "${encodings[@]}"; do
@@ -104,6 +111,8 @@ for enc in "${encodings[@]}"; do
                             --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_only.dpsf") ;;
         planes_pupil) args+=(--DPScaleEstimator.psf_model calibrated
                              --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_pupil.dpsf") ;;
+        planes_front) args+=(--DPScaleEstimator.psf_model calibrated
+                             --DPScaleEstimator.psf_path "$out/calibration/$enc/planes_front.dpsf") ;;
       esac
       if [[ "$mode" == calibrated* || "$mode" == planes_* ]] && [ ! -f "$profile" ]; then
         printf '%s\t%s\t%s\t\t\t\t\tno profile (calibration refused)\t\t\t\t\n' "$enc" "$name" "$mode" >>"$results"
@@ -165,16 +174,25 @@ for enc in encodings:
         wrong = sum(1 for r in ans if abs(1 - float(r[3])) > 0.10 and not float(r[4]) <= 1 <= float(r[5]))
         print("| %s | %s | %d of %d | %d | %d of %d | %d | %s |" % (enc, mode, len(ans), len(mine), near, hold, len(ans), wrong, "%.3f" % es if ans else "-"))
 PY
-# Transfer: the planes' own profile (no transfer term) predicting each
-# scene. Its DP cue is in the report whether or not the run answered.
-# Leave one scene out: the transfer term from the other six (their largest
-# |ln r_s|, as the calibrator's default was chosen from all seven) in
-# quadrature with the profile's own uncertainty, applied to the held-out
-# scene's DP interval as the estimator applies a profile's uncertainty.
-# The blur ratio: per scene, the blur the profile reads over the blur the
-# thin lens predicts from the measured depth (focus fitted, L1), by true
-# |r| (px): a profile that did not transfer would show it at every blur,
-# a kernel that changes shape at small blur only below ~2 px.
+# Transfer: the planes' own profile (no transfer term, distances from the
+# entrance pupil as the calibrated profile's) predicting each scene. Its DP
+# cue is in the report whether or not the run answered. Leave one scene
+# out: the transfer term from the other six (their largest |ln r_s|, as the
+# calibrator's default was chosen from all seven) in quadrature with the
+# profile's own uncertainty, applied to the held-out scene's DP interval as
+# the estimator applies a profile's uncertainty. The blur ratio: per scene,
+# the blur the profile reads over the blur the thin lens predicts from the
+# measured depth (focus fitted, L1), by true |r| (px) and by side of the
+# focus.
+#
+# Then the candidates for the DP cue reading low, each measured: the
+# origin of the planes' distances (the focal-plane mark with the thin
+# lens's position, the entrance pupil, the lens's front), the side of the
+# focus (the planes are one depth each, one on each side; the scenes span
+# both), the frames' encoding (8-bit sRGB against 16-bit linear), and the
+# depth sensors: the profile-free recorded-focus cue with the focus the
+# planes themselves fitted (the captures share one fixed focus), which
+# reads a depth map's own scale error and no DP profile.
 python3 - "$out" "$truth" "${encodings[*]}" <<'PY'
 import glob, json, math, os, re, sys
 out, truth, encodings = sys.argv[1], float(sys.argv[2]), sys.argv[3].split()
@@ -185,40 +203,59 @@ def r_true(z, g):
 def median(v):
     v = sorted(v); n = len(v)
     return float("nan") if n == 0 else (v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2]))
+def report(enc, name, mode):
+    try:
+        return json.load(open(os.path.join(out, enc, "%s.%s.json" % (name, mode))))
+    except Exception:
+        return {}
+def dp_cue(enc, name, mode):
+    c = report(enc, name, mode).get("cues", {}).get("dual_pixel", {})
+    return c["scale"] / truth if c.get("valid") else float("nan")
+def fitted(patches):
+    zs = [1000 * truth * p["depth_model"] for p in patches]
+    rs = [p["radius_px"] for p in patches]
+    best = None
+    for g in range(600, 1600, 5):
+        for k in [x / 100 for x in range(40, 200)]:
+            e = sum(abs(y - k * r_true(z, g)) for z, y in zip(zs, rs))
+            if best is None or e < best[0]:
+                best = (e, g, k)
+    return best[1], best[2], zs, rs
+def object_mm(d):
+    return 0.5 * (d + math.sqrt(d * d - 4 * d * f_mm))
+def planes_focus_m(enc, profile):
+    m = re.search(r"focus fitted at ([0-9.]+) m",
+                  open(os.path.join(out, "calibration", enc, profile + ".log")).read())
+    return float(m.group(1)) if m else float("nan")
+names = sorted(os.path.basename(f).split(".")[0]
+               for f in glob.glob(os.path.join(out, encodings[0], "*.planes_pupil.json")))
 for enc in encodings:
-    prof = os.path.join(out, "calibration", enc, "planes_only.dpsf")
+    prof = os.path.join(out, "calibration", enc, "planes_pupil.dpsf")
     if not os.path.exists(prof):
         continue
     own = float(re.search(r"^uncertainty ([0-9.eE+-]+)", open(prof).read(), re.M).group(1))
     rows = {}
-    for fn in sorted(glob.glob(os.path.join(out, enc, "*.planes_only.json"))):
-        name = os.path.basename(fn).split(".")[0]
-        r = json.load(open(fn))
+    for name in names:
+        r = report(enc, name, "planes_pupil")
         c = r.get("cues", {}).get("dual_pixel", {})
         if not c.get("valid"):
             continue
         s, lo, hi = c["scale"] / truth, c["ci"][0] / truth, c["ci"][1] / truth
         patches = [p for p in r.get("patches", []) if p.get("used") or p.get("selected")]
-        zs = [1000 * truth * p["depth_model"] for p in patches]
-        rs = [p["radius_px"] for p in patches]
-        best = None
-        for g in range(600, 1600, 5):
-            for k in [x / 100 for x in range(40, 200)]:
-                e = sum(abs(y - k * r_true(z, g)) for z, y in zip(zs, rs))
-                if best is None or e < best[0]:
-                    best = (e, g, k)
-        _, g, k = best
-        bins = {}
+        g, k, zs, rs = fitted(patches)
+        bins, sides = {}, {}
         for z, y in zip(zs, rs):
             t = r_true(z, g)
             if abs(t) >= 0.3:
                 bins.setdefault(min(int(abs(t)), 3), []).append(y / t)
-        rows[name] = (s, lo, hi, g, k, bins)
-    print("\n%s: the planes' own profile (uncertainty %.1f %%) on each scene, and left out in turn" % (enc, 100 * own))
-    print("| scene | r_s (planes only) | its interval | focus fitted with the truth (m) | blur read / thin lens | by true blur 0-1 / 1-2 / 2-3 / 3+ px | transfer term from the other six | interval with it | holds |")
-    print("|---|---|---|---|---|---|---|---|---|")
+            if abs(t) >= 0.5:
+                sides.setdefault(t > 0, []).append(y / t)
+        rows[name] = (s, lo, hi, g, k, bins, sides)
+    print("\n%s: the planes' own profile (distances from the entrance pupil, uncertainty %.1f %%) on each scene, and left out in turn" % (enc, 100 * own))
+    print("| scene | r_s (planes only) | its interval | focus fitted with the truth (m) | blur read / thin lens | by true blur 0-1 / 1-2 / 2-3 / 3+ px | nearer / farther than the focus | transfer term from the other six | interval with it | holds |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     held = 0
-    for name, (s, lo, hi, g, k, bins) in rows.items():
+    for name, (s, lo, hi, g, k, bins, sides) in rows.items():
         others = [rows[m][0] for m in rows if m != name]
         t = max(abs(math.log(x)) for x in others)
         u = math.hypot(own, t)
@@ -226,22 +263,42 @@ for enc in encodings:
         ok = lo2 <= 1 <= hi2
         held += ok
         by = " / ".join("%.2f" % median(bins.get(b, [])) if bins.get(b) else "-" for b in range(4))
-        print("| %s | %.3f | [%.3f, %.3f] | %.3f | %.2f | %s | %.3f | [%.3f, %.3f] | %s |" % (
-            name, s, lo, hi, g / 1000, k, by, t, lo2, hi2, "yes" if ok else "NO"))
+        side = " / ".join("%.2f (%d)" % (median(sides[x]), len(sides[x])) if sides.get(x) else "- (0)" for x in (False, True))
+        print("| %s | %.3f | [%.3f, %.3f] | %.3f | %.2f | %s | %s | %.3f | [%.3f, %.3f] | %s |" % (
+            name, s, lo, hi, g / 1000, k, by, side, t, lo2, hi2, "yes" if ok else "NO"))
     if rows:
         errs = [abs(math.log(v[0])) for v in rows.values()]
         print("%s: held-out intervals holding the truth %d of %d; |ln r_s| median %.3f, largest %.3f; mean ln r_s %+.3f" % (
             enc, held, len(rows), median(errs), max(errs), sum(math.log(v[0]) for v in rows.values()) / len(rows)))
-    # The same profile measured with the distances from the entrance pupil.
-    pupil = []
-    for fn in sorted(glob.glob(os.path.join(out, enc, "*.planes_pupil.json"))):
-        c = json.load(open(fn)).get("cues", {}).get("dual_pixel", {})
-        if c.get("valid"):
-            pupil.append((os.path.basename(fn).split(".")[0], c["scale"] / truth))
-    if pupil:
-        ln = [math.log(v) for _, v in pupil]
-        print("%s: distances from the entrance pupil: r_s %s; |ln r_s| median %.3f, largest %.3f; mean ln r_s %+.3f" % (
-            enc, ", ".join("%s %.3f" % (n, v) for n, v in pupil), median([abs(x) for x in ln]),
-            max(abs(x) for x in ln), sum(ln) / len(ln)))
+
+# The candidates, on the 8-bit frames.
+enc = encodings[0]
+origins = [("planes_only", "mark, thin lens"), ("planes_pupil", "entrance pupil"), ("planes_front", "lens front")]
+print("\nWhy the DP cue reads low (%s; DP cue r_s with the planes' own profile; focus cues profile-free)" % enc)
+print("| scene | " + " | ".join("origin: %s" % o for _, o in origins) +
+      " | 16-bit linear (pupil) | recorded-focus cue, 1 m | with the planes' focus | DP / that |")
+print("|---|" + "---|" * (len(origins) + 4))
+cols = {k: [] for k in ["thin", "pupil", "front", "linear", "focus", "planes_focus", "ratio"]}
+g_planes = planes_focus_m(enc, "planes_pupil")
+for name in names:
+    vals = [dp_cue(enc, name, m) for m, _ in origins]
+    lin = dp_cue(encodings[-1], name, "planes_pupil")
+    fc = report(enc, name, "calibrated_focus").get("cues", {}).get("recorded_focus", {})
+    focus = fc["scale"] / truth if fc.get("valid") else float("nan")
+    # The recorded "1 m" from the mark against the planes' own fitted focus,
+    # each the thin lens's object distance (u + v = d, 1/u + 1/v = 1/f).
+    planes = focus * object_mm(1000 * g_planes) / object_mm(1000.0)
+    ratio = vals[1] / planes
+    for key, v in zip(["thin", "pupil", "front", "linear", "focus", "planes_focus", "ratio"],
+                      vals + [lin, focus, planes, ratio]):
+        if not math.isnan(v):
+            cols[key].append(v)
+    print("| %s | %s | %.3f | %.3f | %.3f | %.3f |" % (
+        name, " | ".join("%.3f" % v for v in vals), lin, focus, planes, ratio))
+print("| median | %s | %.3f | %.3f | %.3f | %.3f |" % (
+    " | ".join("%.3f" % median(cols[k]) for k in ["thin", "pupil", "front"]),
+    median(cols["linear"]), median(cols["focus"]), median(cols["planes_focus"]), median(cols["ratio"])))
+print("planes' fitted focus (m from the mark): thin lens %.4f, entrance pupil %.4f, lens front %.4f" % (
+    planes_focus_m(enc, "planes_only"), g_planes, planes_focus_m(enc, "planes_front")))
 PY
 log "total $((SECONDS - start)) s; reports, logs and the profiles in $out"

@@ -268,9 +268,12 @@ TEST_F(FirstHour, RefusalLeadsWithItsCause) {
       "ERROR: dp_scale_estimator: no scale: the DP data and the recorded "
       "focus disagree: ";
   ASSERT_EQ(error.rfind(lead, 0), 0u) << error;
-  // Two numbers: the DP cue's scale against the recorded focus's.
+  // Two cues with their intervals: the DP cue's scale against the recorded
+  // focus's.
   double dp = 0, focus = 0;
-  ASSERT_EQ(std::sscanf(error.c_str() + lead.size(), "%lf against %lf", &dp,
+  ASSERT_EQ(std::sscanf(error.c_str() + lead.size(),
+                        "%lf [%*[^]]] vs %lf",
+                        &dp,
                         &focus),
             2)
       << error;

@@ -459,6 +459,81 @@ TEST_F(RealCaptures, NoConfidentlyWrongAnswerOnAnyScene) {
   std::printf("%d of %d runs answered\n", answered, runs);
 }
 
+// Advice that, followed, does not make the answer worse. A run whose
+// patches lie beyond the search bound says what to do: a larger bound
+// while the profile can describe the blur there, a calibration with more
+// blur once the bound is twice what the profile's calibration covered
+// (beyond it the kernels are magnified guesses: on box/002 a 16 px bound
+// read the near boxes' ~7 px of blur as 12 px and moved the DP cue a third
+// low). Each option a run advises is followed, and the answer must still
+// hold the truth where it did, and the DP cue must not move by more than
+// its own half-width.
+TEST_F(RealCaptures, SearchBoundAdviceDoesNotMakeTheAnswerWorse) {
+  const std::string dir =
+      Calibration({"0600/f4", "1500/f4", "0600/f20", "1500/f20"}, "");
+  const std::string profile = dir_ / "r6m2.dpsf";
+  ASSERT_EQ(Calibrate(dir, profile, kEntrancePupil).exit_code, 0);
+  const std::vector<std::string> calibrated = {"--DPScaleEstimator.psf_model",
+                                               "calibrated",
+                                               "--DPScaleEstimator.psf_path",
+                                               profile};
+  int advised = 0;
+  for (const std::string scene :
+       {"box/002", "casual/orbbec/001", "casual/iphone/001"}) {
+    const std::string ws = Workspace(scene);
+    {
+      std::ofstream lens(ws + "/lens.csv");
+      lens << "name,focal_length_mm,f_number,pixel_pitch_um,focus_distance_m\n"
+           << "view.png,49.57,4,46.875,1.0\n";
+    }
+    const std::string report = dir_ / "advice_base.json";
+    const CommandResult base = Estimate(ws, report, calibrated);
+    const nlohmann::json b = ReadJson(report);
+    const std::string option = "--DPScaleEstimator.max_radius_px ";
+    const size_t at = base.err.find(option);
+    // The bound the run ended with is twice the profile's covered blur:
+    // it must never be advised to search farther.
+    const nlohmann::json& bound = b.at("search_bound");
+    const double covered = bound.at("profile_covered_px").get<double>();
+    if (bound.at("px").get<double>() >= 2 * covered - 0.5) {
+      EXPECT_EQ(at, std::string::npos) << scene << ": " << base.err;
+      if (bound.at("patches_beyond_bound").get<int>() >=
+          0.05 * bound.at("patches_searched").get<int>()) {
+        EXPECT_NE(base.err.find("calibrat"), std::string::npos) << base.err;
+      }
+    }
+    if (at == std::string::npos) continue;
+    ++advised;
+    const std::string value =
+        base.err.substr(at + option.size(),
+                        base.err.find_first_not_of("0123456789.",
+                                                   at + option.size()) -
+                            at - option.size());
+    std::vector<std::string> args = calibrated;
+    args.insert(args.end(), {"--DPScaleEstimator.max_radius_px", value});
+    const std::string followed_report = dir_ / "advice_followed.json";
+    Estimate(ws, followed_report, args);
+    const nlohmann::json f = ReadJson(followed_report);
+    const nlohmann::json& dp = b.at("cues").at("dual_pixel");
+    const nlohmann::json& dp_f = f.at("cues").at("dual_pixel");
+    if (dp.value("valid", false) && dp_f.value("valid", false)) {
+      const double half =
+          0.5 * (dp.at("ci")[1].get<double>() - dp.at("ci")[0].get<double>());
+      EXPECT_LE(std::abs(dp_f.at("scale").get<double>() -
+                         dp.at("scale").get<double>()),
+                half)
+          << scene << " with " << option << value;
+    }
+    if (b.at("success").get<bool>() && f.at("success").get<bool>() &&
+        b.at("scale_ci_low").get<double>() <= kTrueScale &&
+        b.at("scale_ci_high").get<double>() >= kTrueScale) {
+      EXPECT_LE(f.at("scale_ci_low").get<double>(), kTrueScale) << scene;
+      EXPECT_GE(f.at("scale_ci_high").get<double>(), kTrueScale) << scene;
+    }
+  }
+  std::printf("runs that advised a larger bound: %d\n", advised);
+}
+
 // The planes' distances are from the focal-plane mark; scene depths are
 // from the entrance pupil, which the RF 50 mm puts ~40 mm in front of the
 // mark at ~1 m (its patent prescription, traced paraxially, whole-group

@@ -61,11 +61,11 @@ TEST(PatchAccountText, LeadingCauseSummaryAndFixByHand) {
             "too little texture: 55 of 100 patches have texture too weak for "
             "the sensor noise; ");
   EXPECT_EQ(PatchSummaryText(account),
-            " (patches over all views: 100 tried, 8 usable; 8 blur at the "
+            " (patches over all views: 100 tried, 8 usable; 8 blur beyond the "
             "search bound, 55 with texture too weak for the noise, 2 without "
             "depth)");
   EXPECT_EQ(TypicalCausesText(account),
-            "; patches over all views: 100 tried, 8 usable (8 blur at the "
+            "; patches over all views: 100 tried, 8 usable (8 blur beyond the "
             "search bound, 55 with texture too weak for the noise, 2 without "
             "depth). Typical causes: sensor noise too strong for the texture, "
             "too little defocus blur (small aperture, distant subjects), "
@@ -311,12 +311,12 @@ TEST(RefusalLine, TheDisagreementLeadsWithBothCuesAndTwoFixes) {
   const DPScaleRefusal refusal = IssueDisagreement();
   const std::string line = RefusalLine(refusal);
   EXPECT_EQ(line,
-            "the DP data and the recorded focus disagree: 0.318 against "
-            "0.357 (together 53.5 % wide, limit 30 %). Check the f-number "
-            "and focus in lens.csv/EXIF; a measured focus: "
+            "the DP data and the recorded focus disagree: 0.318 [0.25, "
+            "0.42] vs 0.357 [0.33, 0.385] (53.5 % wide, limit 30 %). Check "
+            "the f-number and focus in lens.csv/EXIF; a measured focus: "
             "--DPScaleEstimator.recorded_focus_tolerance ACCURACY");
   ExpectShortLine(line, "the DP data and the recorded focus disagree: 0.318 "
-                        "against 0.357");
+                        "[0.25, 0.42] vs 0.357 [0.33, 0.385]");
   // What did not decide stays out of the line: the profile's width, the
   // search bound, the remedies for other causes.
   for (const char* other : {"uncertainty", "max_radius_px",
@@ -440,6 +440,21 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
                 "(too little blur). Search farther: "
                 "--DPScaleEstimator.max_radius_px 16 (8 of 100 patches "
                 "beyond the 10 px bound)");
+  // The same small blur ranges under a self-calibrated profile the data
+  // leave open: not too little blur, an unknown profile, which a weaker
+  // one would read 3 times larger (or without bound).
+  refusal.blur_read_factor = 3;
+  EXPECT_EQ(RefusalLine(refusal),
+            texture +
+                "the DP profile is unknown: the views' blur ranges read <= 2 "
+                "px with the one assumed, up to 3.0 x more with those the "
+                "data allow. Calibrate it with colmap dp_psf_calibrator");
+  refusal.blur_read_factor = std::numeric_limits<double>::infinity();
+  EXPECT_NE(RefusalLine(refusal).find("without bound more"),
+            std::string::npos);
+  refusal.blur_read_factor = 1.2;  // the profile nearly pinned
+  EXPECT_NE(RefusalLine(refusal).find("(too little blur)"), std::string::npos);
+  refusal.blur_read_factor = 1;
   refusal.linear_failure.cause = LinearFailureCause::kNonPositiveScale;
   ExpectShortLine(RefusalLine(refusal),
                   texture + "the joint linear fit gives s <= 0");
@@ -564,10 +579,11 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
   refusal.code = ScaleRefusal::kCuesNotCombined;
   refusal.cues = Disagreement(false);
   EXPECT_EQ(RefusalLine(refusal),
-            "the DP data and the recorded focus disagree: 0.42 against 0.5 "
-            "(together 28.6 % wide, limit 10 %). A measured focus: "
-            "--DPScaleEstimator.recorded_focus_tolerance ACCURACY; trust the "
-            "DP data: --DPScaleEstimator.pin_to_recorded_focus 0");
+            "the DP data and the recorded focus disagree: 0.42 [0.4, 0.44] "
+            "vs 0.5 [0.48, 0.52] (28.6 % wide, limit 10 %). A "
+            "measured focus: --DPScaleEstimator.recorded_focus_tolerance "
+            "ACCURACY; trust the DP data: "
+            "--DPScaleEstimator.pin_to_recorded_focus 0");
   ExpectShortLine(RefusalLine(refusal),
                   "the DP data and the recorded focus disagree");
   EXPECT_EQ(RefusalAccount(refusal).front(),
@@ -592,7 +608,7 @@ TEST(RefusalLine, LongNumbersStayWithinTheLimit) {
     refusal.code = code;
     ExpectShortLine(RefusalLine(refusal),
                     "the DP data and the recorded focus disagree: 1.23e-07 "
-                    "against 9.88e+12");
+                    "[0.25, 0.42] vs 9.88e+12");
   }
 }
 

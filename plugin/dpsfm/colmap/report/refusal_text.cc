@@ -324,10 +324,9 @@ std::string DisagreementAdviceText(const CueRefusal& cues,
 
 std::string DisagreementCauseText(const CueRefusal& cues) {
   return "the DP data and the recorded focus disagree: " + Num(cues.dp.scale) +
-         " in [" + Num(cues.dp.ci_low) + ", " + Num(cues.dp.ci_high) +
-         "] against " + Num(cues.focus.scale) + " in [" +
-         Num(cues.focus.ci_low) + ", " + Num(cues.focus.ci_high) +
-         "], intervals that share no value (together " + Percent(cues.width) +
+         " [" + Num(cues.dp.ci_low) + ", " + Num(cues.dp.ci_high) +
+         "] vs " + Num(cues.focus.scale) + " [" + Num(cues.focus.ci_low) +
+         ", " + Num(cues.focus.ci_high) + "] (" + Percent(cues.width) +
          " wide, limit " + Percent(cues.limit) + ")";
 }
 
@@ -486,6 +485,22 @@ std::string ScaleOpenLine(const DPScaleRefusal& refusal) {
 std::string LinearStageFailedLine(const DPScaleRefusal& refusal) {
   const LinearFailure& failure = refusal.linear_failure;
   const PatchAccount& patches = refusal.patches;
+  if (refusal.SmallBlurRangeOpenProfile()) {
+    // Not "too little blur": a weaker profile, which the data allow, would
+    // read the same frames' blur larger.
+    std::ostringstream cause;
+    cause << "the DP profile is unknown: the views' blur ranges read <= "
+          << failure.min_blur_range_px << " px with the one assumed, ";
+    if (std::isfinite(refusal.blur_read_factor)) {
+      cause << "up to " << std::fixed << std::setprecision(1)
+            << refusal.blur_read_factor << " x more";
+    } else {
+      cause << "without bound more";
+    }
+    cause << " with those the data allow";
+    return Line(TextureLead(patches) + cause.str(),
+                {"calibrate it with colmap dp_psf_calibrator"});
+  }
   std::vector<std::string> fixes;
   if (failure.SwappedViewsLikely()) {
     fixes.push_back(

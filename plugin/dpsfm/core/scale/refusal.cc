@@ -61,6 +61,14 @@ int PatchAccount::LargerSearchBound() const {
   return static_cast<int>(std::ceil(dpsfm::LargerSearchBound(max_radius_px)));
 }
 
+bool DPScaleRefusal::SmallBlurRangeOpenProfile() const {
+  return code == ScaleRefusal::kLinearStageFailed &&
+         !linear_failure.view_rejections.empty() &&
+         linear_failure.view_rejections.front().second ==
+             ViewRejection::kSmallBlurRange &&
+         !(blur_read_factor <= 1.5);
+}
+
 const char* ScaleRefusalName(ScaleRefusal code) {
   switch (code) {
     case ScaleRefusal::kNone:

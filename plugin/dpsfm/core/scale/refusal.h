@@ -156,6 +156,16 @@ struct DPScaleRefusal {
   // one (which would give the scale without the DP profile).
   bool recorded_focus_missing = false;
   PatchAccount patches;
+  // kLinearStageFailed with a self-calibrated profile: how many times
+  // larger than the profile used reads them the profiles the data allow
+  // would read the blur (1 / DPScaleResult::profile_scale_factor_low; +inf
+  // when they are not bounded; 1 with a given profile). A view's blur range
+  // under T_p is then "too little blur" only when this is near 1.
+  double blur_read_factor = 1;
+
+  // The views' blur ranges fell under T_p, but with a profile the data do
+  // not determine: they could read larger (by more than 1.5 times).
+  bool SmallBlurRangeOpenProfile() const;
 };
 
 }  // namespace dpsfm

@@ -561,6 +561,14 @@ DPScaleResult DPScaleEstimator::Estimate() const {
     result.refusal.code = ScaleRefusal::kLinearStageFailed;
     result.refusal.linear_failure = linear.failure;
     result.refusal.patches = account;
+    if (result.psf_fit_ran) {
+      // Whether the blur the views show is small, or only read small by a
+      // profile the data leave open.
+      SetProfileScaleFactors(field, &result);
+      const double low = result.profile_scale_factor_low;
+      result.refusal.blur_read_factor =
+          low > 0 ? 1 / low : std::numeric_limits<double>::infinity();
+    }
     return result;
   }
   // Intervals: the bootstrap's, widened by the systematic terms: the
