@@ -88,21 +88,27 @@ void RunWalkthrough(const std::string& block,
   EXPECT_GE(high, 0.37) << report.at("scale");
   // The log is not a terminal: no colour codes in it.
   EXPECT_EQ(run.err.find("\x1b["), std::string::npos) << run.err;
-  // The search bound is the view's own, and shown: once 4.93 px (the
-  // profile's kernels) with a third of the patches at it, silently.
+  // The search bound is the view's own, and shown: first 4.79 px (the
+  // blur the profile's kernels were measured at), grown to twice that.
   const nlohmann::json& bound = report.at("search_bound");
   EXPECT_GT(bound.at("px").get<double>(),
             bound.at("initial_px").get<double>())
       << bound;
-  EXPECT_NE(run.err.find("Blur-search bound grown from 4.93"),
+  EXPECT_NE(run.err.find("Blur-search bound grown from 4.79"),
             std::string::npos)
       << run.err;
   const bool warned =
-      run.err.find("sit at the blur-search bound") != std::string::npos;
+      run.err.find("beyond the blur-search bound") != std::string::npos;
   EXPECT_EQ(warned, bound.at("limits_answer").get<bool>()) << bound;
   if (warned) {
-    EXPECT_NE(run.err.find("--DPScaleEstimator.max_radius_px"),
-              std::string::npos);
+    // At twice the blur the profile covered, the advice is a calibration
+    // with more blur, never a larger bound (its kernels would be guesses).
+    EXPECT_NE(run.err.find("a calibration capture farther from the focus"),
+              std::string::npos)
+        << run.err;
+    EXPECT_EQ(run.err.find("--DPScaleEstimator.max_radius_px"),
+              std::string::npos)
+        << run.err;
   }
   // Stages that did not run are null, never 0.
   const nlohmann::json& intensity = report.at("intensity");

@@ -77,7 +77,8 @@ DPPair TexturedPatch(const DPPsfModel& psf,
 // neither is there a blur to measure. At most 2 % may come back measured.
 TEST(BlurEvidence, PureNoiseIsRarelyMeasured) {
   const TranslatingDiskPsf psf;
-  const PatchBlurEstimator estimator(psf, Options(), cv::Size(Crop(psf), Crop(psf)));
+  const PatchBlurEstimator estimator(
+      psf, Options(), cv::Size(Crop(psf), Crop(psf)));
   const int crop = Crop(psf);
   int measured_flat = 0, measured_textured = 0;
   const int seeds = 200;
@@ -114,7 +115,8 @@ TEST(BlurEvidence, PureNoiseIsRarelyMeasured) {
 // is not simply "refuse everything".
 TEST(BlurEvidence, TexturedBlurIsMeasured) {
   const TranslatingDiskPsf psf;
-  const PatchBlurEstimator estimator(psf, Options(), cv::Size(Crop(psf), Crop(psf)));
+  const PatchBlurEstimator estimator(
+      psf, Options(), cv::Size(Crop(psf), Crop(psf)));
   int measured = 0, tried = 0;
   for (const double radius : {-6.0, -2.5, 0.0, 1.5, 4.0, 8.0}) {
     for (uint64_t seed = 11; seed < 16; ++seed) {
@@ -129,8 +131,8 @@ TEST(BlurEvidence, TexturedBlurIsMeasured) {
       // px: the in-focus plateau of the disk reads as 0 up to 0.5 px).
       EXPECT_LE(std::abs(e.radius_px - radius),
                 std::max(4 * e.radius_se_px, 0.3))
-          << "r = " << radius << " seed " << seed << " read "
-          << e.radius_px << " +- " << e.radius_se_px;
+          << "r = " << radius << " seed " << seed << " read " << e.radius_px
+          << " +- " << e.radius_se_px;
     }
   }
   EXPECT_GE(measured, 0.9 * tried);
@@ -141,7 +143,8 @@ TEST(BlurEvidence, BlurPastTheBoundIsBeyondIt) {
   const TranslatingDiskPsf psf;
   BlurEstimationOptions options = Options();
   options.max_radius_px = 6;
-  const PatchBlurEstimator estimator(psf, options, cv::Size(Crop(psf), Crop(psf)));
+  const PatchBlurEstimator estimator(
+      psf, options, cv::Size(Crop(psf), Crop(psf)));
   int beyond = 0, tried = 0;
   for (const double radius : {-9.5, 9.0}) {
     for (uint64_t seed = 21; seed < 26; ++seed) {
@@ -167,7 +170,8 @@ TEST(BlurEvidence, BlurPastTheBoundIsBeyondIt) {
 // reaches the blurs present.
 TEST(BlurEvidence, DepthEdgeIsNeverConfidentlyWrong) {
   const TranslatingDiskPsf psf;
-  const PatchBlurEstimator estimator(psf, Options(), cv::Size(Crop(psf), Crop(psf)));
+  const PatchBlurEstimator estimator(
+      psf, Options(), cv::Size(Crop(psf), Crop(psf)));
   int tried = 0, measured = 0;
   for (const auto& pair : std::vector<std::pair<double, double>>{
            {1.0, 7.0}, {-4.0, 4.0}, {-7.0, -2.0}, {2.0, 9.0}}) {
@@ -193,7 +197,8 @@ TEST(BlurEvidence, DepthEdgeIsNeverConfidentlyWrong) {
 // draws of the same patch: within a factor 1.5.
 TEST(BlurEvidence, StandardErrorMatchesTheSpreadOverNoise) {
   const TranslatingDiskPsf psf;
-  const PatchBlurEstimator estimator(psf, Options(), cv::Size(Crop(psf), Crop(psf)));
+  const PatchBlurEstimator estimator(
+      psf, Options(), cv::Size(Crop(psf), Crop(psf)));
   for (const double radius : {-5.0, 3.0, 7.0}) {
     for (const double noise : {0.01, 0.03}) {
       std::vector<double> radii, errors;
@@ -208,16 +213,18 @@ TEST(BlurEvidence, StandardErrorMatchesTheSpreadOverNoise) {
       double mean = 0;
       for (double r : radii) mean += r / radii.size();
       double var = 0;
-      for (double r : radii) var += (r - mean) * (r - mean) / (radii.size() - 1);
+      for (double r : radii)
+        var += (r - mean) * (r - mean) / (radii.size() - 1);
       const double spread = std::sqrt(var);
       const double se = Median(errors);
-      std::printf("r = %+.1f noise %.2f: spread %.4f px, standard error %.4f px "
-                  "(%zu measured)\n",
-                  radius,
-                  noise,
-                  spread,
-                  se,
-                  radii.size());
+      std::printf(
+          "r = %+.1f noise %.2f: spread %.4f px, standard error %.4f px "
+          "(%zu measured)\n",
+          radius,
+          noise,
+          spread,
+          se,
+          radii.size());
       EXPECT_LE(se, 1.5 * spread) << "r = " << radius << " noise " << noise;
       EXPECT_GE(se, spread / 1.5) << "r = " << radius << " noise " << noise;
     }

@@ -49,10 +49,10 @@ TEST(MakePatchGrid, AWiderBorderMovesNoPatch) {
   ASSERT_LT(wide.size(), narrow.size());
   ASSERT_GT(wide.size(), 0.8 * narrow.size());
   for (const PatchCandidate& w : wide) {
-    EXPECT_TRUE(std::any_of(narrow.begin(), narrow.end(),
-                            [&](const PatchCandidate& n) {
-                              return n.interior == w.interior;
-                            }))
+    EXPECT_TRUE(std::any_of(
+        narrow.begin(),
+        narrow.end(),
+        [&](const PatchCandidate& n) { return n.interior == w.interior; }))
         << w.interior;
   }
 }

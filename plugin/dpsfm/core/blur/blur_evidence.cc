@@ -24,9 +24,10 @@
 //
 // A minimum inside the bound is measured when the rise on each side (the
 // best of 1, 2 and 4 px away), to the same blur on the other side of focus
-// and towards the other sign's best coarse node reach min_evidence_z; its standard error is the larger of the two sides'.
-// A minimum at the bound is beyond it when the rise from the bound inwards
-// reaches min_evidence_z. Everything else is undetermined.
+// and towards the other sign's best coarse node reach min_evidence_z; its
+// standard error is the larger of the two sides'. A minimum at the bound is
+// beyond it when the rise from the bound inwards reaches min_evidence_z.
+// Everything else is undetermined.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -55,13 +56,8 @@ double EnergyThroughKernel(const cv::Mat& field, const cv::Mat& kernel) {
   cv::copyMakeBorder(
       field, padded, py, py, px, px, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::Mat out;
-  cv::filter2D(padded,
-               out,
-               CV_32F,
-               kernel,
-               cv::Point(-1, -1),
-               0,
-               cv::BORDER_CONSTANT);
+  cv::filter2D(
+      padded, out, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
   return cv::norm(out, cv::NORM_L2SQR);
 }
 
@@ -132,8 +128,8 @@ class EvidenceCurve {
       const int n = std::max(
           0,
           std::min(t_.num_nodes - 1,
-                   static_cast<int>(std::lround(
-                       (best_.radius + side * offset) / t_.step)) +
+                   static_cast<int>(
+                       std::lround((best_.radius + side * offset) / t_.step)) +
                        t_.half_nodes));
       if (n == last || side * (t_.Radius(n) - best_.radius) < 0.999 * t_.step) {
         continue;
@@ -184,9 +180,8 @@ void WeighBlurEvidence(const BlurTables& t,
   if (std::abs(t.Radius(mirror) - best.radius) >= 0.999 * t.step) {
     z = std::min(z, curve.RiseTo(mirror).z);
   }
-  if (opposite_node >= 0 &&
-      std::abs(t.Radius(opposite_node) - best.radius) >
-          kEvidenceOffsetsPx.back()) {
+  if (opposite_node >= 0 && std::abs(t.Radius(opposite_node) - best.radius) >
+                                kEvidenceOffsetsPx.back()) {
     z = std::min(z, curve.RiseTo(opposite_node).z);
   }
   result->evidence_z = z;
