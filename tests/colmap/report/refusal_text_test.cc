@@ -441,19 +441,21 @@ TEST(RefusalLine, EachKindLeadsWithItsCauseWithinTheLimit) {
                 "--DPScaleEstimator.max_radius_px 16 (8 of 100 patches "
                 "beyond the 10 px bound)");
   // The same small blur ranges under a self-calibrated profile the data
-  // leave open: not too little blur, an unknown profile, which a weaker
-  // one would read 3 times larger (or without bound).
+  // leave open: too little blur as the profile assumed reads it, which a
+  // weaker one would read 3 times larger (or without bound), so the line
+  // says so and names the calibration first.
   refusal.blur_read_factor = 3;
   EXPECT_EQ(RefusalLine(refusal),
             texture +
-                "the DP profile is unknown: the views' blur ranges read <= 2 "
-                "px with the one assumed, up to 3.0 x more with those the "
-                "data allow. Calibrate it with colmap dp_psf_calibrator");
+                "no view passed selection: 9 views with blur range <= 2 px "
+                "(too little blur); the DP profile is open: a weaker one "
+                "reads it up to 3.0 x larger. Calibrate it: colmap "
+                "dp_psf_calibrator");
   refusal.blur_read_factor = std::numeric_limits<double>::infinity();
-  EXPECT_NE(RefusalLine(refusal).find("without bound more"),
+  EXPECT_NE(RefusalLine(refusal).find("larger without bound"),
             std::string::npos);
   refusal.blur_read_factor = 1.2;  // the profile nearly pinned
-  EXPECT_NE(RefusalLine(refusal).find("(too little blur)"), std::string::npos);
+  EXPECT_EQ(RefusalLine(refusal).find("profile open"), std::string::npos);
   refusal.blur_read_factor = 1;
   refusal.linear_failure.cause = LinearFailureCause::kNonPositiveScale;
   ExpectShortLine(RefusalLine(refusal),

@@ -486,20 +486,23 @@ std::string LinearStageFailedLine(const DPScaleRefusal& refusal) {
   const LinearFailure& failure = refusal.linear_failure;
   const PatchAccount& patches = refusal.patches;
   if (refusal.SmallBlurRangeOpenProfile()) {
-    // Not "too little blur": a weaker profile, which the data allow, would
-    // read the same frames' blur larger.
+    // Too little blur only as the assumed profile reads it: a weaker one,
+    // which the data allow, reads the same frames' blur larger (a real
+    // sensor's weak split read by the translating disk), and the data
+    // cannot tell that from a capture with little blur.
     std::ostringstream cause;
-    cause << "the DP profile is unknown: the views' blur ranges read <= "
-          << failure.min_blur_range_px << " px with the one assumed, ";
+    cause << TextureLead(patches) << LinearFailureCause(failure)
+          << "; the DP profile is open: a weaker one reads it ";
     if (std::isfinite(refusal.blur_read_factor)) {
       cause << "up to " << std::fixed << std::setprecision(1)
-            << refusal.blur_read_factor << " x more";
+            << refusal.blur_read_factor << " x larger";
     } else {
-      cause << "without bound more";
+      cause << "larger without bound";
     }
-    cause << " with those the data allow";
-    return Line(TextureLead(patches) + cause.str(),
-                {"calibrate it with colmap dp_psf_calibrator"});
+    return Line(cause.str(),
+                {"calibrate it: colmap dp_psf_calibrator",
+                 "or more blur: a wider aperture, or views with more depth "
+                 "range"});
   }
   std::vector<std::string> fixes;
   if (failure.SwappedViewsLikely()) {

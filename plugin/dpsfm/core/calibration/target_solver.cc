@@ -102,8 +102,18 @@ TargetReadings ReadAlongPath(const std::vector<double>& kappas,
         patches,
         options.num_threads,
         &prepared);
+    // A patch reads at every profile of the path where its minimum lies
+    // inside the bound, determined by the noise or not: the curve is how
+    // one patch's reading moves with the profile, and a patch dropped at
+    // some profiles and kept at others would make each profile's median
+    // one of a different set (with a wrong f-number the captures' curves
+    // then never met, and the fit refused as undetermined). The planes'
+    // patches are textured (CalibrationRunOptions' texture screening).
     for (int p = 0; p < n; ++p) {
-      if (estimates[p].valid) readings[k][p] = estimates[p].radius_px;
+      const PatchBlurEstimate& e = estimates[p];
+      const bool read = e.valid || (e.reject_reason == kBlurUndetermined &&
+                                    !e.at_bound);
+      if (read && std::isfinite(e.radius_px)) readings[k][p] = e.radius_px;
     }
   }
   return readings;
