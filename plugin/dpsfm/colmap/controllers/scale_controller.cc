@@ -18,6 +18,7 @@
 #include "dpsfm/colmap/rescale/rescale_plan.h"
 #include "dpsfm/colmap/rescale/transaction.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
+#include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
@@ -437,11 +438,9 @@ std::vector<std::string> SearchBoundWarnings(const DPScaleResult& result) {
       << (b.views_grown > 0 ? ", grown from " : "");
     if (b.views_grown > 0) s << b.initial_max_radius_px << " px";
     s << "): the answer rests on the patches nearer the focus; ";
-    if (b.profile_covered_radius_px > 0 &&
-        b.max_radius_px >= 2 * b.profile_covered_radius_px - 0.5) {
+    if (BoundAtProfileCoverage(b.max_radius_px, b.profile_covered_radius_px)) {
       // Beyond twice the covered blur the profile's kernels are a guess:
-      // a larger bound reads those patches, wrongly (refusal.h,
-      // PatchAccount::BoundAtProfileCoverage).
+      // a larger bound reads those patches, wrongly.
       s << "that is twice the blur the DP profile's calibration covered ("
         << b.profile_covered_radius_px
         << " px), and a calibration capture farther from the focus would "

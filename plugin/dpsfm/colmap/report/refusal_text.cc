@@ -341,14 +341,17 @@ const char kTrustDPDataFix[] =
     "trust the DP data: --DPScaleEstimator.pin_to_recorded_focus 0";
 const char kRecordFocusFix[] =
     "record the focus distance (lens.csv focus_distance_m, or EXIF)";
+const char kMoreBlurFix[] =
+    "more blur: a wider aperture, or views with more depth range";
 const char kWiderLimitFix[] =
     "a wider limit: --DPScaleEstimator.max_scale_ci_relative_width";
 
 // A larger blur-search bound, when the patches hit it.
 std::string SearchBoundFix(const PatchAccount& patches) {
   if (!patches.SearchBoundLimits()) return "";
+  const bool at_coverage = patches.BoundAtProfileCoverage();
   std::ostringstream s;
-  if (patches.BoundAtProfileCoverage()) {
+  if (at_coverage) {
     s << "a DP profile calibrated with more blur (a plane farther from the "
          "focus): ";
   } else {
@@ -357,7 +360,7 @@ std::string SearchBoundFix(const PatchAccount& patches) {
   }
   s << patches.at_search_bound << " of " << patches.tried
     << " patches beyond the " << Num(patches.max_radius_px) << " px bound"
-    << (patches.BoundAtProfileCoverage() ? "" : ")");
+    << (at_coverage ? "" : ")");
   return s.str();
 }
 
@@ -500,9 +503,7 @@ std::string LinearStageFailedLine(const DPScaleRefusal& refusal) {
       cause << "larger without bound";
     }
     return Line(cause.str(),
-                {"calibrate it: colmap dp_psf_calibrator",
-                 "or more blur: a wider aperture, or views with more depth "
-                 "range"});
+                {"calibrate it: colmap dp_psf_calibrator", kMoreBlurFix});
   }
   std::vector<std::string> fixes;
   if (failure.SwappedViewsLikely()) {
@@ -515,8 +516,7 @@ std::string LinearStageFailedLine(const DPScaleRefusal& refusal) {
   if (!failure.view_rejections.empty() &&
       failure.view_rejections.front().second ==
           ViewRejection::kSmallBlurRange) {
-    fixes.push_back("more blur: a wider aperture, or views with more depth "
-                    "range");
+    fixes.push_back(kMoreBlurFix);
   }
   // Views swapped explain their s <= 0 better than the texture does.
   return Line((failure.SwappedViewsLikely() ? "" : TextureLead(patches)) +

@@ -18,18 +18,6 @@ const char* const kBlurAtSearchBound = "blur beyond the search bound";
 const char* const kBlurUndetermined =
     "blur not determined (its loss curve is within the patch's noise)";
 
-const char* BlurEvidenceName(BlurEvidence evidence) {
-  switch (evidence) {
-    case BlurEvidence::kMeasured:
-      return "measured";
-    case BlurEvidence::kBeyondBound:
-      return "beyond the bound";
-    case BlurEvidence::kUndetermined:
-      return "undetermined";
-  }
-  return "undetermined";
-}
-
 namespace {
 
 using internal::BlurRefinement;
@@ -206,41 +194,41 @@ double RiseAwayFromMinimum(const BlurTables& t,
   return rise;
 }
 
-// The coarse node of least loss on the other sign of `radius` (-1: none, or
-// radius 0).
-int OppositeSignNode(const BlurTables& t,
-                     const CoarseCurve& coarse,
-                     double radius) {
-  int node = -1;
-  double least = kInf;
+// The coarse search's index of least loss on the other sign of `radius`
+// (-1: none, or radius 0).
+int OppositeSignIndex(const BlurTables& t,
+                      const CoarseCurve& coarse,
+                      double radius) {
+  int index = -1;
   for (size_t i = 0; i < coarse.loss.size(); ++i) {
-    if (t.Radius(t.coarse_nodes[i]) * radius < 0 && coarse.loss[i] < least) {
-      least = coarse.loss[i];
-      node = t.coarse_nodes[i];
+    if (t.Radius(t.coarse_nodes[i]) * radius < 0 &&
+        (index < 0 || coarse.loss[i] < coarse.loss[index])) {
+      index = static_cast<int>(i);
     }
   }
-  return node;
+  return index;
 }
 
-// Sign ambiguity: the best coarse loss on the other sign, against the
-// coarse loss at the estimate (limits the rise; sets opposite_sign_loss).
+// Sign ambiguity: the best coarse loss on the other sign (at `opposite`,
+// OppositeSignIndex), against the coarse loss at the estimate (limits the
+// rise; sets opposite_sign_loss).
 void CompareOppositeSign(const BlurTables& t,
                          const CoarseCurve& coarse,
                          const Minimum& best,
+                         int opposite,
                          double* rise,
                          PatchBlurEstimate* result) {
-  double opposite = kInf;
   double here = kInf;
   for (size_t i = 0; i < coarse.loss.size(); ++i) {
     const double r = t.Radius(t.coarse_nodes[i]);
-    if (r * best.radius < 0) opposite = std::min(opposite, coarse.loss[i]);
     if (std::abs(r - best.radius) <= 0.5 * t.options.coarse_step_px + 1e-9) {
       here = std::min(here, coarse.loss[i]);
     }
   }
-  result->opposite_sign_loss = opposite;
-  if (std::isfinite(opposite) && std::isfinite(here)) {
-    *rise = std::min(*rise, opposite - here);
+  const double opposite_loss = opposite >= 0 ? coarse.loss[opposite] : kInf;
+  result->opposite_sign_loss = opposite_loss;
+  if (std::isfinite(opposite_loss) && std::isfinite(here)) {
+    *rise = std::min(*rise, opposite_loss - here);
   }
 }
 
@@ -379,7 +367,10 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(
   // Fit quality: the rise of the loss away from the minimum against the
   // residual at the minimum.
   double rise = RiseAwayFromMinimum(t, sigma2, best, &refinement);
-  if (best.radius != 0) CompareOppositeSign(t, coarse, best, &rise, &result);
+  const int opposite = OppositeSignIndex(t, coarse, best.radius);
+  if (best.radius != 0) {
+    CompareOppositeSign(t, coarse, best, opposite, &rise, &result);
+  }
   const double residual = std::max(best.raw, 1e-300);
   result.fit_quality =
       std::isfinite(rise) && rise > 0 ? rise / (rise + residual) : 0.0;
@@ -389,7 +380,7 @@ PatchBlurEstimate PatchBlurEstimator::Estimate(
   internal::WeighBlurEvidence(t,
                               sigma2,
                               best,
-                              OppositeSignNode(t, coarse, best.radius),
+                              opposite >= 0 ? t.coarse_nodes[opposite] : -1,
                               &refinement,
                               &result);
   if (result.evidence == BlurEvidence::kBeyondBound) {

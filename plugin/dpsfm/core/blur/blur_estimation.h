@@ -70,8 +70,6 @@ enum class BlurEvidence {
   kUndetermined,
 };
 
-const char* BlurEvidenceName(BlurEvidence evidence);
-
 struct BlurEstimationOptions {
   // Search bound on |r| in pixels of the (possibly resized) DP frame. 20 is
   // the reference DSLR default (kernel 41 on 0.5-resized Canon 5D IV frames);

@@ -25,8 +25,10 @@
 // A minimum inside the bound is measured when the rise on each side (the
 // best of 1, 2 and 4 px away), to the same blur on the other side of focus
 // and towards the other sign's best coarse node reach min_evidence_z; its
-// standard error is the larger of the two sides'. A minimum at the bound is
-// beyond it when the rise from the bound inwards reaches min_evidence_z.
+// standard error is that of the two sides' local curvatures together
+// (1 / se^2 averaged over them), each from its nearest rise (1 px away).
+// A minimum at the bound is beyond it when the rise from the bound inwards
+// reaches min_evidence_z.
 // Everything else is undetermined.
 #include <algorithm>
 #include <array>

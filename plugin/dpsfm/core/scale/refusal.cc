@@ -52,9 +52,13 @@ bool PatchAccount::SearchBoundLimits() const {
   return tried > 0 && !(at_search_bound < 0.05 * tried) && max_radius_px > 0;
 }
 
+bool BoundAtProfileCoverage(double bound_px, double covered_px) {
+  return covered_px > 0 && bound_px >= 2 * covered_px - 0.5;
+}
+
 bool PatchAccount::BoundAtProfileCoverage() const {
-  return profile_covered_radius_px > 0 &&
-         max_radius_px >= 2 * profile_covered_radius_px - 0.5;
+  return dpsfm::BoundAtProfileCoverage(max_radius_px,
+                                       profile_covered_radius_px);
 }
 
 int PatchAccount::LargerSearchBound() const {

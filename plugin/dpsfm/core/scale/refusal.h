@@ -51,9 +51,16 @@ struct PatchAccount {
   // covered: beyond it the profile's magnified kernels are a guess (on the
   // R6 II's box/002 a 16 px bound read the near boxes' ~7 px blur as 12 px
   // and moved the answer 33 % low), so the fix is a calibration capture
-  // with more blur, not a larger bound.
+  // with more blur, not a larger bound. The free function of the same name
+  // on this account's bound and covered blur.
   bool BoundAtProfileCoverage() const;
 };
+
+// Whether a search bound of bound_px reaches twice the blur a measured
+// profile's calibration covered (covered_px; 0: no such profile), where a
+// larger bound would read patches through guessed kernels
+// (PatchAccount::BoundAtProfileCoverage).
+bool BoundAtProfileCoverage(double bound_px, double covered_px);
 
 // Per view: (tried, usable, (reason, count) pairs).
 struct ViewPatchCounts {

@@ -54,9 +54,8 @@ CombinedScale CombineScaleCues(const ScaleCue& dp, const ScaleCue& focus) {
   // not enough: a narrow cue that is wrong (a profile taken on trust) can
   // reach into a wide one's edge, and fusing them would answer with the
   // narrow one's error (scale_estimator_test, the sharper split).
-  const bool consistent =
-      dp.Contains(focus.scale) || focus.Contains(dp.scale) || z <= kZ95;
-  if (consistent) {
+  const bool holds = dp.Contains(focus.scale) || focus.Contains(dp.scale);
+  if (holds || z <= kZ95) {
     out.agreement = CueAgreement::kAgree;
     const double wd = 1 / (sigma_dp * sigma_dp);
     const double wf = 1 / (sigma_focus * sigma_focus);
@@ -69,8 +68,7 @@ CombinedScale CombineScaleCues(const ScaleCue& dp, const ScaleCue& focus) {
     how << "the cues agree (" << Describe("DP", dp) << ", "
         << Describe("recorded focus", focus)
         << ": "
-        << (dp.Contains(focus.scale) || focus.Contains(dp.scale)
-                ? "one interval holds the other's estimate"
+        << (holds ? "one interval holds the other's estimate"
                 : "estimates within the 95 % range of their difference")
         << "): their inverse-variance mean in log scale, with its interval";
   } else {

@@ -200,7 +200,10 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       data->samples = samples(&rejections, &sample_candidate);
       summary.patches_with_depth = with_depth;
       summary.patches_beyond_bound = PatchesAtSearchBound(search);
-      summary.patches_undetermined = PatchesUndetermined(search);
+      // Counted among the rejections by their reason (ViewSamples).
+      const auto undetermined = rejections.find(kBlurUndetermined);
+      summary.patches_undetermined =
+          undetermined == rejections.end() ? 0 : undetermined->second;
       if (!SearchBoundReached(search.num_searched,
                               summary.patches_beyond_bound,
                               summary.search_bound_growths,

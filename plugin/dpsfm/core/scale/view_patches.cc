@@ -270,16 +270,6 @@ int PatchesAtSearchBound(const ViewBlurSearch& search) {
   return count;
 }
 
-int PatchesUndetermined(const ViewBlurSearch& search) {
-  int count = 0;
-  for (size_t k = 0; k < search.estimates.size(); ++k) {
-    count += search.searched[k] &&
-             search.estimates[k].evidence == BlurEvidence::kUndetermined &&
-             search.estimates[k].reject_reason == kBlurUndetermined;
-  }
-  return count;
-}
-
 double LargerSearchBound(double bound_px) {
   return std::ceil(2 * std::max(1.6 * bound_px, bound_px + 2) - 1e-9) / 2;
 }

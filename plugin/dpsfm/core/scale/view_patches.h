@@ -155,9 +155,6 @@ std::vector<char> GrowthSample(const ViewBlurSearch& search);
 // Searched patches whose blur lies beyond the search bound
 // (BlurEvidence::kBeyondBound; their estimate is the bound, not the blur).
 int PatchesAtSearchBound(const ViewBlurSearch& search);
-// Searched patches whose loss curve determines no blur
-// (BlurEvidence::kUndetermined; left out of every later stage).
-int PatchesUndetermined(const ViewBlurSearch& search);
 
 // The next search bound after `bound_px`: 1.6 times it (at least 2 px
 // more), rounded up to a half pixel (the blur grid's step). A bound 1.6
