@@ -7,6 +7,14 @@
 #                     the automatic bound's; only the search's reach moves)
 #   threads           --DPScaleEstimator.num_threads 1 against 2 (the
 #                     default, all of this machine's)
+#   reordered         the same source compiled so that its arithmetic
+#                     rounds otherwise: dp-sfm built against the installed
+#                     COLMAP (make test-installed's prefix, made first when
+#                     missing) with -march=x86-64-v3 -ffp-contract=fast, so
+#                     that the compiler fuses multiplies and adds into FMA
+#                     instructions wherever it can (what GCC does by default
+#                     on aarch64), run as `dpsfm` (on a machine without
+#                     AVX2 and FMA this variant is left out)
 # on the real captures of `make real` (the calibrated profile, with and
 # without the recorded focus; the DP cue is measured whether or not the run
 # answers) and on the generated scenes of `make accuracy` (the defaults).
@@ -33,11 +41,37 @@ start=$SECONDS
 results="$out/results.tsv"
 : >"$results"
 
-# run NAME VARIANT REPORT ARGS...: one estimate, its report in REPORT.
+# The reordered build (see the header): its own tree in the cache, keyed by
+# the installed COLMAP it is built against.
+reordered=""
+build_reordered() {
+  local prefix="$DPSFM_CACHE_DIR/installed/$(basename "$build_dir")"
+  [ -d "$prefix" ] || bash "$DPSFM_ROOT/scripts/run_installed_tests.sh" \
+    || die "the installed COLMAP for the reordered build could not be made"
+  local tree="$DPSFM_CACHE_DIR/build/reordered-$(basename "$build_dir")"
+  cmake -S "$DPSFM_ROOT" -B "$tree" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_PREFIX_PATH="$prefix" -DDPSFM_BENCHMARKS_ENABLED=OFF \
+    -DCMAKE_CXX_FLAGS="-march=x86-64-v3 -ffp-contract=fast" \
+    >"$out/reordered.configure.log" 2>&1 \
+    || die "configuring the reordered build failed (log: $out/reordered.configure.log)"
+  cmake --build "$tree" --target dpsfm -j "$(jobs_count)" \
+    >"$out/reordered.build.log" 2>&1 \
+    || die "the reordered build failed (log: $out/reordered.build.log)"
+  cp "$tree/plugin/dpsfm" "$out/bin/dpsfm-reordered"
+  reordered="$out/bin/dpsfm-reordered"
+}
+if grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo; then
+  stage "build dp-sfm with fused multiply-adds" build_reordered
+else
+  log "this machine has no AVX2 and FMA: the reordered variant is left out"
+fi
+
+# run NAME VARIANT REPORT ARGS...: one estimate, its report in REPORT, by
+# $binary (the patched colmap unless set).
 run() {
   local name="$1" variant="$2" report="$3"
   shift 3
-  "$colmap" dp_scale_estimator --dry_run 1 --report_path "$report" "$@" \
+  "${binary:-$colmap}" dp_scale_estimator --dry_run 1 --report_path "$report" "$@" \
     >"$report.log" 2>&1 || true
   printf '%s\t%s\t%s\n' "$name" "$variant" "$report" >>"$results"
 }
@@ -62,6 +96,9 @@ variants() {
       --DPScaleEstimator.max_radius_px "$(awk "BEGIN{print $b + 1}")"
   fi
   run "$name" threads "$out/$name.t1.json" "$@" --DPScaleEstimator.num_threads 1
+  if [ -n "$reordered" ]; then
+    binary="$reordered" run "$name" reordered "$out/$name.fma.json" "$@"
+  fi
 }
 
 # The real captures, 8-bit as given, with the calibrated profile.
@@ -112,7 +149,7 @@ def answer(path):
 by = {}
 for name, variant, path in rows:
     by.setdefault(name, {})[variant] = answer(path)
-kinds = ["bound-1", "bound+1", "threads"]
+kinds = ["bound-1", "bound+1", "threads", "reordered"]
 print("\n| scene | base (what) | 95 % half-width | " + " | ".join(kinds) + " |")
 print("|---|---|---|" + "---|" * len(kinds))
 worst = {k: (0.0, "") for k in kinds}
