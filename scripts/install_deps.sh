@@ -12,7 +12,7 @@ PACKAGES=(
   libfreeimage-dev libmetis-dev libsqlite3-dev libboost-program-options-dev
   libboost-filesystem-dev libboost-graph-dev libboost-system-dev
   libsuitesparse-dev libglew-dev libopencv-dev libgtest-dev libfftw3-dev
-  libdeflate-dev nlohmann-json3-dev python3 python3-venv
+  libdeflate-dev nlohmann-json3-dev libexiv2-dev python3 python3-venv
   # COLMAP 4: OpenImageIO replaced FreeImage (its CMake package names
   # /usr/bin/iconvert, hence the tools), faiss for retrieval; CA certificates
   # for the sources CMake downloads on a machine without ../shared/sources.

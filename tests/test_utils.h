@@ -178,23 +178,33 @@ inline void CopyFolderFiles(const std::string& from, const std::string& to) {
   }
 }
 
-// The real DP captures: DPSFM_REALDP_DIR, else ../shared/realdp beside the
-// source tree, else /work/shared/realdp; the first that holds
-// canon_r6m2_rf50/, or "" when none does.
-inline std::string RealDpDir() {
+// A folder of ../shared: the environment variable `env`, else
+// ../shared/<name> beside the source tree, else /work/shared/<name>; the
+// first that holds `marker` (a file or folder), or "" when none does.
+inline std::string SharedDataDir(const char* env,
+                                 const std::string& name,
+                                 const std::string& marker) {
   std::vector<std::string> candidates;
-  if (const char* env = std::getenv("DPSFM_REALDP_DIR")) {
-    candidates.push_back(env);
-  }
-  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/realdp");
-  candidates.push_back("/work/shared/realdp");
+  if (const char* value = std::getenv(env)) candidates.push_back(value);
+  candidates.push_back(std::string(DPSFM_SOURCE_DIR) + "/../shared/" + name);
+  candidates.push_back("/work/shared/" + name);
   for (const std::string& c : candidates) {
-    if (std::filesystem::is_directory(std::filesystem::path(c) /
-                                      "canon_r6m2_rf50")) {
+    if (std::filesystem::exists(std::filesystem::path(c) / marker)) {
       return std::filesystem::canonical(c).string();
     }
   }
   return "";
+}
+
+// The real DP captures (DPSFM_REALDP_DIR, ../shared/realdp).
+inline std::string RealDpDir() {
+  return SharedDataDir("DPSFM_REALDP_DIR", "realdp", "canon_r6m2_rf50");
+}
+
+// Files written by real cameras, for the metadata readers (DPSFM_EXIF_DIR,
+// ../shared/exif).
+inline std::string RealExifDir() {
+  return SharedDataDir("DPSFM_EXIF_DIR", "exif", "README.md");
 }
 
 }  // namespace test

@@ -32,7 +32,9 @@ void AddRequiredOptions(CommandOptions* manager, ScaleRunOptions* options) {
 }
 
 void AddLensOptions(CommandOptions* manager, ScaleRunOptions* options) {
-  manager->Group("Lens data (per image: lens.csv, else the flags, else EXIF)");
+  manager->Group(
+      "Lens data (per image: lens.csv, else the flags, else the images' "
+      "metadata)");
   manager->AddDefault(
       "lens_path",
       &options->lens_path,
@@ -41,8 +43,10 @@ void AddLensOptions(CommandOptions* manager, ScaleRunOptions* options) {
       "row per image with a cell for each column (empty cells allowed)");
   manager->AddDefault("image_path",
                       &options->image_path,
-                      "original images, read for their EXIF focal length, "
-                      "f-number, focus distance, camera and lens");
+                      "original images, read for their metadata (EXIF and "
+                      "maker notes; JPEG, TIFF, PNG, raw, CR3, HEIF): focal "
+                      "length, f-number, pixel pitch, recorded focus, camera "
+                      "and lens");
   manager->AddDefault("DPScaleEstimator.focal_length_mm",
                       &options->focal_length_mm,
                       "focal length in millimetres for every image (0: not "
@@ -55,6 +59,11 @@ void AddLensOptions(CommandOptions* manager, ScaleRunOptions* options) {
       &options->pixel_pitch_um,
       "pixel pitch in micrometres of the model camera's pixels (0: not "
       "given, then focal length in mm / focal length in px)");
+  manager->AddDefault(
+      "DPScaleEstimator.use_recorded_focus",
+      &options->use_recorded_focus,
+      "use the focus distance the camera recorded in the images' metadata "
+      "(lens.csv's focus_distance_m is used either way)");
   manager->AddDefault(
       "DPScaleEstimator.lens_check_tolerance",
       &options->lens_check_tolerance,

@@ -53,6 +53,33 @@ TEST(LensCsv, ColumnsByNameInAnyOrder) {
   EXPECT_EQ(row.line, 2);
 }
 
+// A focus window as cameras record one ("lower-upper", the unit after the
+// upper end): its middle and relative half-width, 2.65-2.94 m being
+// 2.795 m +- 0.145 / 2.795. The source column is for people, not read.
+TEST(LensCsv, FocusWindowAndSourceColumn) {
+  TempDir dir;
+  WriteTextFile(dir / "lens.csv",
+                "name,focal_length_mm,f_number,focus_distance_m,source\n"
+                "a.CR3,200,25,2.65-2.94 m,focus: a.CR3 Exif.CanonFi\n"
+                "b.CR3,200,25,265-294 cm,\n"
+                "c.CR3,200,25,2.65-2.94,\n"
+                "d.CR3,200,25,1.5,\n");
+  const auto rows = ReadLensCsv(dir / "lens.csv");
+  for (const char* name : {"a.CR3", "b.CR3", "c.CR3"}) {
+    SCOPED_TRACE(name);
+    EXPECT_NEAR(rows.at(name).focus_distance_m, 2.795, 1e-12);
+    EXPECT_NEAR(rows.at(name).focus_bracket, 0.145 / 2.795, 1e-12);
+  }
+  EXPECT_TRUE(rows.at("a.CR3").focus_unit_written);
+  EXPECT_FALSE(rows.at("c.CR3").focus_unit_written);
+  EXPECT_EQ(rows.at("d.CR3").focus_bracket, 0);
+  WriteTextFile(dir / "bad.csv",
+                "name,focal_length_mm,f_number,focus_distance_m\n"
+                "a.CR3,200,25,2.94-2.65 m\n");
+  ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "bad.csv"); }),
+                 "a window lower-upper (e.g. 2.65-2.94 m), got '2.94-2.65 m'");
+}
+
 TEST(LensCsv, RowOneCellShortIsAnError) {
   TempDir dir;
   // The f-number left out: 49.57, 46.875, 1 would read as f/46.875 with a

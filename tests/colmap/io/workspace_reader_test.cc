@@ -21,6 +21,7 @@
 #include "dpsfm/core/scale/view_patches.h"
 #include "dpsfm/core/util/check.h"
 #include "tests/colmap/io/frame_oracle.h"
+#include "tests/colmap/io/metadata_files.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -28,270 +29,6 @@ namespace test {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A TIFF block written byte by byte, in either byte order: IFD0, an Exif
-// IFD (pointed to from IFD0) and optionally a maker-note IFD (the value of
-// the Exif IFD's MakerNote entry, offsets from the TIFF header as Canon
-// writes them). Values longer than 4 bytes go into a data area at the end.
-class TiffWriter {
- public:
-  explicit TiffWriter(bool big_endian) : big_(big_endian) {}
-
-  struct Entry {
-    uint16_t tag, type;
-    uint32_t count;
-    std::string value;  // already in the file's byte order
-  };
-  std::vector<Entry> ifd0, exif, maker_note;
-
-  std::string U16(uint16_t v) const {
-    std::string out(2, '\0');
-    out[big_ ? 0 : 1] = static_cast<char>(v >> 8);
-    out[big_ ? 1 : 0] = static_cast<char>(v & 0xff);
-    return out;
-  }
-  std::string U32(uint32_t v) const {
-    std::string out(4, '\0');
-    for (int i = 0; i < 4; ++i) {
-      out[big_ ? 3 - i : i] = static_cast<char>((v >> (8 * i)) & 0xff);
-    }
-    return out;
-  }
-  Entry Ascii(uint16_t tag, const std::string& text) const {
-    return {tag,
-            2,
-            static_cast<uint32_t>(text.size() + 1),
-            text + std::string(1, '\0')};
-  }
-  Entry Rational(uint16_t tag, uint32_t num, uint32_t den) const {
-    return {tag, 5, 1, U32(num) + U32(den)};
-  }
-  Entry Shorts(uint16_t tag, const std::vector<uint16_t>& values) const {
-    std::string bytes;
-    for (uint16_t v : values) bytes += U16(v);
-    return {tag, 3, static_cast<uint32_t>(values.size()), bytes};
-  }
-
-  std::string Bytes() const {
-    auto ifd_size = [](const std::vector<Entry>& e) {
-      return static_cast<uint32_t>(2 + 12 * e.size() + 4);
-    };
-    std::vector<Entry> ifd0_entries = ifd0;
-    const bool with_exif = !exif.empty() || !maker_note.empty();
-    if (with_exif) ifd0_entries.push_back({0x8769, 4, 1, ""});
-    std::vector<Entry> exif_entries = exif;
-    if (!maker_note.empty()) exif_entries.push_back({0x927C, 7, 0, ""});
-    const uint32_t ifd0_at = 8;
-    const uint32_t exif_at = ifd0_at + ifd_size(ifd0_entries);
-    const uint32_t note_at = exif_at + ifd_size(exif_entries);
-    const uint32_t note_size = ifd_size(maker_note);
-    uint32_t data_at = note_at + (maker_note.empty() ? 0 : note_size);
-    std::string data;
-    auto write_ifd = [&](std::vector<Entry> entries) {
-      std::string out = U16(static_cast<uint16_t>(entries.size()));
-      for (Entry& e : entries) {
-        if (e.tag == 0x8769) e.value = U32(exif_at);
-        out += U16(e.tag) + U16(e.type);
-        if (e.tag == 0x927C && e.type == 7) {
-          out += U32(note_size) + U32(note_at);
-          continue;
-        }
-        out += U32(e.count);
-        if (e.value.size() <= 4) {
-          out += e.value + std::string(4 - e.value.size(), '\0');
-        } else {
-          out += U32(data_at + static_cast<uint32_t>(data.size()));
-          data += e.value;
-        }
-      }
-      return out + U32(0);
-    };
-    std::string out = big_ ? "MM" : "II";
-    out += U16(42) + U32(ifd0_at);
-    out += write_ifd(ifd0_entries);
-    if (with_exif) out += write_ifd(exif_entries);
-    if (!maker_note.empty()) out += write_ifd(maker_note);
-    return out + data;
-  }
-
- private:
-  bool big_;
-};
-
-// A small JPEG with `tiff` as its APP1 Exif segment (inserted after SOI).
-std::string JpegWithExif(const std::string& tiff) {
-  const std::string payload = std::string("Exif\0\0", 6) + tiff;
-  std::string app1 = "\xFF\xE1";
-  const uint16_t length = static_cast<uint16_t>(payload.size() + 2);
-  app1.push_back(static_cast<char>(length >> 8));
-  app1.push_back(static_cast<char>(length & 0xff));
-  app1 += payload;
-  std::vector<uchar> jpeg;
-  cv::imencode(
-      ".jpg", cv::Mat(16, 16, CV_8UC3, cv::Scalar(90, 120, 200)), jpeg);
-  const std::string bytes(jpeg.begin(), jpeg.end());
-  return bytes.substr(0, 2) + app1 + bytes.substr(2);
-}
-
-// A small PNG with `tiff` as an eXIf chunk after IHDR (CRC not checked by
-// readers of metadata; written as zeros).
-std::string PngWithExif(const std::string& tiff) {
-  std::vector<uchar> png;
-  cv::imencode(".png", cv::Mat(8, 8, CV_8UC1, cv::Scalar(7)), png);
-  const std::string bytes(png.begin(), png.end());
-  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
-  std::string chunk;
-  const uint32_t n = static_cast<uint32_t>(tiff.size());
-  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
-  chunk += "eXIf" + tiff + std::string(4, '\0');
-  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
-}
-
-// An image encoded as PNG with one more chunk (type, data) after IHDR, its
-// CRC-32 computed bit by bit (PNG's polynomial 0xEDB88320).
-std::string PngWithChunk(const cv::Mat& image,
-                         const std::string& type,
-                         const std::string& data) {
-  std::vector<uchar> png;
-  cv::imencode(".png", image, png);
-  const std::string bytes(png.begin(), png.end());
-  const size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
-  std::string chunk;
-  const uint32_t n = static_cast<uint32_t>(data.size());
-  for (int i = 3; i >= 0; --i) chunk.push_back(static_cast<char>(n >> (8 * i)));
-  uint32_t crc = 0xFFFFFFFFu;
-  for (const char c : type + data) {
-    crc ^= static_cast<uint8_t>(c);
-    for (int k = 0; k < 8; ++k)
-      crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  crc ^= 0xFFFFFFFFu;
-  chunk += type + data;
-  for (int i = 3; i >= 0; --i)
-    chunk.push_back(static_cast<char>(crc >> (8 * i)));
-  return bytes.substr(0, after_ihdr) + chunk + bytes.substr(after_ihdr);
-}
-
-std::string BigEndian(uint32_t v) {
-  std::string s;
-  for (int i = 3; i >= 0; --i) s.push_back(static_cast<char>(v >> (8 * i)));
-  return s;
-}
-
-TEST(ExifLens, ReadsExactRationals) {
-  TempDir dir;
-  const std::string path = dir / "IMG_1.JPG";
-  TiffWriter tiff(false);
-  tiff.exif = {tiff.Rational(0x829D, 28, 10), tiff.Rational(0x920A, 2347, 100)};
-  WriteTextFile(path, JpegWithExif(tiff.Bytes()));
-  const ExifLens exif = ReadExifLens(path);
-  // 23.47 mm would read as 23.5 through a library's string form.
-  EXPECT_DOUBLE_EQ(exif.f_number, 2.8);
-  EXPECT_DOUBLE_EQ(exif.focal_length_mm, 23.47);
-  EXPECT_EQ(exif.focus_distance_mm, 0);
-  EXPECT_TRUE(exif.camera.empty());
-}
-
-// Make / Model / LensModel and the focus distance, in both byte orders and
-// in the three containers: the Canon maker note's window (ShotInfo [19]
-// upper, [20] lower, cm) wins over SubjectDistance.
-TEST(ExifLens, CameraLensAndFocusDistance) {
-  for (const bool big : {false, true}) {
-    TiffWriter tiff(big);
-    tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"),
-                 tiff.Ascii(0x0110, "Canon EOS R6m2")};
-    tiff.exif = {tiff.Rational(0x829D, 4, 1),
-                 tiff.Rational(0x920A, 50, 1),
-                 tiff.Rational(0x9206, 1230, 1000),
-                 tiff.Ascii(0xA434, "RF50mm F1.8 STM")};
-    std::vector<uint16_t> shot(34, 0);
-    shot[0] = 68;
-    shot[19] = 98;  // upper, cm
-    shot[20] = 94;  // lower
-    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
-    TempDir dir;
-    for (const std::string& name : {"a.jpg", "a.tif", "a.png"}) {
-      const std::string bytes = name == "a.jpg"   ? JpegWithExif(tiff.Bytes())
-                                : name == "a.png" ? PngWithExif(tiff.Bytes())
-                                                  : tiff.Bytes();
-      WriteTextFile(dir / name, bytes);
-      const ExifLens exif = ReadExifLens(dir / name);
-      SCOPED_TRACE(name + (big ? " MM" : " II"));
-      EXPECT_EQ(exif.camera, "Canon / Canon EOS R6m2");
-      EXPECT_EQ(exif.lens, "RF50mm F1.8 STM");
-      EXPECT_DOUBLE_EQ(exif.f_number, 4);
-      EXPECT_DOUBLE_EQ(exif.focal_length_mm, 50);
-      EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 960);
-      // The window [940, 980] mm is +-20 mm around 960: 4 / 192.
-      EXPECT_DOUBLE_EQ(exif.focus_bracket, 4.0 / 192);
-      EXPECT_EQ(exif.focus_source, "Canon maker note");
-    }
-    // A window of a factor 3 is still a distance (its middle, +-50 %)...
-    shot[19] = 150;
-    shot[20] = 50;
-    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
-    ExifLens wide = ParseExifLens(tiff.Bytes());
-    EXPECT_DOUBLE_EQ(wide.focus_distance_mm, 1000);
-    EXPECT_DOUBLE_EQ(wide.focus_bracket, 0.5);
-    // ...a wider one is not.
-    shot[19] = 151;
-    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
-    wide = ParseExifLens(tiff.Bytes());
-    EXPECT_EQ(wide.focus_source, "SubjectDistance");
-    EXPECT_EQ(wide.focus_bracket, 0);
-    shot[19] = 98;
-    shot[20] = 94;
-    // An open window (infinity as upper) is no distance: SubjectDistance.
-    shot[19] = 65535;
-    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
-    ExifLens exif = ParseExifLens(tiff.Bytes());
-    EXPECT_DOUBLE_EQ(exif.focus_distance_mm, 1230);
-    EXPECT_EQ(exif.focus_source, "SubjectDistance");
-    // Another make's maker note is not read as Canon's.
-    tiff.ifd0[0] = tiff.Ascii(0x010F, "NIKON");
-    shot[19] = 98;
-    tiff.maker_note = {tiff.Shorts(0x0004, shot)};
-    exif = ParseExifLens(tiff.Bytes());
-    EXPECT_EQ(exif.focus_source, "SubjectDistance");
-    // SubjectDistance 0 (unknown) and 0xFFFFFFFF (infinity) are no distance.
-    tiff.exif[2] = tiff.Rational(0x9206, 0, 1);
-    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
-    tiff.exif[2] = tiff.Rational(0x9206, 0xFFFFFFFFu, 1);
-    EXPECT_EQ(ParseExifLens(tiff.Bytes()).focus_distance_mm, 0);
-  }
-}
-
-// Cut or corrupted blocks read as "no EXIF" or partial, never crash: every
-// prefix of a valid file, and every single-byte corruption of its TIFF.
-TEST(ExifLens, TruncatedAndCorruptNeverCrash) {
-  TiffWriter tiff(false);
-  tiff.ifd0 = {tiff.Ascii(0x010F, "Canon"), tiff.Ascii(0x0110, "R5")};
-  tiff.exif = {tiff.Rational(0x829D, 4, 1), tiff.Ascii(0xA434, "RF")};
-  tiff.maker_note = {tiff.Shorts(0x0004, std::vector<uint16_t>(34, 100))};
-  const std::string bytes = tiff.Bytes();
-  for (size_t n = 0; n < bytes.size(); ++n) {
-    ParseExifLens(bytes.substr(0, n));
-    ParseExifLens(JpegWithExif(bytes.substr(0, n)));
-  }
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    for (const char c : {'\0', '\xff', '\x7f'}) {
-      std::string corrupt = bytes;
-      corrupt[i] = c;
-      ParseExifLens(corrupt);
-    }
-  }
-  EXPECT_DOUBLE_EQ(ParseExifLens(bytes).focus_distance_mm, 1000);
-}
-
-TEST(ExifLens, NoExifGivesZeros) {
-  TempDir dir;
-  const std::string path = dir / "plain.png";
-  cv::imwrite(path, cv::Mat(8, 8, CV_8UC1, cv::Scalar(7)));
-  const ExifLens exif = ReadExifLens(path);
-  EXPECT_EQ(exif.f_number, 0);
-  EXPECT_EQ(exif.focal_length_mm, 0);
-  EXPECT_EQ(ReadExifLens(dir / "missing.jpg").f_number, 0);
-}
 
 TEST(LensCsv, ParsesRowsAndEmptyPitch) {
   TempDir dir;
@@ -325,6 +62,8 @@ TEST(LensCsv, BadFilesNameTheLine) {
   EXPECT_THROW(ReadLensCsv(dir / "twice.csv"), InputError);
 }
 
+// lens.csv > flags > the files' metadata (the original's, then the DP
+// frame's) > derived, each number named by its source.
 TEST(ResolveLens, Precedence) {
   std::map<std::string, LensCsvRow> csv;
   csv["IMG"] = LensCsvRow{50, 0, 0};
@@ -332,39 +71,60 @@ TEST(ResolveLens, Precedence) {
   LensFlags flags;
   flags.focal_length_mm = 35;
   flags.f_number = 4;
-  ExifLens exif;
-  exif.focal_length_mm = 85;
-  exif.f_number = 1.8;
-  // lens.csv wins over flags and EXIF; pitch derived from f_mm / f_px.
-  ResolvedLens lens = ResolveLens("IMG", csv, flags, &exif, 10000.0);
+  MetadataFile original{"IMG.CR3", CameraMetadata()};
+  original.metadata.focal_length_mm = {85, "Exif.Photo.FocalLength"};
+  original.metadata.f_number = {1.8, "Exif.Photo.FNumber"};
+  std::vector<MetadataFile> files = {original};
+  const LensCheckOptions check;
+  // lens.csv wins over flags and metadata; pitch derived from f_mm / f_px.
+  ResolvedLens lens = ResolveLens("IMG", csv, flags, files, 10000.0, check);
   EXPECT_EQ(lens.lens.focal_length_mm, 50);
   EXPECT_EQ(lens.focal_length_source, "lens.csv");
   EXPECT_EQ(lens.lens.f_number, 2.8);
   EXPECT_DOUBLE_EQ(lens.lens.pixel_pitch_um, 5.0);
   EXPECT_EQ(lens.pixel_pitch_source, "derived f_mm/f_px");
-  // Flags win over EXIF.
-  lens = ResolveLens("OTHER", csv, flags, &exif, 10000.0);
+  // Flags win over metadata.
+  lens = ResolveLens("OTHER", csv, flags, files, 10000.0, check);
   EXPECT_EQ(lens.lens.focal_length_mm, 35);
   EXPECT_EQ(lens.f_number_source, "flag");
-  // EXIF when nothing else.
-  lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
+  // Metadata when nothing else, named by file and tag.
+  lens = ResolveLens("OTHER", csv, LensFlags(), files, 10000.0, check);
   EXPECT_EQ(lens.lens.f_number, 1.8);
-  EXPECT_EQ(lens.f_number_source, "EXIF");
-  // The recorded focus: lens.csv, else EXIF, else none (NaN).
+  EXPECT_EQ(lens.f_number_source, "IMG.CR3 Exif.Photo.FNumber");
+  EXPECT_TRUE(IsMetadataSource(lens.f_number_source));
+  // The recorded focus: lens.csv, else metadata, else none (NaN).
   EXPECT_TRUE(std::isnan(lens.lens.recorded_focus_mm));
   EXPECT_TRUE(lens.focus_source.empty());
-  exif.focus_distance_mm = 960;
-  exif.focus_source = "Canon maker note";
-  lens = ResolveLens("OTHER", csv, LensFlags(), &exif, 10000.0);
+  // A DP frame's metadata fills what the original lacks, after it.
+  MetadataFile frame{"DP frame IMG.tif", CameraMetadata()};
+  frame.metadata.f_number = {11, "Exif.Photo.FNumber"};
+  frame.metadata.focus.distance_mm = 960;
+  frame.metadata.focus.bracket = 0.02;
+  frame.metadata.focus.tag = "Exif.CanonFi.FocusDistance{Upper,Lower}";
+  files.push_back(frame);
+  lens = ResolveLens("OTHER", csv, LensFlags(), files, 10000.0, check);
+  EXPECT_EQ(lens.lens.f_number, 1.8);
   EXPECT_EQ(lens.lens.recorded_focus_mm, 960);
-  EXPECT_EQ(lens.focus_source, "EXIF Canon maker note");
+  EXPECT_EQ(lens.lens.recorded_focus_bracket, 0.02);
+  EXPECT_EQ(lens.focus_source,
+            "DP frame IMG.tif Exif.CanonFi.FocusDistance{Upper,Lower}");
+  // Switched off: no focus, and a note that says which was not used.
+  LensFlags off;
+  off.use_recorded_focus = false;
+  lens = ResolveLens("OTHER", csv, off, files, 10000.0, check);
+  EXPECT_TRUE(std::isnan(lens.lens.recorded_focus_mm));
+  EXPECT_NE(lens.focus_note.find("use_recorded_focus is off"),
+            std::string::npos);
+  // lens.csv's focus is used either way, with its own window.
   csv["IMG"].focus_distance_m = 1.25;
-  lens = ResolveLens("IMG", csv, LensFlags(), &exif, 10000.0);
+  csv["IMG"].focus_bracket = 0.04;
+  lens = ResolveLens("IMG", csv, off, files, 10000.0, check);
   EXPECT_EQ(lens.lens.recorded_focus_mm, 1250);
+  EXPECT_EQ(lens.lens.recorded_focus_bracket, 0.04);
   EXPECT_EQ(lens.focus_source, "lens.csv");
   // Nothing: the error names the image and the three ways.
   try {
-    ResolveLens("OTHER", csv, LensFlags(), nullptr, 10000.0);
+    ResolveLens("OTHER", csv, LensFlags(), {}, 10000.0, check);
     FAIL();
   } catch (const InputError& error) {
     const std::string message = error.what();
@@ -372,8 +132,36 @@ TEST(ResolveLens, Precedence) {
     EXPECT_NE(message.find("--lens_path"), std::string::npos);
     EXPECT_NE(message.find("--DPScaleEstimator.focal_length_mm"),
               std::string::npos);
-    EXPECT_NE(message.find("EXIF"), std::string::npos);
+    EXPECT_NE(message.find("metadata of the original image"),
+              std::string::npos);
   }
+}
+
+// A pitch from FocalPlaneXResolution is of the camera's full-resolution
+// image: used when it fits the model's camera (f_px = f_mm / pitch, with
+// breathing), else noted and derived. 50 mm / 6.5 um = 7692 px.
+TEST(ResolveLens, MetadataPitchOnlyWhereItFitsTheCamera) {
+  MetadataFile file{"IMG.CR3", CameraMetadata()};
+  file.metadata.focal_length_mm = {50, "Exif.Photo.FocalLength"};
+  file.metadata.f_number = {4, "Exif.Photo.FNumber"};
+  file.metadata.pixel_pitch_um = {6.5, "Exif.Photo.FocalPlaneXResolution"};
+  const LensCheckOptions check;
+  ResolvedLens lens = ResolveLens("IMG", {}, LensFlags(), {file}, 7900, check);
+  EXPECT_EQ(lens.lens.pixel_pitch_um, 6.5);
+  EXPECT_EQ(lens.pixel_pitch_source,
+            "IMG.CR3 Exif.Photo.FocalPlaneXResolution");
+  EXPECT_TRUE(lens.pitch_note.empty());
+  // The model built from half-size images: f_px 3846.
+  lens = ResolveLens("IMG", {}, LensFlags(), {file}, 3846, check);
+  EXPECT_NEAR(lens.lens.pixel_pitch_um, 13.0, 0.01);
+  EXPECT_EQ(lens.pixel_pitch_source, "derived f_mm/f_px");
+  EXPECT_NE(lens.pitch_note.find("6.5 um (IMG.CR3"), std::string::npos)
+      << lens.pitch_note;
+  // A flag still wins.
+  LensFlags flags;
+  flags.pixel_pitch_um = 13;
+  lens = ResolveLens("IMG", {}, flags, {file}, 3846, check);
+  EXPECT_EQ(lens.pixel_pitch_source, "flag");
 }
 
 WorkspaceLayout DPLayout(const TempDir& dir, bool sum) {
@@ -465,36 +253,6 @@ TEST(LoadDPFrames, SixteenBitSumFrameAndSwap) {
 
 // What a file says about its encoding: PNG sRGB / iCCP / gAMA chunks and
 // EXIF ColorSpace; nothing said = kAuto.
-TEST(DeclaredEncoding, ChunksAndExif) {
-  const cv::Mat image(4, 4, CV_16UC1, cv::Scalar(1000));
-  auto declared = [](const std::string& bytes) {
-    return ParseDeclaredEncoding(bytes).encoding;
-  };
-  EXPECT_EQ(declared(PngWithChunk(image, "tEXt", std::string("a\0b", 3))),
-            DPEncoding::kAuto);
-  EXPECT_EQ(declared(PngWithChunk(image, "sRGB", std::string(1, '\0'))),
-            DPEncoding::kSrgb);
-  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(100000))),
-            DPEncoding::kLinear);
-  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(45455))),
-            DPEncoding::kSrgb);
-  EXPECT_EQ(declared(PngWithChunk(image, "gAMA", BigEndian(70000))),
-            DPEncoding::kAuto);
-  EXPECT_EQ(declared(PngWithChunk(
-                image, "iCCP", std::string("Linear Rec2020\0\0x", 17))),
-            DPEncoding::kLinear);
-  EXPECT_EQ(
-      declared(PngWithChunk(image, "iCCP", std::string("Display P3\0\0x", 13))),
-      DPEncoding::kSrgb);
-  TiffWriter tiff(false);
-  tiff.exif = {tiff.Shorts(0xA001, {1})};
-  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kSrgb);
-  EXPECT_EQ(declared(JpegWithExif(tiff.Bytes())), DPEncoding::kSrgb);
-  EXPECT_EQ(declared(PngWithExif(tiff.Bytes())), DPEncoding::kSrgb);
-  tiff.exif = {tiff.Shorts(0xA001, {0xFFFF})};  // uncalibrated
-  EXPECT_EQ(declared(tiff.Bytes()), DPEncoding::kAuto);
-}
-
 // Frames reach the core in linear light: 8-bit code 128 is sRGB by default
 // (0.2158605 by the standard's curve), 16-bit files are linear, a gAMA 1.0
 // chunk makes an 8-bit file linear, the flag overrides the file, a sum

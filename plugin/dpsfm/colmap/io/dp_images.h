@@ -8,7 +8,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "dpsfm/colmap/io/exif.h"
+#include "dpsfm/colmap/io/image_metadata.h"
 #include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/core/optics/encoding.h"
 

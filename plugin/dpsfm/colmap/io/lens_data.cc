@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <vector>
 
 #include "colmap/util/logging.h"
 #include "dpsfm/colmap/io/text.h"
 #include "dpsfm/colmap/io/workspace.h"
+
+namespace fs = std::filesystem;
 
 namespace dpsfm {
 namespace {
@@ -75,6 +78,43 @@ double ParseCell(const CsvTable& table,
   return value;
 }
 
+// focus_distance_m: one distance, or a window "lower-upper" as cameras
+// record one ("2.65-2.94 m", the unit after the upper end), read as its
+// middle and its relative half-width.
+void ParseFocusCell(const CsvTable& table,
+                    const CsvTable::Row& cells,
+                    std::map<std::string, Conversions>* conversions,
+                    LensCsvRow* row) {
+  const std::string cell = table.Cell(cells, "focus_distance_m");
+  const size_t dash = cell.find('-', 1);
+  if (dash == std::string::npos) {
+    row->focus_distance_m = ParseCell(table,
+                                      cells,
+                                      "focus_distance_m",
+                                      conversions,
+                                      &row->focus_unit_written);
+    return;
+  }
+  std::string unit;
+  double lower = 0, upper = 0;
+  const std::string upper_text = cell.substr(dash + 1);
+  const bool ok = ParseLength(upper_text, "m", &upper, &unit) &&
+                  ParseLength(Trim(cell.substr(0, dash)) + " " +
+                                  (unit.empty() ? "m" : unit),
+                              "m",
+                              &lower) &&
+                  lower > 0 && upper >= lower && std::isfinite(upper);
+  if (!ok) {
+    throw InputError(table.Where(cells) +
+                     "focus_distance_m must be a distance or a window "
+                     "lower-upper (e.g. 2.65-2.94 m), got '" +
+                     cell + "'");
+  }
+  row->focus_distance_m = 0.5 * (lower + upper);
+  row->focus_bracket = (upper - lower) / (upper + lower);
+  row->focus_unit_written = !unit.empty();
+}
+
 void LogConversions(const std::string& path,
                     const std::map<std::string, Conversions>& conversions) {
   for (const auto& [column, c] : conversions) {
@@ -127,7 +167,8 @@ const std::vector<std::string>& LensCsvColumns() {
                                                     "pixel_pitch_um",
                                                     "focus_distance_m",
                                                     "camera",
-                                                    "lens"};
+                                                    "lens",
+                                                    "source"};
   return kColumns;
 }
 
@@ -153,11 +194,7 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
     row.f_number = ParseCell(table, cells, "f_number", &conversions);
     row.pixel_pitch_um =
         ParseCell(table, cells, "pixel_pitch_um", &conversions);
-    row.focus_distance_m = ParseCell(table,
-                                     cells,
-                                     "focus_distance_m",
-                                     &conversions,
-                                     &row.focus_unit_written);
+    ParseFocusCell(table, cells, &conversions, &row);
     row.camera = table.Cell(cells, "camera");
     row.lens = table.Cell(cells, "lens");
     row.line = cells.line;
@@ -191,69 +228,248 @@ const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
   return &found->second;
 }
 
+std::vector<MetadataFile> ReadImageMetadata(const std::string& image_path,
+                                            const std::string& image_name,
+                                            const std::string& dp_frame) {
+  std::vector<MetadataFile> files;
+  if (!image_path.empty()) {
+    const fs::path original = fs::path(image_path) / image_name;
+    if (fs::is_regular_file(original)) {
+      files.push_back(
+          {original.filename().string(), ReadCameraMetadata(original.string())});
+    }
+  }
+  const bool complete = !files.empty() &&
+                        files[0].metadata.focal_length_mm.recorded() &&
+                        files[0].metadata.f_number.recorded() &&
+                        files[0].metadata.focus.distance_mm > 0;
+  if (!dp_frame.empty() && !complete) {
+    MetadataFile frame{"DP frame " + fs::path(dp_frame).filename().string(),
+                       ReadCameraMetadata(dp_frame)};
+    // A frame of no format Exiv2 knows simply carries no metadata.
+    if (frame.metadata.error.rfind("not an image format", 0) == 0) {
+      frame.metadata.error.clear();
+    }
+    files.push_back(frame);
+  }
+  return files;
+}
+
+void LensNotes::Add(const std::string& image_name,
+                    const ResolvedLens& resolved) {
+  auto add = [&](Kind* kind, const std::string& note) {
+    if (note.empty()) return;
+    if (kind->count++ == 0) kind->first = "image " + image_name + ": " + note;
+  };
+  add(&focus_, resolved.focus_note);
+  add(&pitch_, resolved.pitch_note);
+  for (const std::string& file : resolved.unreadable) add(&unreadable_, file);
+}
+
+void LensNotes::Log() const {
+  auto log = [](const Kind& kind, const char* what) {
+    if (kind.count == 0) return;
+    LOG(INFO) << what << ": " << kind.first
+              << (kind.count > 1 ? " (and " + std::to_string(kind.count - 1) +
+                                       " more like it)"
+                                 : std::string());
+  };
+  log(focus_, "No recorded focus read");
+  log(pitch_, "Metadata pixel pitch not used");
+  log(unreadable_, "Image metadata not read");
+}
+
+bool IsMetadataSource(const std::string& source) {
+  return source.find(" Exif.") != std::string::npos;
+}
+
+namespace {
+
+// The first of the files whose metadata records `number`, and the source
+// it is named by.
+const MetadataNumber* FirstRecorded(
+    const std::vector<MetadataFile>& files,
+    MetadataNumber CameraMetadata::*number,
+    std::string* source) {
+  for (const MetadataFile& file : files) {
+    const MetadataNumber& n = file.metadata.*number;
+    if (n.recorded()) {
+      *source = file.name + " " + n.tag;
+      return &n;
+    }
+  }
+  return nullptr;
+}
+
+// v / f of a lens of focal length f focused at `focus_mm` from the sensor.
+double Breathing(double focus_mm, double f_mm) {
+  const double u = FocusObjectDistanceMm(focus_mm, f_mm);
+  return (focus_mm - u) / f_mm;
+}
+
+// The calibrated f_px over f_mm / pitch: the image distance over f, which
+// focus breathing puts at v / f >= 1. Its accepted band (the check's).
+struct PitchRatioBand {
+  double low = 0, high = 0;
+};
+PitchRatioBand AcceptedPitchRatio(const DPLensData& lens,
+                                  const LensCheckOptions& options) {
+  const double breathing =
+      std::isfinite(lens.recorded_focus_mm)
+          ? Breathing(lens.recorded_focus_mm, lens.focal_length_mm)
+          : options.breathing_without_focus;
+  return {1 / (1 + options.tolerance), (1 + options.tolerance) * breathing};
+}
+
+std::string Number(double value) {
+  std::ostringstream s;
+  s.precision(4);
+  s << value;
+  return s.str();
+}
+
+// The recorded focus: lens.csv's, else the first file's that records one
+// (unless switched off).
+void ResolveFocus(const LensCsvRow* csv_row,
+                  const std::string& csv_source,
+                  const LensFlags& flags,
+                  const std::vector<MetadataFile>& metadata,
+                  ResolvedLens* resolved) {
+  if (csv_row && csv_row->focus_distance_m > 0) {
+    resolved->lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
+    resolved->lens.recorded_focus_bracket = csv_row->focus_bracket;
+    resolved->focus_source = csv_source;
+    resolved->focus_unit_written = csv_row->focus_unit_written;
+    return;
+  }
+  for (const MetadataFile& file : metadata) {
+    const RecordedFocus& focus = file.metadata.focus;
+    if (!(focus.distance_mm > 0)) {
+      if (resolved->focus_note.empty() && !file.metadata.focus_note.empty()) {
+        resolved->focus_note =
+            file.metadata.focus_note + " in " + file.name + ": no focus";
+      }
+      continue;
+    }
+    if (!flags.use_recorded_focus) {
+      resolved->focus_note = file.name + " records a focus at " +
+                             Number(focus.distance_mm / 1000) + " m (" +
+                             focus.tag +
+                             "), not used (use_recorded_focus is off)";
+      return;
+    }
+    resolved->lens.recorded_focus_mm = focus.distance_mm;
+    resolved->lens.recorded_focus_bracket = focus.bracket;
+    resolved->focus_source = file.name + " " + focus.tag;
+    resolved->focus_note.clear();
+    return;
+  }
+}
+
+// A metadata pitch is the camera's full-resolution pixels': used when it
+// fits the model camera (within the lens check's band), else noted and
+// left for the derived one.
+void ResolveMetadataPitch(const std::vector<MetadataFile>& metadata,
+                          double camera_focal_px,
+                          const LensCheckOptions& check,
+                          ResolvedLens* resolved) {
+  std::string source;
+  const MetadataNumber* pitch =
+      FirstRecorded(metadata, &CameraMetadata::pixel_pitch_um, &source);
+  if (pitch == nullptr || !(camera_focal_px > 0)) return;
+  const DPLensData& lens = resolved->lens;
+  const double ratio =
+      camera_focal_px * pitch->value / (1000 * lens.focal_length_mm);
+  const PitchRatioBand band = AcceptedPitchRatio(lens, check);
+  if (ratio >= band.low && ratio <= band.high) {
+    resolved->lens.pixel_pitch_um = pitch->value;
+    resolved->pixel_pitch_source = source;
+    return;
+  }
+  resolved->pitch_note =
+      "pixel pitch " + Number(pitch->value) + " um (" + source + ") with " +
+      Number(lens.focal_length_mm) + " mm gives f = " +
+      Number(1000 * lens.focal_length_mm / pitch->value) +
+      " px against the model camera's " + Number(camera_focal_px) +
+      " px: the model's pixels are not the full-resolution image's (resized "
+      "images?), so the pitch is derived from f_mm / f_px";
+}
+
+}  // namespace
+
 ResolvedLens ResolveLens(const std::string& image_name,
                          const std::map<std::string, LensCsvRow>& csv,
                          const LensFlags& flags,
-                         const ExifLens* exif,
-                         double camera_focal_px) {
+                         const std::vector<MetadataFile>& metadata,
+                         double camera_focal_px,
+                         const LensCheckOptions& check) {
   ResolvedLens resolved;
   const LensCsvRow* csv_row = FindLensRow(csv, image_name, nullptr);
   const std::string csv_source =
       csv_row == nullptr  ? ""
       : csv_row->line > 0 ? "lens.csv line " + std::to_string(csv_row->line)
                           : "lens.csv";
+  for (const MetadataFile& file : metadata) {
+    if (!file.metadata.error.empty()) {
+      resolved.unreadable.push_back(file.name + ": " + file.metadata.error);
+    }
+  }
 
   auto pick = [&](double csv_value,
                   double flag_value,
-                  double exif_value,
+                  MetadataNumber CameraMetadata::*number,
                   double* out,
                   std::string* source) {
+    std::string metadata_source;
+    const MetadataNumber* recorded =
+        number ? FirstRecorded(metadata, number, &metadata_source) : nullptr;
     if (csv_value > 0) {
       *out = csv_value;
       *source = csv_source;
     } else if (flag_value > 0) {
       *out = flag_value;
       *source = "flag";
-    } else if (exif_value > 0) {
-      *out = exif_value;
-      *source = "EXIF";
+    } else if (recorded != nullptr) {
+      *out = recorded->value;
+      *source = metadata_source;
     }
   };
   pick(csv_row ? csv_row->focal_length_mm : 0,
        flags.focal_length_mm,
-       exif ? exif->focal_length_mm : 0,
+       &CameraMetadata::focal_length_mm,
        &resolved.lens.focal_length_mm,
        &resolved.focal_length_source);
   pick(csv_row ? csv_row->f_number : 0,
        flags.f_number,
-       exif ? exif->f_number : 0,
+       &CameraMetadata::f_number,
        &resolved.lens.f_number,
        &resolved.f_number_source);
   pick(csv_row ? csv_row->pixel_pitch_um : 0,
        flags.pixel_pitch_um,
-       0,
+       nullptr,
        &resolved.lens.pixel_pitch_um,
        &resolved.pixel_pitch_source);
+  ResolveFocus(csv_row, csv_source, flags, metadata, &resolved);
 
-  if (csv_row && csv_row->focus_distance_m > 0) {
-    resolved.lens.recorded_focus_mm = 1000 * csv_row->focus_distance_m;
-    resolved.focus_source = csv_source;
-    resolved.focus_unit_written = csv_row->focus_unit_written;
-  } else if (exif && exif->focus_distance_mm > 0) {
-    resolved.lens.recorded_focus_mm = exif->focus_distance_mm;
-    resolved.lens.recorded_focus_bracket = exif->focus_bracket;
-    resolved.focus_source = "EXIF " + exif->focus_source;
-  }
-  resolved.camera = csv_row && !csv_row->camera.empty()
-                        ? csv_row->camera
-                        : (exif ? exif->camera : "");
-  resolved.lens_model = csv_row && !csv_row->lens.empty()
-                            ? csv_row->lens
-                            : (exif ? exif->lens : "");
+  auto first_text = [&](std::string (*of)(const CameraMetadata&)) {
+    for (const MetadataFile& file : metadata) {
+      const std::string text = of(file.metadata);
+      if (!text.empty()) return text;
+    }
+    return std::string();
+  };
+  resolved.camera =
+      csv_row && !csv_row->camera.empty()
+          ? csv_row->camera
+          : first_text([](const CameraMetadata& m) { return m.Camera(); });
+  resolved.lens_model =
+      csv_row && !csv_row->lens.empty()
+          ? csv_row->lens
+          : first_text([](const CameraMetadata& m) { return m.lens_model; });
 
   const char* kHowTo =
       " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "
-      "the EXIF of the original image under --image_path)";
+      "the metadata of the original image under --image_path)";
   char how[256];
   if (resolved.lens.focal_length_mm <= 0) {
     std::snprintf(how, sizeof(how), kHowTo, "focal_length_mm");
@@ -262,6 +478,9 @@ ResolvedLens ResolveLens(const std::string& image_name,
   if (resolved.lens.f_number <= 0) {
     std::snprintf(how, sizeof(how), kHowTo, "f_number");
     throw InputError("no f-number for image " + image_name + how);
+  }
+  if (resolved.lens.pixel_pitch_um <= 0) {
+    ResolveMetadataPitch(metadata, camera_focal_px, check, &resolved);
   }
   if (resolved.lens.pixel_pitch_um <= 0) {
     if (!(camera_focal_px > 0)) {
@@ -278,13 +497,6 @@ ResolvedLens ResolveLens(const std::string& image_name,
 
 namespace {
 
-std::string Number(double value) {
-  std::ostringstream s;
-  s.precision(4);
-  s << value;
-  return s.str();
-}
-
 // Where a number can be corrected, in the words of its source.
 std::string FixFor(const std::string& source, const char* column) {
   if (source.rfind("lens.csv", 0) == 0) {
@@ -293,19 +505,14 @@ std::string FixFor(const std::string& source, const char* column) {
   if (source == "flag") {
     return "correct --DPScaleEstimator." + std::string(column);
   }
-  if (source == "EXIF") {
-    return "the original image's EXIF is wrong here: override it with "
-           "--DPScaleEstimator." +
+  if (IsMetadataSource(source)) {
+    return "the file's metadata (" + source +
+           ") is wrong here: override it with --DPScaleEstimator." +
            std::string(column) + " or lens.csv";
   }
   return "give " + std::string(column) + " in lens.csv or as a flag";
 }
 
-// v / f of a lens of focal length f focused at `focus_mm` from the sensor.
-double Breathing(double focus_mm, double f_mm) {
-  const double u = FocusObjectDistanceMm(focus_mm, f_mm);
-  return (focus_mm - u) / f_mm;
-}
 
 void CheckRanges(const std::string& image_name,
                  const ResolvedLens& resolved,
@@ -425,11 +632,8 @@ void CheckLensAgainstCamera(const std::string& image_name,
   const double ratio =
       camera.focal_px * lens.pixel_pitch_um / (1000 * lens.focal_length_mm);
   const bool focus = std::isfinite(lens.recorded_focus_mm);
-  const double breathing =
-      focus ? Breathing(lens.recorded_focus_mm, lens.focal_length_mm)
-            : options.breathing_without_focus;
-  const double low = 1 / (1 + options.tolerance);
-  const double high = (1 + options.tolerance) * breathing;
+  const PitchRatioBand band = AcceptedPitchRatio(lens, options);
+  const double low = band.low, high = band.high;
   if (ratio >= low && ratio <= high) return;
 
   std::string hint;

@@ -1,16 +1,17 @@
 // Per-image lens data (focal length, f-number, pixel pitch) with the
-// contract's precedence: lens.csv row > explicit flag > EXIF of the original
-// image > derived (pitch only, f_mm / f_px of the calibrated camera). The
-// recorded focus distance: lens.csv > EXIF (Canon maker note, then
-// SubjectDistance). Whatever their source, the numbers are checked against
-// the model's camera before they are used (CheckLensAgainstCamera).
+// contract's precedence: lens.csv row > explicit flag > the image files'
+// metadata (the original image's, then its DP frame's) > derived (pitch
+// only, f_mm / f_px of the calibrated camera). The recorded focus distance:
+// lens.csv > the files' metadata (unless use_recorded_focus is off).
+// Whatever their source, the numbers are checked against the model's camera
+// before they are used (CheckLensAgainstCamera).
 #pragma once
 
 #include <map>
 #include <string>
 #include <vector>
 
-#include "dpsfm/colmap/io/exif.h"
+#include "dpsfm/colmap/io/image_metadata.h"
 #include "dpsfm/core/optics/lens_model.h"
 
 namespace dpsfm {
@@ -21,6 +22,9 @@ struct LensCsvRow {
   double f_number = 0;
   double pixel_pitch_um = 0;
   double focus_distance_m = 0;  // recorded, from the focal-plane mark
+  // A window written as the camera records one ("2.65-2.94 m"): its
+  // relative half-width, the distance being its middle; 0 for one distance.
+  double focus_bracket = 0;
   // The focus cell carried its unit ("1.2 m", "120 cm"): a far focus written
   // so is meant (a bare one beyond the hyperfocal distance is refused).
   bool focus_unit_written = false;
@@ -57,37 +61,89 @@ const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
                               const std::string& image_name,
                               std::string* matched_name);
 
+// One file's metadata and its name (for the sources: "IMG_1.CR3
+// Exif.Photo.FNumber").
+struct MetadataFile {
+  std::string name;
+  CameraMetadata metadata;
+};
+
 // Lens data of one image and where each number came from ("lens.csv line
-// N", "flag", "EXIF", "derived"), for the log, the report and the errors.
+// N", "flag", "<file> <tag>" for a file's metadata, "derived"), for the log,
+// the report and the errors.
 struct ResolvedLens {
   DPLensData lens;  // pitch is of the MODEL camera's pixels
   std::string focal_length_source;
   std::string f_number_source;
   std::string pixel_pitch_source;
-  // Where DPLensData::recorded_focus_mm came from ("lens.csv line N", "EXIF
-  // Canon maker note", "EXIF SubjectDistance"), empty if none.
+  // Where DPLensData::recorded_focus_mm came from ("lens.csv line N",
+  // "IMG_1.CR3 Exif.CanonFi.FocusDistance{Upper,Lower}"), empty if none.
   std::string focus_source;
   // lens.csv wrote the focus with its unit (LensCsvRow::focus_unit_written).
   bool focus_unit_written = false;
-  // The DP profile library's keys (lens.csv > EXIF; empty if unknown).
+  // The DP profile library's keys (lens.csv > metadata; empty if unknown).
   std::string camera, lens_model;
+  // What the files held but the run does not use, one line each, for the
+  // log: a focus tag that gives no distance (open, zero), a recorded focus
+  // switched off, a metadata pitch of other pixels than the model's, a
+  // file whose metadata could not be read.
+  std::string focus_note;
+  std::string pitch_note;
+  std::vector<std::string> unreadable;
 };
 
 struct LensFlags {
   double focal_length_mm = 0;
   double f_number = 0;
   double pixel_pitch_um = 0;
+  // Use a focus distance recorded in the files' metadata (lens.csv's is
+  // used either way).
+  bool use_recorded_focus = true;
 };
 
-// Applies the precedence for one image. `exif` may be null (no original
-// image); `camera_focal_px` is the calibrated focal length in pixels (used to
-// derive the pitch). Throws InputError naming the image and the three ways
-// to supply a missing focal length or f-number.
+struct LensCheckOptions;
+
+// The files an image's lens data may come from, read in precedence order:
+// the original image <image_path>/<image_name> (when image_path is given
+// and the file exists), then its DP frame `dp_frame` (a split TIFF or a
+// phone's frame may carry EXIF; read when given and the original did not
+// record a focal length, an f-number and a focus).
+std::vector<MetadataFile> ReadImageMetadata(const std::string& image_path,
+                                            const std::string& image_name,
+                                            const std::string& dp_frame);
+
+// What many images' resolved lens data noted (ResolvedLens's notes), for
+// the log once per run: one line per kind, with how many images and the
+// first image's words.
+class LensNotes {
+ public:
+  void Add(const std::string& image_name, const ResolvedLens& resolved);
+  void Log() const;
+
+ private:
+  struct Kind {
+    int count = 0;
+    std::string first;
+  };
+  Kind focus_, pitch_, unreadable_;
+};
+
+// True when `source` names a file's metadata tag.
+bool IsMetadataSource(const std::string& source);
+
+// Applies the precedence for one image. `metadata`: the files that carry
+// it, first the one that wins (the original image, then the DP frame);
+// `camera_focal_px` is the calibrated focal length in pixels (used to
+// derive the pitch, and to check a metadata pitch: one that does not fit
+// it, within LensCheckOptions' bounds, is of other pixels and is not used).
+// Throws InputError naming the image and the three ways to supply a
+// missing focal length or f-number.
 ResolvedLens ResolveLens(const std::string& image_name,
                          const std::map<std::string, LensCsvRow>& csv,
                          const LensFlags& flags,
-                         const ExifLens* exif,
-                         double camera_focal_px);
+                         const std::vector<MetadataFile>& metadata,
+                         double camera_focal_px,
+                         const LensCheckOptions& check);
 
 // The model camera an image's lens data are checked against.
 struct CameraGeometry {

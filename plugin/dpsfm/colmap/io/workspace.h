@@ -22,7 +22,8 @@ struct ScaleRunOptions {
   std::string input_path;
   // DP views: <dp_image_path>/left/<name> with right/<name> or sum/<name>.
   std::string dp_image_path;
-  // Original images, for EXIF FocalLength and FNumber.
+  // Original images, read for their metadata (colmap/io/image_metadata.h):
+  // focal length, f-number, pixel pitch, recorded focus, camera and lens.
   std::string image_path;
   // The project database; opened read-only, never created.
   std::string database_path;
@@ -46,10 +47,14 @@ struct ScaleRunOptions {
   // Consent to rescale a workspace that was already rescaled.
   bool force = false;
 
-  // Lens flags; 0 means "not given" (lens.csv and EXIF may supply them).
+  // Lens flags; 0 means "not given" (lens.csv and the images' metadata may
+  // supply them).
   double focal_length_mm = 0.0;
   double f_number = 0.0;
   double pixel_pitch_um = 0.0;
+  // Use the focus distance the camera recorded in the images' metadata
+  // (lens.csv's focus_distance_m is used either way).
+  bool use_recorded_focus = true;
   // Relative tolerance of each image's f_mm / pitch against its camera's
   // f_px, beyond focus breathing (lens_data.h, CheckLensAgainstCamera).
   double lens_check_tolerance = 0.1;

@@ -272,8 +272,10 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
   flags.focal_length_mm = options_.focal_length_mm;
   flags.f_number = options_.f_number;
   flags.pixel_pitch_um = options_.pixel_pitch_um;
+  flags.use_recorded_focus = options_.use_recorded_focus;
 
   WarnUnmatchedLensRows(reconstruction_, image_ids, lens_csv);
+  LensNotes notes;
   for (const colmap::image_t image_id : image_ids) {
     const colmap::Image& image = reconstruction_.Image(image_id);
     const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
@@ -282,24 +284,20 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     source.image_id = image_id;
     source.dp = dp_index_->Find(image.Name());
 
-    ExifLens exif;
-    const ExifLens* exif_ptr = nullptr;
-    if (!options_.image_path.empty()) {
-      const std::string original =
-          (fs::path(options_.image_path) / image.Name()).string();
-      if (fs::is_regular_file(original)) {
-        exif = ReadExifLens(original);
-        exif_ptr = &exif;
-      }
-    }
+    LensCheckOptions check;
+    check.tolerance = options_.lens_check_tolerance;
     source.lens = ResolveLens(
-        image.Name(), lens_csv, flags, exif_ptr, camera.MeanFocalLength());
+        image.Name(),
+        lens_csv,
+        flags,
+        ReadImageMetadata(options_.image_path, image.Name(), source.dp.left),
+        camera.MeanFocalLength(),
+        check);
+    notes.Add(image.Name(), source.lens);
     CameraGeometry geometry;
     geometry.focal_px = camera.MeanFocalLength();
     geometry.width = static_cast<int>(camera.width);
     geometry.height = static_cast<int>(camera.height);
-    LensCheckOptions check;
-    check.tolerance = options_.lens_check_tolerance;
     CheckLensAgainstCamera(image.Name(), source.lens, geometry, check);
 
     if (layout_.dense) {
@@ -310,6 +308,7 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     }
     sources_.push_back(source);
   }
+  notes.Log();
 }
 
 std::string WorkspaceReader::ReadPath(const std::string& path) const {
