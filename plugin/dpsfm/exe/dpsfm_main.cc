@@ -37,6 +37,8 @@ void ShowHelp() {
                "--dp_image_path DP\n"
                "  dpsfm dp_psf_calibrator --dp_image_path CAPTURES "
                "--targets_path targets.csv --output_path PROFILE.dpsf\n"
+               "  dpsfm dp_lens_data --workspace_path DENSE --image_path "
+               "IMAGES\n"
                "COLMAP's own commands (feature_extractor, mapper, ...) "
                "stay with your colmap.\n"
                "Available commands:\n"

@@ -77,7 +77,7 @@ TEST(CameraMetadata, CameraLensAndFocusDistance) {
       EXPECT_DOUBLE_EQ(m.focus.distance_mm, 960);
       // The window [940, 980] mm is +-20 mm around 960: 4 / 192.
       EXPECT_DOUBLE_EQ(m.focus.bracket, 4.0 / 192);
-      EXPECT_EQ(m.focus.tag, "Exif.CanonSi (ShotInfo 19-20)");
+      EXPECT_EQ(m.focus.tag, "Exif.CanonSi.0x0013/0x0014 (ShotInfo 19-20)");
     }
     // A window of a factor 3 is still a distance (its middle, +-50 %)...
     shot[19] = 150;
@@ -106,7 +106,7 @@ TEST(CameraMetadata, CameraLensAndFocusDistance) {
     m = ParseCameraMetadata(tiff.Bytes());
     EXPECT_EQ(m.focus.distance_mm, 0);
     EXPECT_EQ(m.focus_note,
-              "Exif.CanonSi (ShotInfo 19-20) is open (94 cm to infinity)");
+              "Exif.CanonSi.0x0013/0x0014 (ShotInfo 19-20) is open (94 cm to infinity)");
     tiff.exif[2] = tiff.Rational(0x9206, 0xFFFFFFFFu, 1);
     shot[19] = 0;
     shot[20] = 0;
@@ -114,7 +114,7 @@ TEST(CameraMetadata, CameraLensAndFocusDistance) {
     m = ParseCameraMetadata(tiff.Bytes());
     EXPECT_EQ(m.focus.distance_mm, 0);
     EXPECT_EQ(m.focus_note,
-              "Exif.CanonSi (ShotInfo 19-20) is 0-0 cm: not recorded");
+              "Exif.CanonSi.0x0013/0x0014 (ShotInfo 19-20) is 0-0 cm: not recorded");
     // Another make's maker note is not read as Canon's.
     tiff.ifd0[0] = tiff.Ascii(0x010F, "NIKON");
     shot[19] = 98;
@@ -202,7 +202,7 @@ TEST_F(CameraMetadataOfRealCameras, CanonEosR6Cr3) {
   EXPECT_DOUBLE_EQ(m.focus.bracket, (294.0 - 265) / (294 + 265));
   EXPECT_DOUBLE_EQ(m.focus.lower_mm, 2650);
   EXPECT_DOUBLE_EQ(m.focus.upper_mm, 2940);
-  EXPECT_EQ(m.focus.tag, "Exif.CanonFi.FocusDistance{Upper,Lower}");
+  EXPECT_EQ(m.focus.tag, "Exif.CanonFi.FocusDistanceUpper/Lower");
 }
 
 // An EOS 20D JPEG: its ShotInfo records no focus (entry 19 is 0), which
@@ -215,7 +215,7 @@ TEST_F(CameraMetadataOfRealCameras, CanonEos20dJpeg) {
   EXPECT_DOUBLE_EQ(m.pixel_pitch_um.value, 25400.0 * 885 / 3504000);
   EXPECT_EQ(m.focus.distance_mm, 0);
   EXPECT_EQ(m.focus_note,
-            "Exif.CanonSi (ShotInfo 19-20) is 0-0 cm: not recorded");
+            "Exif.CanonSi.0x0013/0x0014 (ShotInfo 19-20) is 0-0 cm: not recorded");
 }
 
 // A Sony ILCE-1 HEIF: camera, lens, focal length and f-number; it records

@@ -222,6 +222,28 @@ TEST(PsfProfileFile, ConditionsRoundTrip) {
   }
 }
 
+// The library finds a profile by the names a camera writes in its own
+// files: the EOS R6's CR3 (../shared/exif) records "Canon" / "Canon EOS R6"
+// and "RF70-200mm F2.8 L IS USM", matched as a JPEG's are (case and
+// surrounding blanks ignored); another lens of the same body is not.
+TEST(PsfProfileFile, LibraryFoundByTheNamesACr3Records) {
+  const std::string exif = test::RealExifDir();
+  ASSERT_FALSE(exif.empty()) << "../shared/exif is missing (DPSFM_EXIF_DIR)";
+  const CameraMetadata m = ReadCameraMetadata(exif + "/Canon-R6-pruned.CR3");
+  ASSERT_TRUE(m.error.empty()) << m.error;
+  test::TempDir dir;
+  PsfProfileFile profile;
+  profile.params.split_exponent = 0.62;
+  profile.camera = "canon / canon eos r6 ";
+  profile.lens = "RF24-105mm F4 L IS USM";
+  WritePsfProfile(dir / "a_other_lens.dpsf", profile);
+  profile.lens = " rf70-200mm f2.8 l is usm";
+  WritePsfProfile(dir / "b_r6_rf70_200.dpsf", profile);
+  EXPECT_EQ(FindLibraryProfile(dir.path(), m.Camera(), m.lens_model),
+            dir / "b_r6_rf70_200.dpsf");
+  EXPECT_EQ(FindLibraryProfile(dir.path(), m.Camera(), "RF50mm F1.8 STM"), "");
+}
+
 // Each view's lens data against the profile's conditions: another f-number
 // is refused naming the image, its value and source, the profile's and the
 // option; with the option, or a profile without conditions, it passes.

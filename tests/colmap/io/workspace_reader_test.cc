@@ -100,14 +100,14 @@ TEST(ResolveLens, Precedence) {
   frame.metadata.f_number = {11, "Exif.Photo.FNumber"};
   frame.metadata.focus.distance_mm = 960;
   frame.metadata.focus.bracket = 0.02;
-  frame.metadata.focus.tag = "Exif.CanonFi.FocusDistance{Upper,Lower}";
+  frame.metadata.focus.tag = "Exif.CanonFi.FocusDistanceUpper/Lower";
   files.push_back(frame);
   lens = ResolveLens("OTHER", csv, LensFlags(), files, 10000.0, check);
   EXPECT_EQ(lens.lens.f_number, 1.8);
   EXPECT_EQ(lens.lens.recorded_focus_mm, 960);
   EXPECT_EQ(lens.lens.recorded_focus_bracket, 0.02);
   EXPECT_EQ(lens.focus_source,
-            "DP frame IMG.tif Exif.CanonFi.FocusDistance{Upper,Lower}");
+            "DP frame IMG.tif Exif.CanonFi.FocusDistanceUpper/Lower");
   // Switched off: no focus, and a note that says which was not used.
   LensFlags off;
   off.use_recorded_focus = false;

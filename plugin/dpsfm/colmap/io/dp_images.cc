@@ -74,6 +74,10 @@ std::string DPImageIndex::Lookup(const Folder& folder,
   return stem->second.front();
 }
 
+std::string DPImageIndex::LeftPath(const std::string& image_name) const {
+  return HasLeft(image_name) ? Lookup(left_, image_name, "left") : "";
+}
+
 bool DPImageIndex::HasLeft(const std::string& image_name) const {
   return left_.by_name.count(image_name) > 0 ||
          left_.by_stem.count(StripExtension(image_name)) > 0;

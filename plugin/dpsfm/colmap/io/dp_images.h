@@ -34,6 +34,8 @@ class DPImageIndex {
   // False if the image has no left view at all (lets the caller list every
   // missing image in one message).
   bool HasLeft(const std::string& image_name) const;
+  // The left view's file, "" when there is none.
+  std::string LeftPath(const std::string& image_name) const;
 
  private:
   struct Folder {

@@ -207,13 +207,13 @@ RecordedFocus Focus(const Exiv2::ExifData& exif, std::string* note) {
   if (CanonWindow(exif,
                   "Exif.CanonFi.FocusDistanceUpper",
                   "Exif.CanonFi.FocusDistanceLower",
-                  "Exif.CanonFi.FocusDistance{Upper,Lower}",
+                  "Exif.CanonFi.FocusDistanceUpper/Lower",
                   &focus,
                   note) ||
       CanonWindow(exif,
                   "Exif.CanonSi.SubjectDistance",
                   "Exif.CanonSi.0x0014",
-                  "Exif.CanonSi (ShotInfo 19-20)",
+                  "Exif.CanonSi.0x0013/0x0014 (ShotInfo 19-20)",
                   &focus,
                   note)) {
     return focus;

@@ -38,7 +38,7 @@ struct RecordedFocus {
   // The window's relative half-width, (upper - lower) / (upper + lower);
   // 0 for a single distance.
   double bracket = 0;
-  std::string tag;  // where it came from, e.g. "Exif.CanonFi.FocusDistance{Upper,Lower}"
+  std::string tag;  // where it came from, e.g. "Exif.CanonFi.FocusDistanceUpper/Lower"
   double lower_mm = 0, upper_mm = 0;  // the window, when one was recorded
 };
 

@@ -207,6 +207,74 @@ std::map<std::string, LensCsvRow> ReadLensCsv(const std::string& path) {
   return rows;
 }
 
+namespace {
+
+std::string Cell(double value) {
+  if (!(value > 0)) return "";
+  std::ostringstream s;
+  s.precision(6);
+  s << value;
+  return s.str();
+}
+
+// A cell as RFC 4180 writes it: in quotes when it holds a comma or quote.
+std::string Quoted(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) {
+    out += c;
+    if (c == '"') out += '"';
+  }
+  return out + "\"";
+}
+
+std::string FocusCell(const DPLensData& lens) {
+  if (!std::isfinite(lens.recorded_focus_mm)) return "";
+  const double m = lens.recorded_focus_mm / 1000;
+  const double b = lens.recorded_focus_bracket;
+  if (!(b > 0)) return Cell(m) + " m";
+  return Cell(m * (1 - b)) + "-" + Cell(m * (1 + b)) + " m";
+}
+
+std::string SourceCell(const ResolvedLens& r) {
+  std::vector<std::string> parts;
+  auto add = [&](const char* column, const std::string& source) {
+    if (!source.empty()) parts.push_back(std::string(column) + ": " + source);
+  };
+  add("focal_length_mm", r.focal_length_source);
+  add("f_number", r.f_number_source);
+  add("pixel_pitch_um",
+      r.pixel_pitch_source == kDerivedPitch
+          ? std::string("derived by the run (f_mm / f_px)")
+          : r.pixel_pitch_source);
+  add("focus_distance_m", r.focus_source);
+  std::string text;
+  for (const std::string& part : parts) {
+    text += (text.empty() ? "" : "; ") + part;
+  }
+  return text;
+}
+
+}  // namespace
+
+std::string LensCsvText(const std::vector<LensTableRow>& rows) {
+  std::string text;
+  for (const std::string& column : LensCsvColumns()) {
+    text += (text.empty() ? "" : ",") + column;
+  }
+  text += "\n";
+  for (const LensTableRow& row : rows) {
+    const ResolvedLens& r = row.lens;
+    const bool derived = r.pixel_pitch_source == kDerivedPitch;
+    text += Quoted(row.name) + "," + Cell(r.lens.focal_length_mm) + "," +
+            Cell(r.lens.f_number) + "," +
+            (derived ? "" : Cell(r.lens.pixel_pitch_um)) + "," +
+            FocusCell(r.lens) + "," + Quoted(r.camera) + "," +
+            Quoted(r.lens_model) + "," + Quoted(SourceCell(r)) + "\n";
+  }
+  return text;
+}
+
 const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
                               const std::string& image_name,
                               std::string* matched_name) {
@@ -274,10 +342,12 @@ void LensNotes::Log() const {
                                        " more like it)"
                                  : std::string());
   };
-  log(focus_, "No recorded focus read");
+  log(focus_, "No recorded focus");
   log(pitch_, "Metadata pixel pitch not used");
   log(unreadable_, "Image metadata not read");
 }
+
+const char kDerivedPitch[] = "derived f_mm/f_px";
 
 bool IsMetadataSource(const std::string& source) {
   return source.find(" Exif.") != std::string::npos;
@@ -347,7 +417,8 @@ void ResolveFocus(const LensCsvRow* csv_row,
     if (!(focus.distance_mm > 0)) {
       if (resolved->focus_note.empty() && !file.metadata.focus_note.empty()) {
         resolved->focus_note =
-            file.metadata.focus_note + " in " + file.name + ": no focus";
+            file.metadata.focus_note +
+            (file.name.rfind("DP frame", 0) == 0 ? " (" + file.name + ")" : "");
       }
       continue;
     }
@@ -376,7 +447,14 @@ void ResolveMetadataPitch(const std::vector<MetadataFile>& metadata,
   std::string source;
   const MetadataNumber* pitch =
       FirstRecorded(metadata, &CameraMetadata::pixel_pitch_um, &source);
-  if (pitch == nullptr || !(camera_focal_px > 0)) return;
+  if (pitch == nullptr) return;
+  if (!(camera_focal_px > 0)) {
+    // No camera to check it against here (a folder listed without a
+    // model): the run checks it.
+    resolved->lens.pixel_pitch_um = pitch->value;
+    resolved->pixel_pitch_source = source;
+    return;
+  }
   const DPLensData& lens = resolved->lens;
   const double ratio =
       camera_focal_px * pitch->value / (1000 * lens.focal_length_mm);
@@ -397,12 +475,12 @@ void ResolveMetadataPitch(const std::vector<MetadataFile>& metadata,
 
 }  // namespace
 
-ResolvedLens ResolveLens(const std::string& image_name,
-                         const std::map<std::string, LensCsvRow>& csv,
-                         const LensFlags& flags,
-                         const std::vector<MetadataFile>& metadata,
-                         double camera_focal_px,
-                         const LensCheckOptions& check) {
+ResolvedLens GatherLens(const std::string& image_name,
+                        const std::map<std::string, LensCsvRow>& csv,
+                        const LensFlags& flags,
+                        const std::vector<MetadataFile>& metadata,
+                        double camera_focal_px,
+                        const LensCheckOptions& check) {
   ResolvedLens resolved;
   const LensCsvRow* csv_row = FindLensRow(csv, image_name, nullptr);
   const std::string csv_source =
@@ -467,6 +545,27 @@ ResolvedLens ResolveLens(const std::string& image_name,
           ? csv_row->lens
           : first_text([](const CameraMetadata& m) { return m.lens_model; });
 
+  if (resolved.lens.pixel_pitch_um <= 0 && resolved.lens.focal_length_mm > 0) {
+    ResolveMetadataPitch(metadata, camera_focal_px, check, &resolved);
+  }
+  if (resolved.lens.pixel_pitch_um <= 0 && resolved.lens.focal_length_mm > 0 &&
+      camera_focal_px > 0) {
+    // f_mm / f_px is the physical size of one model camera pixel.
+    resolved.lens.pixel_pitch_um =
+        1000.0 * resolved.lens.focal_length_mm / camera_focal_px;
+    resolved.pixel_pitch_source = kDerivedPitch;
+  }
+  return resolved;
+}
+
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const std::vector<MetadataFile>& metadata,
+                         double camera_focal_px,
+                         const LensCheckOptions& check) {
+  ResolvedLens resolved =
+      GatherLens(image_name, csv, flags, metadata, camera_focal_px, check);
   const char* kHowTo =
       " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "
       "the metadata of the original image under --image_path)";
@@ -480,17 +579,8 @@ ResolvedLens ResolveLens(const std::string& image_name,
     throw InputError("no f-number for image " + image_name + how);
   }
   if (resolved.lens.pixel_pitch_um <= 0) {
-    ResolveMetadataPitch(metadata, camera_focal_px, check, &resolved);
-  }
-  if (resolved.lens.pixel_pitch_um <= 0) {
-    if (!(camera_focal_px > 0)) {
-      throw InputError("no pixel pitch for image " + image_name +
-                       " and its camera has no focal length to derive it from");
-    }
-    // f_mm / f_px is the physical size of one model camera pixel.
-    resolved.lens.pixel_pitch_um =
-        1000.0 * resolved.lens.focal_length_mm / camera_focal_px;
-    resolved.pixel_pitch_source = "derived f_mm/f_px";
+    throw InputError("no pixel pitch for image " + image_name +
+                     " and its camera has no focal length to derive it from");
   }
   return resolved;
 }
@@ -601,7 +691,7 @@ void CheckLensAgainstCamera(const std::string& image_name,
                                  " um; leave the pitch out to use that)"
                            : "";
   if (sensor_mm < options.min_sensor_mm || sensor_mm > options.max_sensor_mm) {
-    const bool derived = resolved.pixel_pitch_source.rfind("derived", 0) == 0;
+    const bool derived = resolved.pixel_pitch_source == kDerivedPitch;
     // A pitch in mm makes the sensor 1000 times too small.
     const bool in_mm = 1000 * sensor_mm >= options.min_sensor_mm &&
                        1000 * sensor_mm <= options.max_sensor_mm;
@@ -624,7 +714,7 @@ void CheckLensAgainstCamera(const std::string& image_name,
                      Number(options.min_sensor_mm) + ", " +
                      Number(options.max_sensor_mm) + "] mm: " + cause);
   }
-  if (resolved.pixel_pitch_source.rfind("derived", 0) == 0 ||
+  if (resolved.pixel_pitch_source == kDerivedPitch ||
       !(camera.focal_px > 0)) {
     return;
   }

@@ -131,7 +131,22 @@ class LensNotes {
 // True when `source` names a file's metadata tag.
 bool IsMetadataSource(const std::string& source);
 
-// Applies the precedence for one image. `metadata`: the files that carry
+// The pitch source of a pitch derived from f_mm / f_px.
+extern const char kDerivedPitch[];
+
+// The precedence applied for one image, nothing required: each number from
+// the first source that gives it, zeros where none does; the pitch derived
+// from f_mm / f_px when none is given and both are known. For listing what
+// a run would use (dp_lens_data).
+ResolvedLens GatherLens(const std::string& image_name,
+                        const std::map<std::string, LensCsvRow>& csv,
+                        const LensFlags& flags,
+                        const std::vector<MetadataFile>& metadata,
+                        double camera_focal_px,
+                        const LensCheckOptions& check);
+
+// Applies the precedence for one image (GatherLens) and requires what the
+// estimator needs. `metadata`: the files that carry
 // it, first the one that wins (the original image, then the DP frame);
 // `camera_focal_px` is the calibrated focal length in pixels (used to
 // derive the pitch, and to check a metadata pitch: one that does not fit
@@ -144,6 +159,20 @@ ResolvedLens ResolveLens(const std::string& image_name,
                          const std::vector<MetadataFile>& metadata,
                          double camera_focal_px,
                          const LensCheckOptions& check);
+
+// One image's lens data as dp_lens_data lists it: what GatherLens found,
+// and what the estimator would refuse in it ("" when nothing).
+struct LensTableRow {
+  std::string name;
+  ResolvedLens lens;
+  std::string problem;
+};
+
+// The rows as a lens.csv the estimator reads back (ReadLensCsv): every
+// column, a cell empty where no source gave the number or where the run
+// derives it (the pitch from f_mm / f_px), a recorded window as its range
+// ("2.65-2.94 m"), and a source column naming where each cell came from.
+std::string LensCsvText(const std::vector<LensTableRow>& rows);
 
 // The model camera an image's lens data are checked against.
 struct CameraGeometry {

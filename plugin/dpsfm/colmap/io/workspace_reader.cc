@@ -89,49 +89,6 @@ const char* const kModelFileNames[] = {"cameras.bin",
                                        "rigs.txt",
                                        "frames.txt"};
 
-// Reads a model with COLMAP. The model was checked first (CheckModel: its
-// structure and cross references, in words), so COLMAP's own checks never
-// fire. COLMAP's readers take a folder: when some of its files are read from
-// elsewhere (a dry run over an interrupted rescale reads their staged
-// versions), the model is read from a temporary folder of links to the files
-// that stand for them.
-void ReadModel(const std::string& dir,
-               const ReadPathFn& read_path,
-               colmap::Reconstruction* model) {
-  std::vector<std::pair<fs::path, fs::path>> links;
-  for (const char* name : kModelFileNames) {
-    const fs::path path = fs::path(dir) / name;
-    if (!fs::is_regular_file(path)) continue;
-    const fs::path read = read_path ? fs::path(read_path(path.string())) : path;
-    links.emplace_back(name, fs::absolute(read));
-  }
-  const bool redirected =
-      std::any_of(links.begin(), links.end(), [&](const auto& link) {
-        return link.second != fs::absolute(fs::path(dir) / link.first);
-      });
-  std::string read_dir = dir;
-  std::string overlay;
-  if (redirected) {
-    std::string pattern =
-        (fs::temp_directory_path() / "dpsfm-model-XXXXXX").string();
-    // mkdtemp: std::filesystem has no unique directory maker.
-    if (mkdtemp(pattern.data()) == nullptr) {
-      throw std::runtime_error("cannot create a temporary folder " + pattern);
-    }
-    overlay = read_dir = pattern;
-    for (const auto& link : links) {
-      fs::create_symlink(link.second, fs::path(overlay) / link.first);
-    }
-  }
-  try {
-    model->Read(read_dir);
-  } catch (const std::exception& error) {
-    if (!overlay.empty()) fs::remove_all(overlay);
-    throw InputError("cannot read the model in " + dir + ": " + error.what());
-  }
-  if (!overlay.empty()) fs::remove_all(overlay);
-}
-
 // Sparse mode takes each view's depths from its triangulated points (that
 // each exists, CheckModel made sure): a view without any has no depth and is
 // left out.
@@ -197,6 +154,47 @@ void WarnUnmatchedLensRows(const colmap::Reconstruction& model,
 }
 
 }  // namespace
+
+// COLMAP's readers take a folder: when some of its files are read from
+// elsewhere (a dry run over an interrupted rescale reads their staged
+// versions), the model is read from a temporary folder of links to the files
+// that stand for them.
+void ReadModel(const std::string& dir,
+               const ReadPathFn& read_path,
+               colmap::Reconstruction* model) {
+  std::vector<std::pair<fs::path, fs::path>> links;
+  for (const char* name : kModelFileNames) {
+    const fs::path path = fs::path(dir) / name;
+    if (!fs::is_regular_file(path)) continue;
+    const fs::path read = read_path ? fs::path(read_path(path.string())) : path;
+    links.emplace_back(name, fs::absolute(read));
+  }
+  const bool redirected =
+      std::any_of(links.begin(), links.end(), [&](const auto& link) {
+        return link.second != fs::absolute(fs::path(dir) / link.first);
+      });
+  std::string read_dir = dir;
+  std::string overlay;
+  if (redirected) {
+    std::string pattern =
+        (fs::temp_directory_path() / "dpsfm-model-XXXXXX").string();
+    // mkdtemp: std::filesystem has no unique directory maker.
+    if (mkdtemp(pattern.data()) == nullptr) {
+      throw std::runtime_error("cannot create a temporary folder " + pattern);
+    }
+    overlay = read_dir = pattern;
+    for (const auto& link : links) {
+      fs::create_symlink(link.second, fs::path(overlay) / link.first);
+    }
+  }
+  try {
+    model->Read(read_dir);
+  } catch (const std::exception& error) {
+    if (!overlay.empty()) fs::remove_all(overlay);
+    throw InputError("cannot read the model in " + dir + ": " + error.what());
+  }
+  if (!overlay.empty()) fs::remove_all(overlay);
+}
 
 WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
                                  const WorkspaceLayout& layout,

@@ -59,6 +59,14 @@ struct WorkspaceReadOptions {
   int num_threads = -1;
 };
 
+// Reads a model with COLMAP's reader, once the caller has checked it
+// (CheckModel: its structure and cross references, in words), so that
+// COLMAP's own checks never fire; throws InputError naming the folder when
+// it cannot be read.
+void ReadModel(const std::string& dir,
+               const ReadPathFn& read_path,
+               colmap::Reconstruction* model);
+
 class WorkspaceReader {
  public:
   WorkspaceReader(const ScaleRunOptions& options,
