@@ -8,6 +8,7 @@
 
 #include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/workspace.h"
+#include "tests/colmap/io/metadata_files.h"
 #include "tests/test_utils.h"
 
 namespace dpsfm {
@@ -78,6 +79,38 @@ TEST(LensCsv, FocusWindowAndSourceColumn) {
                 "a.CR3,200,25,2.94-2.65 m\n");
   ExpectContains(ErrorOf([&] { ReadLensCsv(dir / "bad.csv"); }),
                  "a window lower-upper (e.g. 2.65-2.94 m), got '2.94-2.65 m'");
+}
+
+// The original image by the model's name, else by its stem (a card's
+// IMG_1.tif for a developed IMG_1.JPG), then the DP frame's metadata when
+// the original lacks a number; a frame of no image format carries none.
+TEST(ReadImageMetadata, OriginalByNameOrStemThenTheDPFrame) {
+  TempDir dir;
+  TiffWriter original(false);
+  original.exif = {original.Rational(0x829D, 4, 1),
+                   original.Rational(0x920A, 50, 1)};
+  std::filesystem::create_directories(dir / "images/sub");
+  WriteTextFile(dir / "images/sub/IMG_1.tif", original.Bytes());
+  TiffWriter frame(false);
+  frame.exif = {frame.Rational(0x829D, 8, 1),
+                frame.Rational(0x9206, 1500, 1000)};
+  WriteTextFile(dir / "IMG_1_left.tif", frame.Bytes());
+  const FileIndex originals(dir / "images");
+  std::vector<MetadataFile> files = ReadImageMetadata(
+      originals, "sub/IMG_1.JPG", dir / "IMG_1_left.tif");
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files[0].name, "IMG_1.tif");
+  EXPECT_EQ(files[0].metadata.f_number.value, 4);
+  EXPECT_EQ(files[1].name, "DP frame IMG_1_left.tif");
+  EXPECT_DOUBLE_EQ(files[1].metadata.focus.distance_mm, 1500);
+  // Not under the folder at all: only the frame.
+  files = ReadImageMetadata(originals, "IMG_2.JPG", dir / "IMG_1_left.tif");
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_EQ(files[0].name, "DP frame IMG_1_left.tif");
+  WriteTextFile(dir / "frame.raw", "not an image");
+  files = ReadImageMetadata(originals, "IMG_2.JPG", dir / "frame.raw");
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_TRUE(files[0].metadata.error.empty());
 }
 
 TEST(LensCsv, RowOneCellShortIsAnError) {

@@ -108,6 +108,7 @@ std::unique_ptr<DPImageIndex> LeftViews(const std::string& dp_image_path) {
 bool ListImage(const ListedImage& image,
                const LensDataRunOptions& options,
                const std::map<std::string, LensCsvRow>& csv,
+               const FileIndex& originals,
                const DPImageIndex* left_views,
                LensTableRow* row,
                LensNotes* notes) {
@@ -119,7 +120,7 @@ bool ListImage(const ListedImage& image,
   LensCheckOptions check;
   check.tolerance = options.lens_check_tolerance;
   const std::vector<MetadataFile> metadata = ReadImageMetadata(
-      options.image_path,
+      originals,
       image.name,
       left_views ? left_views->LeftPath(image.name) : "");
   const bool listed_from_folder = image.camera.focal_px == 0;
@@ -185,11 +186,16 @@ RunOutcome RunLensData(const LensDataRunOptions& options, std::ostream& out) {
                                 : ReadLensCsv(options.lens_path);
   const std::unique_ptr<DPImageIndex> left_views =
       LeftViews(options.dp_image_path);
+  if (!options.image_path.empty() && !fs::is_directory(options.image_path)) {
+    throw InputError("--image_path is not a folder: " + options.image_path);
+  }
+  const FileIndex originals(options.image_path);
   std::vector<LensTableRow> rows;
   LensNotes notes;
   for (const ListedImage& image : images) {
     LensTableRow row;
-    if (ListImage(image, options, csv, left_views.get(), &row, &notes)) {
+    if (ListImage(
+            image, options, csv, originals, left_views.get(), &row, &notes)) {
       rows.push_back(row);
     }
   }

@@ -27,51 +27,31 @@ namespace fs = std::filesystem;
 
 }  // namespace
 
-DPImageIndex::Folder DPImageIndex::Scan(const std::string& root) {
-  Folder folder;
-  folder.root = root;
-  if (root.empty()) {
-    return folder;
-  }
-  for (fs::recursive_directory_iterator it(root), end; it != end; ++it) {
-    if (!fs::is_regular_file(it->path())) {
-      continue;
-    }
-    const std::string relative =
-        fs::relative(it->path(), root).generic_string();
-    folder.by_name[relative] = it->path().string();
-    folder.by_stem[StripExtension(relative)].push_back(it->path().string());
-  }
-  return folder;
-}
-
 DPImageIndex::DPImageIndex(const WorkspaceLayout& layout)
-    : left_(Scan(layout.left_path)),
-      right_(Scan(layout.right_path)),
-      sum_(Scan(layout.sum_path)),
+    : left_(layout.left_path),
+      right_(layout.right_path),
+      sum_(layout.sum_path),
       has_right_(!layout.right_path.empty()) {}
 
-std::string DPImageIndex::Lookup(const Folder& folder,
+std::string DPImageIndex::Lookup(const FileIndex& folder,
                                  const std::string& name,
                                  const std::string& what) {
-  const auto exact = folder.by_name.find(name);
-  if (exact != folder.by_name.end()) {
-    return exact->second;
-  }
-  const auto stem = folder.by_stem.find(StripExtension(name));
-  if (stem == folder.by_stem.end() || stem->second.empty()) {
+  const std::string exact = folder.Exact(name);
+  if (!exact.empty()) return exact;
+  const std::vector<std::string>& stem = folder.SameStem(name);
+  if (stem.empty()) {
     throw InputError("no " + what + " DP view for image " + name + " in " +
-                     folder.root);
+                     folder.root());
   }
-  if (stem->second.size() > 1) {
+  if (stem.size() > 1) {
     std::ostringstream message;
     message << "ambiguous " << what << " DP view for image " << name << ": ";
-    for (size_t i = 0; i < stem->second.size(); ++i) {
-      message << (i > 0 ? ", " : "") << stem->second[i];
+    for (size_t i = 0; i < stem.size(); ++i) {
+      message << (i > 0 ? ", " : "") << stem[i];
     }
     throw InputError(message.str());
   }
-  return stem->second.front();
+  return stem.front();
 }
 
 std::string DPImageIndex::LeftPath(const std::string& image_name) const {
@@ -79,8 +59,7 @@ std::string DPImageIndex::LeftPath(const std::string& image_name) const {
 }
 
 bool DPImageIndex::HasLeft(const std::string& image_name) const {
-  return left_.by_name.count(image_name) > 0 ||
-         left_.by_stem.count(StripExtension(image_name)) > 0;
+  return !left_.Find(image_name).empty();
 }
 
 DPFramePaths DPImageIndex::Find(const std::string& image_name) const {

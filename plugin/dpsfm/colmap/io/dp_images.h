@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "dpsfm/colmap/io/file_index.h"
 #include "dpsfm/colmap/io/image_metadata.h"
 #include "dpsfm/colmap/io/workspace.h"
 #include "dpsfm/core/optics/encoding.h"
@@ -38,20 +39,13 @@ class DPImageIndex {
   std::string LeftPath(const std::string& image_name) const;
 
  private:
-  struct Folder {
-    std::string root;
-    // relative path -> full path; relative path without extension -> paths.
-    std::map<std::string, std::string> by_name;
-    std::map<std::string, std::vector<std::string>> by_stem;
-  };
-  static Folder Scan(const std::string& root);
-  static std::string Lookup(const Folder& folder,
+  static std::string Lookup(const FileIndex& folder,
                             const std::string& name,
                             const std::string& what);
 
-  Folder left_;
-  Folder right_;
-  Folder sum_;
+  FileIndex left_;
+  FileIndex right_;
+  FileIndex sum_;
   bool has_right_ = false;
 };
 

@@ -296,16 +296,14 @@ const LensCsvRow* FindLensRow(const std::map<std::string, LensCsvRow>& csv,
   return &found->second;
 }
 
-std::vector<MetadataFile> ReadImageMetadata(const std::string& image_path,
+std::vector<MetadataFile> ReadImageMetadata(const FileIndex& originals,
                                             const std::string& image_name,
                                             const std::string& dp_frame) {
   std::vector<MetadataFile> files;
-  if (!image_path.empty()) {
-    const fs::path original = fs::path(image_path) / image_name;
-    if (fs::is_regular_file(original)) {
-      files.push_back(
-          {original.filename().string(), ReadCameraMetadata(original.string())});
-    }
+  const std::string original = originals.Find(image_name);
+  if (!original.empty()) {
+    files.push_back({fs::path(original).filename().string(),
+                     ReadCameraMetadata(original)});
   }
   const bool complete = !files.empty() &&
                         files[0].metadata.focal_length_mm.recorded() &&

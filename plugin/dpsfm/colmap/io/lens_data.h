@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "dpsfm/colmap/io/file_index.h"
 #include "dpsfm/colmap/io/image_metadata.h"
 #include "dpsfm/core/optics/lens_model.h"
 
@@ -104,11 +105,13 @@ struct LensFlags {
 struct LensCheckOptions;
 
 // The files an image's lens data may come from, read in precedence order:
-// the original image <image_path>/<image_name> (when image_path is given
-// and the file exists), then its DP frame `dp_frame` (a split TIFF or a
-// phone's frame may carry EXIF; read when given and the original did not
-// record a focal length, an f-number and a focus).
-std::vector<MetadataFile> ReadImageMetadata(const std::string& image_path,
+// the original image, found in `originals` (the --image_path folder) by
+// the model's name or, like DP views, by its stem (a card's IMG_1.CR3 for
+// a developed IMG_1.JPG; the first by name when several share it), then
+// its DP frame `dp_frame` (a split TIFF or a phone's frame may carry EXIF;
+// read when given and the original did not record a focal length, an
+// f-number and a focus).
+std::vector<MetadataFile> ReadImageMetadata(const FileIndex& originals,
                                             const std::string& image_name,
                                             const std::string& dp_frame);
 

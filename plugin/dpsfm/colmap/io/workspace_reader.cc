@@ -274,6 +274,7 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
 
   WarnUnmatchedLensRows(reconstruction_, image_ids, lens_csv);
   LensNotes notes;
+  const FileIndex originals(options_.image_path);
   for (const colmap::image_t image_id : image_ids) {
     const colmap::Image& image = reconstruction_.Image(image_id);
     const colmap::Camera& camera = reconstruction_.Camera(image.CameraId());
@@ -288,7 +289,7 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
         image.Name(),
         lens_csv,
         flags,
-        ReadImageMetadata(options_.image_path, image.Name(), source.dp.left),
+        ReadImageMetadata(originals, image.Name(), source.dp.left),
         camera.MeanFocalLength(),
         check);
     notes.Add(image.Name(), source.lens);
