@@ -39,7 +39,7 @@
 # with the measured one: each run of the one is followed by the same run of
 # the other, so both see the machine as it is then, and a before -> after
 # table follows; two binaries measured one after the other drifted by
-# several per cent against each other, docs/benchmark.md, session 24),
+# several per cent against each other, docs/benchmark.md),
 # DPSFM_COST_DIR (<cache>/cost).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/accuracy_suite.sh"

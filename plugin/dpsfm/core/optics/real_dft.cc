@@ -173,14 +173,14 @@ struct RealDft::Plans {
   // turn:
   // - between the spectrum and a work array (`apart`): FFTW needs no
   //   buffers then, 3.4x faster at 40 px, 2.7x at 60, 2.3x at 96, 1.5-1.6x
-  //   at 36 and 45, the same at 64 (docs/benchmark.md, session 26); at 48,
+  //   at 36 and 45, the same at 64 (docs/benchmark.md); at 48,
   //   50, 54, 72, 80 and 100 px it picks other codelets, whose rounding
   //   differs;
   // - into contiguous columns (`to_columns`), the buffered plan's own first
   //   step planned alone, then the rows wanted gathered from them
   //   (GatherRows): the same codelets, without FFTW's copy back through its
   //   tiles, and the inverse gathers only the rows it keeps; 1.6x at 48 px,
-  //   1.1x at 72 and 80 (session 27).
+  //   1.1x at 72 and 80.
   // Whether each computes the in-place plan's bits is decided here, on a
   // pseudo-random probe, on the machine that runs them: the plans depend on
   // its SIMD, so a table of sizes could not say, and an answer must not
