@@ -257,7 +257,7 @@ TEST(SplitProfilePsf, SumOfViewsDoesNotDependOnTheSplit) {
   }
 }
 
-// Centroid offsets (notes, section 5): sharper split -> larger offset
+// Centroid offsets (docs/psf-profiles.md): sharper split -> larger offset
 // towards 4 / (3 pi) R; crosstalk c scales it by (1 - 2 c).
 TEST(SplitProfilePsf, CentroidOffsetsFollowTheParameters) {
   SplitProfileParams params;

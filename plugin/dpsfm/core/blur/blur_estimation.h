@@ -19,7 +19,7 @@
 //   residual is linear in r inside a grid interval and the loss quadratic, so
 //   each interval's minimum is closed-form. A handful of inverse FFTs walk
 //   from the coarse minimum downhill; the result resolves r far below 0.1 px.
-// - Noise bias (notes, section 5): with i.i.d. noise of std sigma on both
+// - Noise bias (docs/method.md, "Blur search"): with i.i.d. noise of std sigma on both
 //   views the loss gains sigma^2 (|H_l|^2 + |H_r|^2), largest for the
 //   sharpest kernels, so noise makes small blurs read large and in-focus
 //   patches read ~0.5-0.7 px. The estimator subtracts that expected floor with
@@ -99,7 +99,7 @@ struct BlurEstimationOptions {
 
   // Subtract the loss's expected noise floor sigma^2 (|H_l|^2 + |H_r|^2) with
   // sigma estimated from the patch (without it, noise reads small blurs large;
-  // notes, section 5).
+  // docs/method.md, "Blur search").
   bool subtract_noise_floor = true;
 
   // Reject patches whose texture (mean |horizontal Sobel| of left + right,

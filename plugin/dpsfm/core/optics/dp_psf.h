@@ -103,7 +103,7 @@ class TranslatingDiskPsf : public DPPsfModel {
 };
 
 // A family of split profiles that differ from the translating disk in the
-// ways real DP sensors do (notes, section 5). The sum of the two views is
+// ways real DP sensors do (docs/psf-profiles.md). The sum of the two views is
 // the defocus disk of radius |r| (softened at the rim by rim_softness); how
 // that disk's light divides between the views is:
 // - split_exponent p: along each horizontal chord of the disk (half length
