@@ -7,6 +7,7 @@
 #include <zlib.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -310,6 +311,108 @@ TEST(DecodePng, CorruptPixelDataIsLeftToOpenImageIOToWord) {
           << name;
     }
   }
+}
+
+// A header is checked against the data before anything is allocated: a
+// 10^6 x 10^6 frame over a few bytes of stream is refused by this reader
+// (deflate expands at most 1032:1) and by ReadDPFrameFile, whose
+// OpenImageIO would take the header as it is, with one line naming the
+// file.
+TEST(DecodePng, HeaderClaimingMoreThanTheDataCanHoldIsRefused) {
+  const std::string file = std::string("\x89PNG\r\n\x1a\n", 8) +
+                           Header(1000000, 1000000, 16, 2) +
+                           Chunk("IDAT", Compress(std::string(64, '\0'))) +
+                           Chunk("IEND", "");
+  std::string bytes = file;
+  cv::Mat pixels;
+  EXPECT_EQ(DecodePng(&bytes, &pixels), PngDecoding::kFailed);
+  EXPECT_TRUE(pixels.empty());
+  test::TempDir dir;
+  const std::string path = dir / "huge.png";
+  test::WriteTextFile(path, file);
+  try {
+    ReadDPFrameFile(path);
+    ADD_FAILURE() << "a 10^6 x 10^6 header was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("header claims 1000000 x 1000000"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// 3000 files made from a valid one: cut anywhere, bytes flipped anywhere
+// (CRCs then mostly wrong: left to OpenImageIO), and header fields and
+// stream bytes changed under right CRCs (this reader's own paths; some
+// streams left intact, which decode where the header fits). Each is
+// decoded, left as it was or refused; a tenth go through ReadDPFrameFile,
+// which returns pixels or throws InputError. None crashes.
+TEST(DecodePng, MutatedFilesAreDecodedOrRefusedNeverACrash) {
+  const cv::Mat frame = RandomFrame(24, 16, CV_16U, 3, 11);
+  const std::string valid = EncodePng(frame);
+  const std::string stream = FilteredStream(frame, 4);
+  std::mt19937 rng(20261207);
+  auto uniform = [&](size_t n) {
+    return std::uniform_int_distribution<size_t>(0, n - 1)(rng);
+  };
+  test::TempDir dir;
+  int decoded = 0, refused = 0, left = 0, read = 0, input_errors = 0;
+  for (int i = 0; i < 3000; ++i) {
+    std::string file;
+    switch (i % 3) {
+      case 0:
+        file = valid.substr(0, uniform(valid.size()));
+        break;
+      case 1:
+        file = valid;
+        for (int k = 0; k < 1 + static_cast<int>(uniform(4)); ++k) {
+          file[uniform(file.size())] ^= static_cast<char>(1 << uniform(8));
+        }
+        break;
+      default: {
+        const int j = i / 3;
+        const bool random_size = j % 3 == 0;
+        const uint32_t width =
+            random_size ? static_cast<uint32_t>(uniform(2000000)) : 24;
+        const uint32_t height =
+            random_size ? static_cast<uint32_t>(uniform(2000000)) : 16;
+        std::string damaged = stream;
+        if (j % 2 == 0) {
+          damaged[uniform(damaged.size())] ^=
+              static_cast<char>(1 << uniform(8));
+        }
+        file = std::string("\x89PNG\r\n\x1a\n", 8) +
+               Header(width, height, i / 3 % 7 ? 16 : 8, i / 3 % 11 ? 2 : 0) +
+               IdatChunks(damaged, 1 + uniform(200)) +
+               Chunk("IEND", "");
+      }
+    }
+    std::string bytes = file;
+    cv::Mat pixels;
+    const PngDecoding result = DecodePng(&bytes, &pixels);
+    decoded += result == PngDecoding::kDecoded;
+    refused += result == PngDecoding::kFailed;
+    left += result == PngDecoding::kNotDecoded;
+    if (result == PngDecoding::kNotDecoded) {
+      EXPECT_EQ(bytes, file) << i;  // left as it was
+    }
+    if (i % 10 == 0) {
+      const std::string path = dir / "mutated.png";
+      test::WriteTextFile(path, file);
+      try {
+        read += !ReadDPFrameFile(path).pixels.empty();
+      } catch (const InputError&) {
+        ++input_errors;
+      }
+    }
+  }
+  std::printf("3000 mutated PNGs: %d decoded, %d refused, %d left to "
+              "OpenImageIO; 300 read: %d frames, %d input errors\n",
+              decoded, refused, left, read, input_errors);
+  EXPECT_EQ(decoded + refused + left, 3000);
+  EXPECT_EQ(read + input_errors, 300);
+  EXPECT_GT(decoded, 0);
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(left, 0);
 }
 
 TEST(DecodePng, RealCapturesAsOpenImageIO) {

@@ -88,6 +88,27 @@ void SwapRedAndBlue(cv::Mat* pixels) {
   }
 }
 
+// No format DP frames come in stores its pixels more than 4096 times
+// smaller (deflate at most 1032:1, LZW about 2700:1): a header that claims
+// more is corrupt, and is refused before its frame is allocated.
+constexpr double kMaxCompressionRatio = 4096;
+
+void CheckFrameFitsTheFile(int width,
+                           int height,
+                           int bytes_per_pixel,
+                           size_t file_bytes,
+                           const std::string& path) {
+  const double frame_bytes =
+      static_cast<double>(width) * height * bytes_per_pixel;
+  if (frame_bytes > kMaxCompressionRatio * static_cast<double>(file_bytes) +
+                        65536) {
+    throw InputError("DP view's header claims " + std::to_string(width) +
+                     " x " + std::to_string(height) +
+                     " pixels, more than its " + std::to_string(file_bytes) +
+                     " bytes can hold (corrupt file): " + path);
+  }
+}
+
 // Decodes an image file's bytes with OpenImageIO, the library COLMAP 4 reads
 // images with, so that any frame COLMAP reads, the plugin reads; plain PNGs
 // with libdeflate instead (png_decoder.h), to the same bits in half the
@@ -97,6 +118,7 @@ void SwapRedAndBlue(cv::Mat* pixels) {
 // read), as is a PNG whose pixel data libdeflate found corrupt, so that
 // OpenImageIO decides what to make of it.
 cv::Mat DecodeImage(std::string bytes, const std::string& path) {
+  const size_t file_bytes = bytes.size();
   cv::Mat png;
   const PngDecoding decoding = DecodePng(&bytes, &png);
   if (decoding == PngDecoding::kDecoded) return png;
@@ -124,6 +146,11 @@ cv::Mat DecodeImage(std::string bytes, const std::string& path) {
     format = OIIO::TypeDesc::UINT16;
     depth = CV_16U;
   }
+  CheckFrameFitsTheFile(spec.width,
+                        spec.height,
+                        channels * static_cast<int>(CV_ELEM_SIZE1(depth)),
+                        file_bytes,
+                        path);
   cv::Mat pixels(spec.height, spec.width, CV_MAKETYPE(depth, channels));
   // 8- and 16-bit files are read as they are stored (TypeDesc::UNKNOWN):
   // asked for their own type by name, OpenImageIO decodes into a buffer of

@@ -17,6 +17,8 @@ constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
 // libpng's default limits on either side (PNG_USER_WIDTH_MAX and
 // PNG_USER_HEIGHT_MAX); larger files are left to OpenImageIO.
 constexpr uint32_t kMaxSide = 1000000;
+// Deflate's largest expansion: 258 bytes from each 2-bit code (RFC 1951).
+constexpr size_t kMaxDeflateRatio = 1032;
 
 uint32_t BigEndian32(const unsigned char* p) {
   return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) |
@@ -260,6 +262,15 @@ PngDecoding DecodePng(std::string* bytes, cv::Mat* pixels) {
   const size_t row_bytes = static_cast<size_t>(layout.width) * layout.channels *
                            layout.bytes_per_sample;
   const size_t stream_bytes = layout.height * (row_bytes + 1);
+  // The header is checked against the data before the frame is allocated:
+  // deflate expands at most 1032:1, so a header claiming more than its IDAT
+  // chunks can hold is corrupt (a 10^6 x 10^6 header over a few bytes
+  // would otherwise allocate terabytes before inflating).
+  size_t compressed_bytes = 0;
+  for (const auto& chunk : layout.idat) compressed_bytes += chunk.second;
+  if (stream_bytes / kMaxDeflateRatio > compressed_bytes + 1) {
+    return PngDecoding::kFailed;
+  }
 
   // The frame's own matrix is the inflate buffer (with the rows' filter
   // bytes and LoadPixel's padding, a few rows more than the frame): each row
