@@ -103,22 +103,31 @@ std::unique_ptr<DPImageIndex> LeftViews(const std::string& dp_image_path) {
   return std::make_unique<DPImageIndex>(layout);
 }
 
+// How the run reads lens data: its flags and its check, from the options.
+struct LensReading {
+  LensFlags flags;
+  LensCheckOptions check;
+};
+
+LensReading ReadingOf(const LensDataRunOptions& options) {
+  LensReading reading;
+  reading.flags.focal_length_mm = options.focal_length_mm;
+  reading.flags.f_number = options.f_number;
+  reading.flags.pixel_pitch_um = options.pixel_pitch_um;
+  reading.flags.use_recorded_focus = options.use_recorded_focus;
+  reading.check.tolerance = options.lens_check_tolerance;
+  return reading;
+}
+
 // One image as the estimator reads it; a file of no image format under a
 // folder is left out (false).
 bool ListImage(const ListedImage& image,
-               const LensDataRunOptions& options,
+               const LensReading& reading,
                const std::map<std::string, LensCsvRow>& csv,
                const FileIndex& originals,
                const DPImageIndex* left_views,
                LensTableRow* row,
                LensNotes* notes) {
-  LensFlags flags;
-  flags.focal_length_mm = options.focal_length_mm;
-  flags.f_number = options.f_number;
-  flags.pixel_pitch_um = options.pixel_pitch_um;
-  flags.use_recorded_focus = options.use_recorded_focus;
-  LensCheckOptions check;
-  check.tolerance = options.lens_check_tolerance;
   const std::vector<MetadataFile> metadata = ReadImageMetadata(
       originals,
       image.name,
@@ -129,14 +138,18 @@ bool ListImage(const ListedImage& image,
     return false;
   }
   row->name = image.name;
-  row->lens = GatherLens(
-      image.name, csv, flags, metadata, image.camera.focal_px, check);
+  row->lens = GatherLens(image.name,
+                         csv,
+                         reading.flags,
+                         metadata,
+                         image.camera.focal_px,
+                         reading.check);
   notes->Add(image.name, row->lens);
   try {
-    ResolveLens(
-        image.name, csv, flags, metadata, image.camera.focal_px, check);
+    RequireLensData(image.name, row->lens);
     if (!listed_from_folder) {
-      CheckLensAgainstCamera(image.name, row->lens, image.camera, check);
+      CheckLensAgainstCamera(
+          image.name, row->lens, image.camera, reading.check);
     }
   } catch (const InputError& error) {
     // Listed without a model, only what no camera can supply counts: the
@@ -190,12 +203,13 @@ RunOutcome RunLensData(const LensDataRunOptions& options, std::ostream& out) {
     throw InputError("--image_path is not a folder: " + options.image_path);
   }
   const FileIndex originals(options.image_path);
+  const LensReading reading = ReadingOf(options);
   std::vector<LensTableRow> rows;
   LensNotes notes;
   for (const ListedImage& image : images) {
     LensTableRow row;
     if (ListImage(
-            image, options, csv, originals, left_views.get(), &row, &notes)) {
+            image, reading, csv, originals, left_views.get(), &row, &notes)) {
       rows.push_back(row);
     }
   }

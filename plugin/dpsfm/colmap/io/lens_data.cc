@@ -389,6 +389,11 @@ PitchRatioBand AcceptedPitchRatio(const DPLensData& lens,
   return {1 / (1 + options.tolerance), (1 + options.tolerance) * breathing};
 }
 
+// The ratio itself: the calibrated f_px x pitch / f_mm.
+double PitchRatio(double focal_px, double pitch_um, double focal_length_mm) {
+  return focal_px * pitch_um / (1000 * focal_length_mm);
+}
+
 std::string Number(double value) {
   std::ostringstream s;
   s.precision(4);
@@ -455,7 +460,7 @@ void ResolveMetadataPitch(const std::vector<MetadataFile>& metadata,
   }
   const DPLensData& lens = resolved->lens;
   const double ratio =
-      camera_focal_px * pitch->value / (1000 * lens.focal_length_mm);
+      PitchRatio(camera_focal_px, pitch->value, lens.focal_length_mm);
   const PitchRatioBand band = AcceptedPitchRatio(lens, check);
   if (ratio >= band.low && ratio <= band.high) {
     resolved->lens.pixel_pitch_um = pitch->value;
@@ -556,14 +561,8 @@ ResolvedLens GatherLens(const std::string& image_name,
   return resolved;
 }
 
-ResolvedLens ResolveLens(const std::string& image_name,
-                         const std::map<std::string, LensCsvRow>& csv,
-                         const LensFlags& flags,
-                         const std::vector<MetadataFile>& metadata,
-                         double camera_focal_px,
-                         const LensCheckOptions& check) {
-  ResolvedLens resolved =
-      GatherLens(image_name, csv, flags, metadata, camera_focal_px, check);
+void RequireLensData(const std::string& image_name,
+                     const ResolvedLens& resolved) {
   const char* kHowTo =
       " (give it in --lens_path lens.csv, with --DPScaleEstimator.%s, or in "
       "the metadata of the original image under --image_path)";
@@ -580,6 +579,17 @@ ResolvedLens ResolveLens(const std::string& image_name,
     throw InputError("no pixel pitch for image " + image_name +
                      " and its camera has no focal length to derive it from");
   }
+}
+
+ResolvedLens ResolveLens(const std::string& image_name,
+                         const std::map<std::string, LensCsvRow>& csv,
+                         const LensFlags& flags,
+                         const std::vector<MetadataFile>& metadata,
+                         double camera_focal_px,
+                         const LensCheckOptions& check) {
+  ResolvedLens resolved =
+      GatherLens(image_name, csv, flags, metadata, camera_focal_px, check);
+  RequireLensData(image_name, resolved);
   return resolved;
 }
 
@@ -718,7 +728,7 @@ void CheckLensAgainstCamera(const std::string& image_name,
   }
   // The calibrated f_px is the image distance v over the pitch; v >= f.
   const double ratio =
-      camera.focal_px * lens.pixel_pitch_um / (1000 * lens.focal_length_mm);
+      PitchRatio(camera.focal_px, lens.pixel_pitch_um, lens.focal_length_mm);
   const bool focus = std::isfinite(lens.recorded_focus_mm);
   const PitchRatioBand band = AcceptedPitchRatio(lens, options);
   const double low = band.low, high = band.high;

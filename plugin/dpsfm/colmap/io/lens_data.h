@@ -148,8 +148,13 @@ ResolvedLens GatherLens(const std::string& image_name,
                         double camera_focal_px,
                         const LensCheckOptions& check);
 
-// Applies the precedence for one image (GatherLens) and requires what the
-// estimator needs. `metadata`: the files that carry
+// What the estimator needs of GatherLens's result: a focal length, an
+// f-number and a pitch. Throws InputError naming the image and the three
+// ways to supply a missing focal length or f-number.
+void RequireLensData(const std::string& image_name,
+                     const ResolvedLens& resolved);
+
+// GatherLens, then RequireLensData. `metadata`: the files that carry
 // it, first the one that wins (the original image, then the DP frame);
 // `camera_focal_px` is the calibrated focal length in pixels (used to
 // derive the pitch, and to check a metadata pitch: one that does not fit

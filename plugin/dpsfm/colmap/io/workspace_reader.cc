@@ -271,6 +271,8 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
   flags.f_number = options_.f_number;
   flags.pixel_pitch_um = options_.pixel_pitch_um;
   flags.use_recorded_focus = options_.use_recorded_focus;
+  LensCheckOptions check;
+  check.tolerance = options_.lens_check_tolerance;
 
   WarnUnmatchedLensRows(reconstruction_, image_ids, lens_csv);
   LensNotes notes;
@@ -283,8 +285,6 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     source.image_id = image_id;
     source.dp = dp_index_->Find(image.Name());
 
-    LensCheckOptions check;
-    check.tolerance = options_.lens_check_tolerance;
     source.lens = ResolveLens(
         image.Name(),
         lens_csv,
