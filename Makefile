@@ -9,6 +9,8 @@
 #   DPSFM_BUILD_TYPE      Release (default)
 #   DPSFM_JOBS            parallel jobs (default: the number of cores)
 #   CTEST_ARGS            more arguments for ctest (make test), e.g. -R Rescale
+#   DPSFM_CMAKE_ARGS      more CMake options for the build, e.g.
+#                         -DDPSFM_WITH_FFTW=ON (README, "Licence")
 .PHONY: example test build deps bench cost accuracy profiles real stability large \
         clean-cache test-3.10 test-installed check-colmap-main
 
@@ -40,17 +42,20 @@ deps:
 build: deps
 	bash scripts/build.sh "$(DPSFM_BUILD_DIR)" \
 	  -DDPSFM_COLMAP_RELEASE=$(DPSFM_COLMAP_VERSION) \
-	  -DCMAKE_BUILD_TYPE=$(DPSFM_BUILD_TYPE)
+	  -DCMAKE_BUILD_TYPE=$(DPSFM_BUILD_TYPE) $(DPSFM_CMAKE_ARGS)
 
 # The whole suite on the COLMAP 3.10 build (the default build is COLMAP 4.1.1;
-# DPSFM_COLMAP_VERSION=3.10 works with every target).
+# DPSFM_COLMAP_VERSION=3.10 works with every target), with FFTW's transforms,
+# so that CI runs both backends.
 test-3.10:
 	$(MAKE) test DPSFM_COLMAP_VERSION=3.10 \
-	  DPSFM_BUILD_DIR="$(DPSFM_CACHE_DIR)/build/colmap-3.10"
+	  DPSFM_BUILD_DIR="$(DPSFM_CACHE_DIR)/build/colmap-3.10" \
+	  DPSFM_CMAKE_ARGS="-DDPSFM_WITH_FFTW=ON $(DPSFM_CMAKE_ARGS)"
 
 # dp-sfm built against an installed COLMAP 4.1.1 (find_package, the `dpsfm`
-# executable; the prefix is installed from the default build) and its
-# end-to-end tests run through `dpsfm`.
+# executable; the prefix is installed from the default build) with Clang and
+# neither GPL library, its unit tests run and its end-to-end tests run
+# through `dpsfm`.
 test-installed: build
 	bash scripts/run_installed_tests.sh
 

@@ -17,6 +17,9 @@ PACKAGES=(
   # /usr/bin/iconvert, hence the tools), faiss for retrieval; CA certificates
   # for the sources CMake downloads on a machine without ../shared/sources.
   libopenimageio-dev openimageio-tools libfaiss-dev ca-certificates
+  # The installed route is compiled with Clang (and its OpenMP runtime), so
+  # that CI builds the plugin and its tests with a second compiler.
+  clang-14 libomp-14-dev
 )
 
 PYCOLMAP_VERSION="4.2.1"

@@ -10,9 +10,13 @@
 #     no COLMAP_SOURCE_DIR) with the fetched sources (COLMAP's, PoseLib's)
 #     and COLMAP's build tree hidden (a private mount namespace), and built:
 #     `dpsfm`.
-#  3. `dpsfm` is installed into a prefix of its own and its end-to-end tests
-#     run: the dp-sfm commands through `dpsfm`, COLMAP's own through the
-#     cached build's `colmap` behind a wrapper that refuses the dp-sfm ones.
+#     It is compiled with Clang (clang++-14), where make test's build uses
+#     GCC, and with neither GPL library (-DDPSFM_WITH_FFTW=OFF
+#     -DDPSFM_WITH_EXIV2=OFF: the permissive build, README "Licence").
+#  3. Its unit tests (the `fast` label) run, then `dpsfm` is installed into
+#     a prefix of its own and its end-to-end tests run: the dp-sfm commands
+#     through `dpsfm`, COLMAP's own through the cached build's `colmap`
+#     behind a wrapper that refuses the dp-sfm ones.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 colmap_is_4 || die "the installed route needs COLMAP 4 (not DPSFM_COLMAP_VERSION=$DPSFM_COLMAP_VERSION)"
@@ -47,7 +51,7 @@ log "the installed COLMAP: $(grep -o 'COLMAP_VERSION [0-9.]*' "$prefix/share/col
 
 # 2. dp-sfm against it. The build tree reaches the clone through a symlink,
 # as the checkout build does, so another clone reuses it.
-build_dir="$DPSFM_CACHE_DIR/build/installed-$(basename "$checkout_build")"
+build_dir="$DPSFM_CACHE_DIR/build/installed-clang-$(basename "$checkout_build")"
 mkdir -p "$build_dir"
 exec 9>"$build_dir.lock"
 flock 9
@@ -76,9 +80,12 @@ hidden() {
     "$@"
   fi
 }
+command -v clang++-14 >/dev/null || die "clang++-14 is missing (make deps installs it)"
 configure() {
   hidden cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
     -DCMAKE_BUILD_TYPE="$DPSFM_BUILD_TYPE" \
+    -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+    -DDPSFM_WITH_FFTW=OFF -DDPSFM_WITH_EXIV2=OFF \
     -DCMAKE_PREFIX_PATH="$prefix" \
     -DDPSFM_TEST_COLMAP="$checkout_build/bin/colmap" \
     -DDPSFM_BENCHMARKS_ENABLED=OFF \
@@ -90,7 +97,7 @@ grep -o 'dp-sfm: building against .*' "$build_dir/configure.log" | sed 's/^/[dp-
 start=$SECONDS
 stage "build dpsfm" hidden cmake --build "$build_dir" --target dpsfm -j "$(jobs_count)"
 log "warm cache to a built dpsfm: $((SECONDS - start)) s of build after the configure"
-stage "build the end-to-end tests" hidden cmake --build "$build_dir" --target e2e_tests -j "$(jobs_count)"
+stage "build the tests" hidden cmake --build "$build_dir" -j "$(jobs_count)"
 # Nothing built may point into the fetched sources or COLMAP's build tree.
 if grep -q -e "$fetched/" -e "$checkout_build/colmap/" "$build_dir/build.ninja"; then
   die "the installed-route build refers to COLMAP's sources or build tree ($build_dir/build.ninja)"
@@ -101,6 +108,8 @@ rm -rf "$build_dir/install"
 cmake --install "$build_dir" --prefix "$build_dir/install" >/dev/null
 "$build_dir/install/bin/dpsfm" version | sed 's/^/[dp-sfm] installed: /' >&2
 status=0
+stage "test (unit tests, Clang)" ctest --test-dir "$build_dir" -L fast \
+  -j "$(jobs_count)" --output-on-failure --timeout 900 "$@" || status=$?
 stage "test (end to end, through dpsfm)" ctest --test-dir "$build_dir" -L e2e \
   -j "$(jobs_count)" --output-on-failure --timeout 900 "$@" || status=$?
 log "total $((SECONDS - total_start)) s"

@@ -52,6 +52,7 @@ build_reordered() {
   cmake -S "$DPSFM_ROOT" -B "$tree" -G Ninja -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$prefix" -DDPSFM_BENCHMARKS_ENABLED=OFF \
     -DCMAKE_CXX_FLAGS="-march=x86-64-v3 -ffp-contract=fast" \
+    -DDPSFM_FP_CONTRACT=fast \
     >"$out/reordered.configure.log" 2>&1 \
     || die "configuring the reordered build failed (log: $out/reordered.configure.log)"
   cmake --build "$tree" --target dpsfm -j "$(jobs_count)" \

@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include "dpsfm/colmap/util/paths.h"
+
 namespace dpsfm {
 namespace test {
 
@@ -48,13 +50,13 @@ inline std::string ShellQuote(const std::string& arg) {
 class TempDir {
  public:
   TempDir() {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "dpsfm-test-XXXXXX").string();
-    // mkdtemp: std::filesystem has no unique directory maker.
-    if (mkdtemp(pattern.data()) == nullptr) {
-      throw std::runtime_error("mkdtemp failed for " + pattern);
+    std::error_code error;
+    path_ = MakeUniqueDirectory(std::filesystem::temp_directory_path(),
+                                "dpsfm-test-", &error)
+                .string();
+    if (path_.empty()) {
+      throw std::runtime_error("no temporary folder: " + error.message());
     }
-    path_ = pattern;
   }
   ~TempDir() {
     std::error_code ec;

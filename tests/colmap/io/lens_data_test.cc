@@ -84,6 +84,7 @@ TEST(LensCsv, FocusWindowAndSourceColumn) {
 // The original image by the model's name, else by its stem (a card's
 // IMG_1.tif for a developed IMG_1.JPG), then the DP frame's metadata when
 // the original lacks a number; a frame of no image format carries none.
+#ifdef DPSFM_WITH_EXIV2
 TEST(ReadImageMetadata, OriginalByNameOrStemThenTheDPFrame) {
   TempDir dir;
   TiffWriter original(false);
@@ -112,6 +113,24 @@ TEST(ReadImageMetadata, OriginalByNameOrStemThenTheDPFrame) {
   ASSERT_EQ(files.size(), 1u);
   EXPECT_TRUE(files[0].metadata.error.empty());
 }
+#else
+// Built without Exiv2: the files are still found, and each says why its
+// metadata was not read (the run's lens notes pass that on once).
+TEST(ReadImageMetadata, WithoutExiv2EachFileSaysWhyItWasNotRead) {
+  TempDir dir;
+  TiffWriter original(false);
+  original.exif = {original.Rational(0x829D, 4, 1)};
+  std::filesystem::create_directories(dir / "images");
+  WriteTextFile(dir / "images/IMG_1.tif", original.Bytes());
+  const FileIndex originals(dir / "images");
+  const std::vector<MetadataFile> files =
+      ReadImageMetadata(originals, "IMG_1.JPG", "");
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_EQ(files[0].name, "IMG_1.tif");
+  EXPECT_FALSE(files[0].metadata.f_number.recorded());
+  ExpectContains(files[0].metadata.error, "-DDPSFM_WITH_EXIV2=OFF");
+}
+#endif  // DPSFM_WITH_EXIV2
 
 TEST(LensCsv, RowOneCellShortIsAnError) {
   TempDir dir;

@@ -222,6 +222,7 @@ TEST(PsfProfileFile, ConditionsRoundTrip) {
   }
 }
 
+#ifdef DPSFM_WITH_EXIV2
 // The library finds a profile by the names a camera writes in its own
 // files: the EOS R6's CR3 (../shared/exif) records "Canon" / "Canon EOS R6"
 // and "RF70-200mm F2.8 L IS USM", matched as a JPEG's are (case and
@@ -243,6 +244,7 @@ TEST(PsfProfileFile, LibraryFoundByTheNamesACr3Records) {
             dir / "b_r6_rf70_200.dpsf");
   EXPECT_EQ(FindLibraryProfile(dir.path(), m.Camera(), "RF50mm F1.8 STM"), "");
 }
+#endif  // DPSFM_WITH_EXIV2
 
 // Each view's lens data against the profile's conditions: another f-number
 // is refused naming the image, its value and source, the profile's and the

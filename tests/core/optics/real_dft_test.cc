@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#ifdef DPSFM_WITH_FFTW
 #include <fftw3.h>
+#endif
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
@@ -147,6 +149,15 @@ TEST(RealDft, RowsAskedForAloneAreTheWholeInversesBits) {
   }
 }
 
+// The backend the build chose (CMake's DPSFM_WITH_FFTW) is the one that runs.
+TEST(RealDft, TheBackendIsTheBuilds) {
+#ifdef DPSFM_WITH_FFTW
+  EXPECT_STREQ(RealDftBackend(), "FFTW");
+#else
+  EXPECT_STREQ(RealDftBackend(), "OpenCV");
+#endif
+}
+
 TEST(RealDft, TheSameBitsEveryTime) {
   const cv::Size size(72, 48);
   const cv::Mat image = RandomImage(size, 40, 5);
@@ -158,6 +169,7 @@ TEST(RealDft, TheSameBitsEveryTime) {
                            first.total() * first.elemSize()));
 }
 
+#ifdef DPSFM_WITH_FFTW
 // FFTW's in-place column pass over a half spectrum at `data` (rows x half,
 // continuous), planned with FFTW_ESTIMATE as RealDft planned it before it
 // ran some elsewhere.
@@ -291,6 +303,8 @@ TEST(RealDft, WhereFftwBuffersTheColumnsTheyRunWithoutItsCopy) {
   }
 }
 
+#endif  // DPSFM_WITH_FFTW
+
 TEST(RealDft, RefusesWhatItCannotTransform) {
   EXPECT_THROW(RealDft(cv::Size(0, 4)), std::invalid_argument);
   const RealDft dft(cv::Size(8, 8));
@@ -303,10 +317,12 @@ TEST(RealDft, RefusesWhatItCannotTransform) {
                std::invalid_argument);
   EXPECT_THROW(dft.Forward(cv::Mat::zeros(8, 8, CV_32FC1), 9, &spectrum),
                std::invalid_argument);
+#ifdef DPSFM_WITH_FFTW
   // A continuous view that starts off FFTW's alignment.
   const cv::Mat rows = cv::Mat::zeros(9, 8, CV_32FC1);
   const cv::Mat shifted(8, 8, CV_32FC1, const_cast<float*>(rows.ptr<float>()) + 1);
   EXPECT_THROW(dft.Forward(shifted, 8, &spectrum), std::invalid_argument);
+#endif
   cv::Mat image;
   cv::Mat wrong = cv::Mat::zeros(8, 4, CV_32FC2);
   EXPECT_THROW(dft.Inverse(&wrong, cv::Range(0, 8), &image),

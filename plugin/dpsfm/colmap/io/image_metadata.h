@@ -9,6 +9,10 @@
 // Canon body records the lens's focus-distance window. Neither COLMAP 3
 // (FreeImage) nor COLMAP 4 (OpenImageIO) exposes those.
 //
+// Built with -DDPSFM_WITH_EXIV2=OFF (README, "Licence"), no file's camera
+// metadata is read: each comes back with `error` saying so, and only a
+// PNG's own chunks declare its encoding (image_metadata_reader.h).
+//
 // Nothing here throws or logs: a file whose metadata cannot be read comes
 // back with `error` set (one line, in this product's words; Exiv2's own
 // messages are muted).

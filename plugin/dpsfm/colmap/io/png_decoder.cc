@@ -109,50 +109,76 @@ size_t GatherStream(const PngLayout& layout, std::string* bytes) {
   return end - layout.idat.front().first;
 }
 
-// A pixel's bytes (up to six) widened to 16-bit lanes, so that sums and
-// differences of bytes cannot wrap. GCC's vector extensions rather than
-// intrinsics: they compile to SSE2 or NEON alike. The Average and Paeth
+// A pixel's bytes (up to six) widened to eight 16-bit lanes, so that sums
+// and differences of bytes cannot wrap. Plain loops over the lanes, which
+// GCC and Clang turn into SSE2 or NEON operations. The Average and Paeth
 // filters make each pixel depend on the one before it; a pixel at a time in
 // one register, all its channels at once, Paeth runs 2-5 times faster than
 // a byte at a time (whose channels' chains spill out of the registers).
-typedef int16_t Lanes __attribute__((vector_size(16)));
-typedef uint8_t LaneBytes __attribute__((vector_size(8)));
-// Bytes readable after a row's end (LoadPixel reads a whole LaneBytes).
-constexpr size_t kPixelPadding = sizeof(LaneBytes);
+struct PixelLanes {
+  int16_t v[8];
+};
+// Bytes readable after a row's end (LoadPixel reads eight).
+constexpr size_t kPixelPadding = 8;
 
 // Reads eight bytes from `p` (the pixel's and those after it, which the
 // buffers hold for the last pixel too): a load of the pixel's bytes alone
 // would go through memory, and wait for the bytes it stored.
-inline Lanes LoadPixel(const uint8_t* p) {
-  LaneBytes bytes;
-  std::memcpy(&bytes, p, sizeof(bytes));
-  return __builtin_convertvector(bytes, Lanes);
+inline PixelLanes LoadPixel(const uint8_t* p) {
+  uint8_t bytes[8];
+  std::memcpy(bytes, p, sizeof(bytes));
+  PixelLanes lanes;
+  for (int k = 0; k < 8; ++k) lanes.v[k] = bytes[k];
+  return lanes;
 }
 
 // Stores the first `Bpp` lanes' low bytes (the sums modulo 256 the filters
 // define).
 template <int Bpp>
-void StorePixel(const Lanes& lanes, uint8_t* p) {
-  const LaneBytes bytes = __builtin_convertvector(lanes, LaneBytes);
-  uint64_t word;
-  std::memcpy(&word, &bytes, sizeof(word));
-  std::memcpy(p, &word, Bpp);
+void StorePixel(const PixelLanes& lanes, uint8_t* p) {
+  uint8_t bytes[8];
+  for (int k = 0; k < 8; ++k) bytes[k] = static_cast<uint8_t>(lanes.v[k]);
+  std::memcpy(p, bytes, Bpp);
 }
 
-inline Lanes Abs(const Lanes& v) { return v < 0 ? -v : v; }
+// Each lane of `filtered` plus its predictor, modulo 256.
+inline PixelLanes AddModulo256(const PixelLanes& filtered,
+                               const PixelLanes& predictor) {
+  PixelLanes sum;
+  for (int k = 0; k < 8; ++k) {
+    sum.v[k] = static_cast<int16_t>((filtered.v[k] + predictor.v[k]) & 0xFF);
+  }
+  return sum;
+}
+
+// The Average predictor of each lane: the floor of the mean of its left and
+// upper neighbours.
+inline PixelLanes Average(const PixelLanes& left, const PixelLanes& upper) {
+  PixelLanes mean;
+  for (int k = 0; k < 8; ++k) {
+    mean.v[k] = static_cast<int16_t>((left.v[k] + upper.v[k]) >> 1);
+  }
+  return mean;
+}
 
 // The Paeth predictor (PNG 1.2, section 6.6) of each lane from its left,
 // upper and upper-left neighbours: the nearest of the three to left + upper
 // - upper left, ties to left, then upper.
-inline Lanes Paeth(const Lanes& left,
-                   const Lanes& upper,
-                   const Lanes& upper_left) {
-  const Lanes pa = Abs(upper - upper_left);
-  const Lanes pb = Abs(left - upper_left);
-  const Lanes pc = Abs(left + upper - 2 * upper_left);
-  const Lanes nearer = pb < pa ? upper : left;
-  const Lanes nearer_distance = pb < pa ? pb : pa;
-  return pc < nearer_distance ? upper_left : nearer;
+inline PixelLanes Paeth(const PixelLanes& left,
+                        const PixelLanes& upper,
+                        const PixelLanes& upper_left) {
+  PixelLanes predictor;
+  for (int k = 0; k < 8; ++k) {
+    const int16_t a = left.v[k], b = upper.v[k], c = upper_left.v[k];
+    const int16_t pa = static_cast<int16_t>(b > c ? b - c : c - b);
+    const int16_t pb = static_cast<int16_t>(a > c ? a - c : c - a);
+    const int16_t sum = static_cast<int16_t>(a + b - 2 * c);
+    const int16_t pc = static_cast<int16_t>(sum < 0 ? -sum : sum);
+    const int16_t nearer = pb < pa ? b : a;
+    const int16_t nearer_distance = pb < pa ? pb : pa;
+    predictor.v[k] = pc < nearer_distance ? c : nearer;
+  }
+  return predictor;
 }
 
 // Reverses one row's filter (PNG 1.2, section 9) in place, given the row
@@ -180,21 +206,21 @@ bool Unfilter(int filter,
       return true;
     case 3: {  // Average
       for (int i = 0; i < Bpp; ++i) row[i] += prior[i] >> 1;
-      Lanes left = LoadPixel(row);
+      PixelLanes left = LoadPixel(row);
       for (size_t i = Bpp; i < row_bytes; i += Bpp) {
-        const Lanes upper = LoadPixel(prior + i);
-        left = (LoadPixel(row + i) + ((left + upper) >> 1)) & 0xFF;
+        const PixelLanes upper = LoadPixel(prior + i);
+        left = AddModulo256(LoadPixel(row + i), Average(left, upper));
         StorePixel<Bpp>(left, row + i);
       }
       return true;
     }
     case 4: {  // Paeth
       for (int i = 0; i < Bpp; ++i) row[i] += prior[i];
-      Lanes left = LoadPixel(row);
-      Lanes upper_left = LoadPixel(prior);
+      PixelLanes left = LoadPixel(row);
+      PixelLanes upper_left = LoadPixel(prior);
       for (size_t i = Bpp; i < row_bytes; i += Bpp) {
-        const Lanes upper = LoadPixel(prior + i);
-        left = (LoadPixel(row + i) + Paeth(left, upper, upper_left)) & 0xFF;
+        const PixelLanes upper = LoadPixel(prior + i);
+        left = AddModulo256(LoadPixel(row + i), Paeth(left, upper, upper_left));
         StorePixel<Bpp>(left, row + i);
         upper_left = upper;
       }

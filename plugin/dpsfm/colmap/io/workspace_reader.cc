@@ -15,6 +15,7 @@
 #include "dpsfm/colmap/rescale/rescale.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "dpsfm/colmap/util/durable_file.h"
+#include "dpsfm/colmap/util/paths.h"
 
 namespace dpsfm {
 namespace {
@@ -176,13 +177,16 @@ void ReadModel(const std::string& dir,
   std::string read_dir = dir;
   std::string overlay;
   if (redirected) {
-    std::string pattern =
-        (fs::temp_directory_path() / "dpsfm-model-XXXXXX").string();
-    // mkdtemp: std::filesystem has no unique directory maker.
-    if (mkdtemp(pattern.data()) == nullptr) {
-      throw std::runtime_error("cannot create a temporary folder " + pattern);
+    std::error_code error;
+    overlay = MakeUniqueDirectory(fs::temp_directory_path(), "dpsfm-model-",
+                                  &error)
+                  .string();
+    if (overlay.empty()) {
+      throw std::runtime_error("cannot create a temporary folder in " +
+                               fs::temp_directory_path().string() + ": " +
+                               error.message());
     }
-    overlay = read_dir = pattern;
+    read_dir = overlay;
     for (const auto& link : links) {
       fs::create_symlink(link.second, fs::path(overlay) / link.first);
     }

@@ -1,9 +1,6 @@
 #include "dpsfm/colmap/rescale/rescale_plan.h"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -164,8 +161,8 @@ void CheckWritable(const RescalePlan& plan) {
     }
   }
   for (const std::string& dir : dirs) {
-    if (::access(dir.c_str(), W_OK) == 0) continue;
-    const std::string why = std::strerror(errno);
+    std::string why;
+    if (CanCreateIn(dir, &why)) continue;
     if (plan.mode == RescaleMode::kCopy) {
       throw InputError("cannot write the rescaled copy: " + dir +
                        " is not writable (" + why +

@@ -132,12 +132,11 @@ class DPKernelGrid {
 double DPKernelGridBound(double max_radius_px, double step_px);
 
 // The DFT size >= n of the kernel grids' classes: 2^a times 1, 3, 5, 9 or
-// 25. Chosen when cv::dft did the transforms (cv::getOptimalDFTSize's 45,
-// 75 or 81 cost it 1.2-2.2x the next such size, OpenCV 4.6 on 40-160 px);
-// with RealDft's FFTW_ESTIMATE plans, forward and inverse, the sizes it
-// gives for 30-130 px cost 3 % more than the fastest sizes measured (96
-// costs 1.7x 100) on average. Kept: another size changes answers by
-// rounding, for a few percent.
+// 25: the sizes cv::dft, RealDft's default backend, does fastest
+// (cv::getOptimalDFTSize's 45, 75 or 81 cost it 1.2-2.2x the next such
+// size, OpenCV 4.6 on 40-160 px); with FFTW's FFTW_ESTIMATE plans (the
+// other backend) the sizes it gives for 30-130 px cost 3 % more than the
+// fastest sizes measured (96 costs 1.7x 100) on average.
 int FastDftSize(int n);
 
 // (1 - t)^2 a + 2 t (1 - t) ab + t^2 b: the squared norm of

@@ -1,20 +1,15 @@
 // Real 2-D DFTs of one size, the one home of the searches' transforms.
 //
-// FFTW's single-precision plans rather than cv::dft: at the searches' sizes
-// (48-144 px) cv::dft (OpenCV 4.6, as Debian 12 builds it, without IPP)
-// takes 2-3x FFTW's time (docs/benchmark.md), and the blur and intensity
-// searches spend about half their time in transforms. The plans are made
-// with FFTW_ESTIMATE: a transform's arithmetic then depends on its size and
-// nothing else (FFTW_MEASURE's choice depends on timings), so answers are
-// the same run to run and at any thread count.
-//
-// A 2-D transform is done in two passes, rows then columns (forward) and
-// columns then rows (inverse), so that rows known to be zero are not
-// transformed and rows not needed are not computed back (what cv::dft's
-// nonzero_rows does). The column pass runs between the spectrum and a
-// per-thread work array, or into contiguous columns there, where FFTW
-// computes the same bits that way as in place (checked per size when the
-// plans are made), because it then needs no buffers.
+// Two backends behind one interface, chosen when dp-sfm is built:
+// - OpenCV's cv::dft (the default, real_dft_opencv.cc): permissively
+//   licensed, as the rest of the default build is;
+// - FFTW's single-precision plans (-DDPSFM_WITH_FFTW=ON,
+//   real_dft_fftw.cc): 2-3x faster at the searches' sizes, GPL-2.0-or-later
+//   (README, "Licence").
+// Either computes a transform's bits from its size and input alone, so
+// answers are the same run to run and at any thread count; the two
+// backends' bits differ by rounding (docs/benchmark.md measures how far
+// answers move between them).
 //
 // Spectra are half spectra: CV_32FC2, rows x (cols / 2 + 1), the columns
 // u = 0 .. cols / 2 of the full spectrum (the others are their conjugate
@@ -28,8 +23,9 @@ namespace dpsfm {
 
 class RealDft {
  public:
-  // Transforms of `size` (both sides >= 1). Plans are shared by every
-  // RealDft of the same size and made at most once per process.
+  // Transforms of `size` (both sides >= 1). Whatever a backend prepares
+  // per size is shared by every RealDft of that size and made at most once
+  // per process.
   explicit RealDft(const cv::Size& size);
 
   const cv::Size& size() const { return size_; }
@@ -54,19 +50,35 @@ class RealDft {
   // A half spectrum of SpectrumSize(), continuous, as the transforms need.
   cv::Mat NewSpectrum() const;
 
+#ifdef DPSFM_WITH_FFTW
   // How a direction's column pass runs on this machine, decided per size
-  // when the plans are made (the fastest way found that computes the
+  // when FFTW's plans are made (the fastest way found that computes the
   // in-place pass's bits): between the spectrum and a work array, into
   // contiguous columns whose rows are then gathered, or in place. For tests
   // and benchmarks.
   enum class ColumnPass { kApart, kThroughColumns, kInPlace };
   ColumnPass ColumnPassOf(bool forward) const;
+#endif
 
  private:
+  // What the backend keeps per size (its own definition).
   struct Plans;
+  static const Plans* PlansFor(const cv::Size& size);
+  // The backend's transforms, called with arguments Forward and Inverse
+  // have checked and outputs they have allocated; the inverse unscaled.
+  void ForwardTransform(const cv::Mat& image,
+                        int nonzero_rows,
+                        cv::Mat* spectrum) const;
+  void InverseTransform(cv::Mat* spectrum,
+                        const cv::Range& rows,
+                        cv::Mat* image) const;
+
   cv::Size size_;
   const Plans* plans_ = nullptr;
 };
+
+// The backend this build transforms with: "OpenCV" or "FFTW".
+const char* RealDftBackend();
 
 // a * b, element-wise complex, for half spectra of one size (RealDft), into
 // *out: cv::mulSpectrums's arithmetic to the bit (each part summed in double

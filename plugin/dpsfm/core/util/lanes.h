@@ -15,7 +15,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define DPSFM_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
@@ -23,24 +22,50 @@
 #define DPSFM_VECTOR_CLONES
 #endif
 
+// Pointers whose caller has checked that they do not overlap, declared so
+// for the vectoriser (GCC, Clang and MSVC spell it __restrict); nothing
+// relies on it for what is computed.
+#if defined(__GNUC__) || defined(_MSC_VER)
+#define DPSFM_RESTRICT __restrict
+#else
+#define DPSFM_RESTRICT
+#endif
+
 namespace dpsfm {
 
-// Four doubles, and the four floats they are converted from (GCC and Clang
-// vector types).
-typedef double Lanes __attribute__((vector_size(32)));
-typedef float LaneFloats __attribute__((vector_size(16)));
+// Four doubles: partial sums kept apart. Plain C++ whose element-wise loops
+// GCC and Clang vectorise (one AVX2 or two SSE2 operations each, checked in
+// the assembly of MomentsOfValues and DotInLanes); each lane is its own
+// chain of IEEE operations, so the bits depend neither on the vector width
+// nor on the compiler, provided none of it is contracted into FMAs (the
+// core is built with -ffp-contract=off, plugin/CMakeLists.txt).
+struct Lanes {
+  double v[4] = {0, 0, 0, 0};
 
-// Four consecutive floats from p as doubles, into *lanes (not returned: a
-// 32-byte vector return would depend on the clone's ABI).
+  double& operator[](int k) { return v[k]; }
+  double operator[](int k) const { return v[k]; }
+  Lanes& operator+=(const Lanes& other) {
+    for (int k = 0; k < 4; ++k) v[k] += other.v[k];
+    return *this;
+  }
+};
+
+inline Lanes operator+(Lanes a, const Lanes& b) { return a += b; }
+
+inline Lanes operator*(const Lanes& a, const Lanes& b) {
+  Lanes product;
+  for (int k = 0; k < 4; ++k) product.v[k] = a.v[k] * b.v[k];
+  return product;
+}
+
+// Four consecutive floats from p as doubles, into *lanes.
 inline void LoadLanes(const float* p, Lanes* lanes) {
-  LaneFloats floats;
-  std::memcpy(&floats, p, sizeof(floats));
-  *lanes = __builtin_convertvector(floats, Lanes);
+  for (int k = 0; k < 4; ++k) lanes->v[k] = p[k];
 }
 
 // The sum of the four partial sums, in the fixed order.
 inline double LanesTotal(const Lanes& sums) {
-  return (sums[0] + sums[1]) + (sums[2] + sums[3]);
+  return (sums.v[0] + sums.v[1]) + (sums.v[2] + sums.v[3]);
 }
 
 // sum a[i] b[i] over count floats, in double, in lanes.
