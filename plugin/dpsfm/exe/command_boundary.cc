@@ -3,8 +3,10 @@
 #include <cstdlib>
 #include <exception>
 #include <iostream>
+#include <new>
 
 #include "dpsfm/colmap/util/input_error.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace {
@@ -24,8 +26,17 @@ int RunAtCommandBoundary(const std::string& command,
     return EXIT_SUCCESS;
   } catch (const InputError& error) {
     return Fail(command, error.what());
+  } catch (const std::bad_alloc&) {
+    return Fail(command,
+                "out of memory; nothing was changed (fewer threads, the "
+                "command's num_threads option, need less)");
   } catch (const std::exception& error) {
-    return Fail(command, std::string("internal error: ") + error.what());
+    // An invariant (InternalError, with its file and line), or anything a
+    // library threw that the run did not expect: a bug, not the input's.
+    return Fail(command,
+                std::string("internal error (a bug in dp-sfm; please report "
+                            "it with this line and the log): ") +
+                    error.what());
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -346,6 +347,55 @@ TEST(DecodePng, HeaderClaimingMoreThanTheDataCanHoldIsRefused) {
 // streams left intact, which decode where the header fits). Each is
 // decoded, left as it was or refused; a tenth go through ReadDPFrameFile,
 // which returns pixels or throws InputError. None crashes.
+// The textbook filter reversal (PNG 1.2, section 9), a byte at a time.
+void UnfilterByTheBook(int filter,
+                       int bpp,
+                       const std::vector<uint8_t>& prior,
+                       std::vector<uint8_t>* row,
+                       size_t row_bytes) {
+  std::vector<uint8_t>& r = *row;
+  for (size_t i = 0; i < row_bytes; ++i) {
+    const int a = i >= static_cast<size_t>(bpp) ? r[i - bpp] : 0;
+    const int b = prior[i];
+    const int c = i >= static_cast<size_t>(bpp) ? prior[i - bpp] : 0;
+    int predictor = 0;
+    if (filter == 1) predictor = a;
+    if (filter == 2) predictor = b;
+    if (filter == 3) predictor = (a + b) / 2;
+    if (filter == 4) predictor = PaethPredictor(a, b, c);
+    r[i] = static_cast<uint8_t>(r[i] + predictor);
+  }
+}
+
+// Both forms of the decoder's pixel lanes (the vector extension's and the
+// plain ones) reverse every filter as the specification does, for every
+// pixel size the decoder meets.
+TEST(DecodePng, PixelLanesOfBothFormsUnfilterAsTheBook) {
+  std::mt19937 rng(5);
+  for (const int bpp : {1, 2, 3, 4, 6, 8}) {
+    for (int filter = 0; filter <= 4; ++filter) {
+      const size_t row_bytes = static_cast<size_t>(bpp) * 37;
+      std::vector<uint8_t> prior(row_bytes + 8), row(row_bytes + 8);
+      for (uint8_t& v : prior) v = static_cast<uint8_t>(rng());
+      for (uint8_t& v : row) v = static_cast<uint8_t>(rng());
+      std::vector<uint8_t> book = row;
+      UnfilterByTheBook(filter, bpp, prior, &book, row_bytes);
+      for (const bool portable : {false, true}) {
+        std::vector<uint8_t> got = row;
+        ASSERT_TRUE(internal::UnfilterRowForTest(
+            filter, bpp, row_bytes, prior.data(), got.data(), portable));
+        EXPECT_TRUE(std::equal(got.begin(), got.begin() + row_bytes,
+                               book.begin()))
+            << "filter " << filter << ", " << bpp << " bytes per pixel, "
+            << (portable ? "portable" : "vector") << " lanes";
+      }
+    }
+  }
+  std::vector<uint8_t> prior(16), row(16);
+  EXPECT_FALSE(internal::UnfilterRowForTest(5, 3, 6, prior.data(), row.data(),
+                                            false));
+}
+
 TEST(DecodePng, MutatedFilesAreDecodedOrRefusedNeverACrash) {
   const cv::Mat frame = RandomFrame(24, 16, CV_16U, 3, 11);
   const std::string valid = EncodePng(frame);

@@ -1,4 +1,5 @@
 #include "dpsfm/core/optics/real_dft.h"
+#include "dpsfm/core/util/check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -306,32 +307,32 @@ TEST(RealDft, WhereFftwBuffersTheColumnsTheyRunWithoutItsCopy) {
 #endif  // DPSFM_WITH_FFTW
 
 TEST(RealDft, RefusesWhatItCannotTransform) {
-  EXPECT_THROW(RealDft(cv::Size(0, 4)), std::invalid_argument);
+  EXPECT_THROW(RealDft(cv::Size(0, 4)), InternalError);
   const RealDft dft(cv::Size(8, 8));
   cv::Mat spectrum;
   const cv::Mat wider = cv::Mat::zeros(8, 12, CV_32FC1);
   EXPECT_THROW(dft.Forward(wider(cv::Rect(0, 0, 8, 8)), 8, &spectrum),
-               std::invalid_argument)
+               InternalError)
       << "a view that is not continuous";
   EXPECT_THROW(dft.Forward(cv::Mat::zeros(8, 8, CV_64FC1), 8, &spectrum),
-               std::invalid_argument);
+               InternalError);
   EXPECT_THROW(dft.Forward(cv::Mat::zeros(8, 8, CV_32FC1), 9, &spectrum),
-               std::invalid_argument);
+               InternalError);
 #ifdef DPSFM_WITH_FFTW
   // A continuous view that starts off FFTW's alignment.
   const cv::Mat rows = cv::Mat::zeros(9, 8, CV_32FC1);
   const cv::Mat shifted(8, 8, CV_32FC1, const_cast<float*>(rows.ptr<float>()) + 1);
-  EXPECT_THROW(dft.Forward(shifted, 8, &spectrum), std::invalid_argument);
+  EXPECT_THROW(dft.Forward(shifted, 8, &spectrum), InternalError);
 #endif
   cv::Mat image;
   cv::Mat wrong = cv::Mat::zeros(8, 4, CV_32FC2);
   EXPECT_THROW(dft.Inverse(&wrong, cv::Range(0, 8), &image),
-               std::invalid_argument);
+               InternalError);
   cv::Mat right = cv::Mat::zeros(8, 5, CV_32FC2);
   EXPECT_THROW(dft.Inverse(&right, cv::Range(4, 9), &image),
-               std::invalid_argument);
+               InternalError);
   EXPECT_THROW(dft.Inverse(&right, cv::Range(5, 4), &image),
-               std::invalid_argument);
+               InternalError);
 }
 
 // The product difference, transformed back, is the difference of the

@@ -12,6 +12,23 @@
 namespace dpsfm {
 namespace {
 
+// A whole-number dimension or element size: digits, blanks around them.
+// False for anything else, and for values above `max` (std::stol would
+// throw its own exceptions, and accept "12abc").
+bool ParseCount(const std::string& text, long max, long* value) {
+  const size_t first = text.find_first_not_of(" \t");
+  const size_t last = text.find_last_not_of(" \t");
+  if (first == std::string::npos) return false;
+  long n = 0;
+  for (size_t i = first; i <= last; ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+    n = 10 * n + (text[i] - '0');
+    if (n > max) return false;
+  }
+  *value = n;
+  return true;
+}
+
 bool HostIsLittleEndian() {
   const uint16_t one = 1;
   unsigned char first = 0;
@@ -20,6 +37,10 @@ bool HostIsLittleEndian() {
 }
 
 }  // namespace
+
+// Published DP kernel arrays hold thousands of values; a profile's at most
+// a few million.
+constexpr size_t kMaxValues = size_t{1} << 28;
 
 NpyArray ReadNpy(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
@@ -55,8 +76,9 @@ NpyArray ReadNpy(const std::string& path) {
     throw fail("no dtype in the header");
   }
   const char order = m[1].str()[0];
-  const int bytes = std::stoi(m[3].str());
-  if (m[2].str() != "f" || (bytes != 4 && bytes != 8)) {
+  long bytes = 0;
+  if (m[2].str() != "f" || !ParseCount(m[3].str(), 8, &bytes) ||
+      (bytes != 4 && bytes != 8)) {
     throw fail("dtype " + m[0].str() + " (need float32 or float64)");
   }
   const bool little = order == '<' || (order == '=' && HostIsLittleEndian());
@@ -76,13 +98,26 @@ NpyArray ReadNpy(const std::string& path) {
     std::string item;
     while (std::getline(dims, item, ',')) {
       if (item.find_first_not_of(" \t") == std::string::npos) continue;
-      const long n = std::stol(item);
-      if (n < 0 || n > (1 << 24)) throw fail("bad shape");
+      long n = 0;
+      if (!ParseCount(item, 1 << 24, &n)) throw fail("bad shape");
+      // Checked before it is multiplied: a product that wrapped around
+      // would pass any limit.
+      if (n > 0 && count > kMaxValues / static_cast<size_t>(n)) {
+        throw fail("array too large");
+      }
       array.shape.push_back(static_cast<int>(n));
       count *= static_cast<size_t>(n);
     }
   }
-  if (count > (size_t{1} << 28)) throw fail("array too large");
+  // The data the header claims must be in the file before it is allocated.
+  const std::streampos data_start = file.tellg();
+  file.seekg(0, std::ios::end);
+  const std::streamoff available = file.tellg() - data_start;
+  file.seekg(data_start);
+  if (available < static_cast<std::streamoff>(count * bytes)) {
+    throw fail("truncated data (" + std::to_string(count) +
+               " values expected)");
+  }
   std::vector<unsigned char> raw(count * bytes);
   if (!file.read(reinterpret_cast<char*>(raw.data()), raw.size())) {
     throw fail("truncated data (" + std::to_string(count) +

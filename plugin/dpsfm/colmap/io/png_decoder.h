@@ -9,6 +9,8 @@
 // OpenImageIO, so that what it decodes is what OpenImageIO would, to the bit.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -29,5 +31,21 @@ enum class PngDecoding {
 // are released before the pixels are unfiltered, so that a frame is held
 // compressed and decoded at once only while it is inflated.
 PngDecoding DecodePng(std::string* bytes, cv::Mat* pixels);
+
+namespace internal {
+
+// One row's PNG filter (0-4) reversed in place, given the row above as
+// unfiltered, with the decoder's pixel lanes or (`portable`) the plain C++
+// ones every compiler has, for the tests that compare the two. The row and
+// the prior row hold 8 readable bytes after row_bytes; bytes_per_pixel is
+// 1, 2, 3, 4, 6 or 8. False for an unknown filter or pixel size.
+bool UnfilterRowForTest(int filter,
+                        int bytes_per_pixel,
+                        size_t row_bytes,
+                        const uint8_t* prior,
+                        uint8_t* row,
+                        bool portable);
+
+}  // namespace internal
 
 }  // namespace dpsfm

@@ -123,12 +123,8 @@ ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
   const int num = static_cast<int>(candidates.size());
   const PatchScreening screening(gray_left, gray_right);
   std::vector<char> pass(num, 0);
-#ifdef _OPENMP
-  threads = EffectiveNumThreads(threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int k = 0; k < num; ++k) {
-    if (!candidates[k].reject.empty()) continue;
+  ParallelFor(num, threads, [&](int k) {
+    if (!candidates[k].reject.empty()) return;
     const cv::Rect r = PatchCrop(candidates[k].interior, crop_border);
     PatchBlurEstimate& e = (*estimates)[k];
     e.texture = screening.Texture(r);
@@ -142,11 +138,11 @@ ScreenedPatches ScreenPatches(const cv::Mat& gray_left,
       e.noise_sigma = screening.NoiseSigma(r);
       if (TextureSnr(e.texture, e.noise_sigma) < threshold) {
         e.reject_reason = kTextureTooWeak;
-        continue;
+        return;
       }
     }
     pass[k] = 1;
-  }
+  });
   for (int k = 0; k < num; ++k) {
     if (!pass[k]) continue;
     out.index.push_back(k);

@@ -782,11 +782,9 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
   if (prepare) prepared->resize(n);
   DPSFM_CHECK_EQ(static_cast<int>(prepared->size()), n)
       << "prepared patches of another list";
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int i = 0; i < n; ++i) {
+  // A patch the estimator cannot take (a failed DPSFM_CHECK) is invalid;
+  // anything else thrown ends the calibration (ParallelFor).
+  ParallelFor(n, num_threads, [&](int i) {
     try {
       if (prepare) {
         (*prepared)[i] = estimator.Prepare(patches[i]->left, patches[i]->right);
@@ -795,10 +793,10 @@ std::vector<PatchBlurEstimate> EstimateProfilePatches(
       if (estimates[i].at_bound || !std::isfinite(estimates[i].radius_px)) {
         estimates[i].valid = false;
       }
-    } catch (const std::exception&) {
+    } catch (const CheckFailure&) {
       estimates[i].valid = false;
     }
-  }
+  });
   return estimates;
 }
 

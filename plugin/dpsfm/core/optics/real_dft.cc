@@ -36,11 +36,11 @@ void PrepareProduct(std::initializer_list<const cv::Mat*> spectra,
                     cv::Mat* out) {
   const cv::Mat& a = **spectra.begin();
   for (const cv::Mat* m : spectra) {
-    DPSFM_CHECK(m->type() == CV_32FC2)
+    DPSFM_INVARIANT(m->type() == CV_32FC2)
         << what << " takes CV_32FC2 half spectra";
-    DPSFM_CHECK(m->size() == a.size()) << what << " takes spectra of one size";
-    DPSFM_CHECK(m->isContinuous()) << what << " takes continuous spectra";
-    DPSFM_CHECK(out->data != m->data)
+    DPSFM_INVARIANT(m->size() == a.size()) << what << " takes spectra of one size";
+    DPSFM_INVARIANT(m->isContinuous()) << what << " takes continuous spectra";
+    DPSFM_INVARIANT(out->data != m->data)
         << what << " writes to a matrix of its own";
   }
   if (out->type() != CV_32FC2 || out->size() != a.size() ||
@@ -69,7 +69,7 @@ DPSFM_VECTOR_CLONES void ComplexProductDifference(const float* DPSFM_RESTRICT pa
 }  // namespace
 
 RealDft::RealDft(const cv::Size& size) : size_(size) {
-  DPSFM_CHECK(size.width >= 1 && size.height >= 1)
+  DPSFM_INVARIANT(size.width >= 1 && size.height >= 1)
       << "RealDft: a " << size.width << "x" << size.height << " transform";
   plans_ = PlansFor(size);
 }
@@ -81,11 +81,11 @@ cv::Mat RealDft::NewSpectrum() const {
 void RealDft::Forward(const cv::Mat& image,
                       int nonzero_rows,
                       cv::Mat* spectrum) const {
-  DPSFM_CHECK(image.type() == CV_32FC1 && image.size() == size_ &&
+  DPSFM_INVARIANT(image.type() == CV_32FC1 && image.size() == size_ &&
               image.isContinuous())
       << "RealDft::Forward takes a continuous CV_32FC1 image of " << size_
       << ", got " << image.size();
-  DPSFM_CHECK(nonzero_rows >= 0 && nonzero_rows <= size_.height)
+  DPSFM_INVARIANT(nonzero_rows >= 0 && nonzero_rows <= size_.height)
       << "RealDft::Forward: " << nonzero_rows << " nonzero rows of "
       << size_.height;
   if (spectrum->type() != CV_32FC2 || spectrum->size() != SpectrumSize() ||
@@ -98,11 +98,11 @@ void RealDft::Forward(const cv::Mat& image,
 void RealDft::Inverse(cv::Mat* spectrum,
                       const cv::Range& rows,
                       cv::Mat* image) const {
-  DPSFM_CHECK(spectrum->type() == CV_32FC2 &&
+  DPSFM_INVARIANT(spectrum->type() == CV_32FC2 &&
               spectrum->size() == SpectrumSize() && spectrum->isContinuous())
       << "RealDft::Inverse takes a continuous CV_32FC2 half spectrum of "
       << SpectrumSize() << ", got " << spectrum->size();
-  DPSFM_CHECK(rows.start >= 0 && rows.start <= rows.end &&
+  DPSFM_INVARIANT(rows.start >= 0 && rows.start <= rows.end &&
               rows.end <= size_.height)
       << "RealDft::Inverse: rows " << rows.start << " to " << rows.end << " of "
       << size_.height;

@@ -22,6 +22,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <utility>
 #include <vector>
 
@@ -44,7 +45,7 @@ std::mutex& PlannerMutex() {
 // aligned at least as well (cv::fastMalloc), and views into them are
 // refused here rather than run with the wrong alignment.
 void CheckAligned(const void* data, const char* what) {
-  DPSFM_CHECK(fftwf_alignment_of(
+  DPSFM_INVARIANT(fftwf_alignment_of(
                   const_cast<float*>(static_cast<const float*>(data))) == 0)
       << "RealDft: the " << what << " is not aligned for FFTW";
 }
@@ -62,8 +63,7 @@ fftwf_complex* ThreadWork(size_t count) {
   if (work.count < count) {
     fftwf_free(work.data);
     work.data = fftwf_alloc_complex(count);
-    DPSFM_CHECK(work.data != nullptr)
-        << "RealDft: no memory for " << count << " complex numbers";
+    if (work.data == nullptr) throw std::bad_alloc();
     work.count = count;
   }
   return work.data;
@@ -151,7 +151,7 @@ struct RealDft::Plans {
                              fftwf_complex* columns) {
     ColumnPlans pass;
     pass.in_place = Columns(sign, spectrum, spectrum, half, 1, 0);
-    DPSFM_CHECK(pass.in_place != nullptr)
+    DPSFM_INVARIANT(pass.in_place != nullptr)
         << "FFTW made no plan for " << cols << "x" << rows;
     const size_t floats = 2 * static_cast<size_t>(rows) * half;
     std::vector<float> probe(floats);
@@ -241,7 +241,7 @@ struct RealDft::Plans {
                                              FFTW_ESTIMATE);
     fftwf_free(image);
     fftwf_free(spectrum);
-    DPSFM_CHECK(plan != nullptr)
+    DPSFM_INVARIANT(plan != nullptr)
         << "FFTW made no plan for " << count << " rows of " << cols;
     slot.store(plan, std::memory_order_release);
     return plan;

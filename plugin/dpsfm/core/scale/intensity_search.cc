@@ -267,11 +267,7 @@ std::vector<Prepared> PreparePatches(
     const IntensitySearchOptions& options) {
   const int num_patches = static_cast<int>(patches.size());
   std::vector<Prepared> prepared(num_patches);
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(options.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int j = 0; j < num_patches; ++j) {
+  ParallelFor(num_patches, options.num_threads, [&](int j) {
     Prepared& p = prepared[j];
     const DPPsfModel& patch_psf = PsfOf(patches[j], psf);
     p = intensity::Prepare(
@@ -288,7 +284,7 @@ std::vector<Prepared> PreparePatches(
       p.sigma_right = p.sigma_left;
     }
     const DPKernelGrid* grid = grids.of_patch[j];
-    if (grid == nullptr) continue;
+    if (grid == nullptr) return;
     std::vector<double> needed = scales;
     needed.push_back(initial_scale);
     p.grid = grid;
@@ -303,7 +299,7 @@ std::vector<Prepared> PreparePatches(
     // The float crops are no longer needed: the statistics are the patch.
     p.left.release();
     p.right.release();
-  }
+  });
   return prepared;
 }
 
@@ -354,11 +350,7 @@ void TightenNoiseByFit(const IntensitySearchOptions& options,
                        std::vector<Prepared>* prepared,
                        int* failed) {
   const int num_patches = static_cast<int>(prepared->size());
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(options.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int j = 0; j < num_patches; ++j) {
+  ParallelFor(num_patches, options.num_threads, [&](int j) {
     Prepared& p = (*prepared)[j];
     std::vector<double> radii;
     if (p.grid != nullptr) {
@@ -376,7 +368,7 @@ void TightenNoiseByFit(const IntensitySearchOptions& options,
       std::vector<ChannelTerms> terms;
       try {
         LossOfPrepared(p, radius, *p.psf, options.loss, &terms);
-      } catch (...) {
+      } catch (const CheckFailure&) {
 #pragma omp atomic
         ++*failed;
         continue;
@@ -391,7 +383,7 @@ void TightenNoiseByFit(const IntensitySearchOptions& options,
         }
       }
     }
-  }
+  });
 }
 
 // kRelativeL2: fixed denominators at the initial scale (a denominator that
@@ -404,11 +396,7 @@ void FixReferencePower(const std::vector<IntensityView>& views,
                        std::vector<Prepared>* prepared,
                        int* failed) {
   const int num_patches = static_cast<int>(patches.size());
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(options.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int j = 0; j < num_patches; ++j) {
+  ParallelFor(num_patches, options.num_threads, [&](int j) {
     Prepared& p = (*prepared)[j];
     const double r = PatchRadii(views[patches[j].view],
                                 patches[j].depth,
@@ -417,7 +405,7 @@ void FixReferencePower(const std::vector<IntensityView>& views,
     std::vector<ChannelTerms> terms;
     try {
       LossOfPrepared(p, r, *p.psf, options.loss, &terms);
-    } catch (...) {
+    } catch (const CheckFailure&) {
 #pragma omp atomic
       ++*failed;
       terms.clear();
@@ -428,13 +416,13 @@ void FixReferencePower(const std::vector<IntensityView>& views,
       p.reference_power.push_back(t.power);
       p.channel_used.push_back(t.power > 2 * t.noise ? 1 : 0);
     }
-  }
+  });
 }
 
 // Per-patch loss curves over a list of scales: r_ij(s) from eq.
 // (solution01) with s g_i' and s z'_ij. A patch whose loss cannot be
-// evaluated at a radius contributes nothing there (counted in *failed: an
-// exception must not leave the parallel region).
+// evaluated at a radius (a failed DPSFM_CHECK) contributes nothing there,
+// counted in *failed; anything else thrown ends the search (ParallelFor).
 std::vector<std::vector<double>> LossCurves(
     const std::vector<IntensityView>& views,
     const std::vector<IntensityPatch>& patches,
@@ -445,18 +433,14 @@ std::vector<std::vector<double>> LossCurves(
   const int num_patches = static_cast<int>(patches.size());
   std::vector<std::vector<double>> curves(num_patches,
                                           std::vector<double>(scales.size()));
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(options.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int j = 0; j < num_patches; ++j) {
+  ParallelFor(num_patches, options.num_threads, [&](int j) {
     Prepared& p = (*prepared)[j];
     const std::vector<double> radii = PatchRadii(
         views[patches[j].view], patches[j].depth, scales, p.max_abs_radius);
     if (p.grid != nullptr) {
       try {
         AddIntervals(patches[j], IntervalsOf(*p.grid, radii), &p);
-      } catch (...) {
+      } catch (const CheckFailure&) {
         // Evaluated as unprepared below (contributes nothing).
 #pragma omp atomic
         ++*failed;
@@ -469,7 +453,7 @@ std::vector<std::vector<double>> LossCurves(
       if (r != last_radius) {
         try {
           last_loss = LossOfPrepared(p, r, *p.psf, options.loss);
-        } catch (...) {
+        } catch (const CheckFailure&) {
 #pragma omp atomic
           ++*failed;
           last_loss = 0;
@@ -478,7 +462,7 @@ std::vector<std::vector<double>> LossCurves(
       }
       curves[j][k] = last_loss;
     }
-  }
+  });
   return curves;
 }
 

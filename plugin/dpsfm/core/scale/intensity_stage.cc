@@ -8,6 +8,7 @@
 
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/scale_estimator_data.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace {
@@ -143,7 +144,7 @@ void DPScaleEstimator::IntensityStage(
     try {
       intensity = SearchScaleByIntensity(
           iviews, ipatches, linear.scale, *psf, search, &intensity_cache_);
-    } catch (const std::exception& e) {
+    } catch (const CheckFailure& e) {
       intensity.success = false;
       intensity.failure_reason = e.what();
     }

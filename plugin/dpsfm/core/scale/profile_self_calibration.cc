@@ -14,6 +14,7 @@
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/scale_estimator_data.h"
 #include "dpsfm/core/util/threads.h"
+#include "dpsfm/core/util/check.h"
 
 namespace dpsfm {
 namespace {
@@ -134,12 +135,11 @@ int DPScaleEstimator::ReestimateStoredPatches(
                                  options_.num_threads));
     }
     const std::vector<StoredRef>& refs = g.second;
-#ifdef _OPENMP
-    const int threads = EffectiveNumThreads(options_.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic) \
-    reduction(+ : reestimated, failed)
-#endif
-    for (int k = 0; k < static_cast<int>(refs.size()); ++k) {
+    // A crop the estimator cannot take (a failed DPSFM_CHECK) is counted
+    // and left out; anything else thrown ends the run (ParallelFor).
+    const int num_refs = static_cast<int>(refs.size());
+    std::vector<char> redone(num_refs, 0), refused(num_refs, 0);
+    ParallelFor(num_refs, options_.num_threads, [&](int k) {
       const ViewData& v = *views_[refs[k].view];
       const StoredCrop& st = v.stored[refs[k].stored];
       PatchSample& s = (*samples)[refs[k].view][st.sample];
@@ -152,12 +152,15 @@ int DPScaleEstimator::ReestimateStoredPatches(
           s.radius_frame_px = e.radius_px / v.summary.resize_factor;
           s.fit_quality = e.fit_quality;
           s.selected = true;
-          ++reestimated;
+          redone[k] = 1;
         }
-      } catch (const std::exception&) {
-        ++failed;  // left out of the selection, and counted
+      } catch (const CheckFailure&) {
+        refused[k] = 1;
       }
-    }
+    });
+    reestimated += static_cast<int>(
+        std::count(redone.begin(), redone.end(), 1));
+    failed += static_cast<int>(std::count(refused.begin(), refused.end(), 1));
   }
   *failures = failed;
   return reestimated;
@@ -200,7 +203,7 @@ void DPScaleEstimator::CalibrateProfile(
                                         0.02,
                                         /*bands_when_frame_fits=*/false,
                                         &profile_cache_);
-  } catch (const std::exception& e) {
+  } catch (const CheckFailure& e) {
     calibration.summary = e.what();  // said in the status below
   }
   result->psf_fit = calibration.frame;

@@ -286,7 +286,7 @@ bool DPScaleEstimator::LinearStage(
   linear_options.num_threads = options_.num_threads;
   try {
     *linear = EstimateScaleLinear(linear_views, linear_options);
-  } catch (const std::exception& e) {
+  } catch (const CheckFailure& e) {
     result->refusal.code = ScaleRefusal::kLinearStageThrew;
     result->refusal.error = e.what();
     return false;

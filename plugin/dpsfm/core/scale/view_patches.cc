@@ -222,17 +222,16 @@ void SearchChosenPatches(const WorkingView& working,
   if (todo.empty()) return;
   const BlurSearchEstimators::Estimators& estimators =
       cache->For(blur, patch_size + 2 * border);
-  DPSFM_CHECK_EQ(estimators.size(), field.cells.size());
+  DPSFM_INVARIANT(estimators.size() == field.cells.size());
   for (const auto& estimator : estimators) {
-    DPSFM_CHECK_LE(estimator->Border(), border);
+    DPSFM_INVARIANT(estimator->Border() <= border);
   }
   std::vector<PatchBlurEstimate>& estimates = search->estimates;
   const int num_todo = static_cast<int>(todo.size());
-#ifdef _OPENMP
-  const int threads = EffectiveNumThreads(options.num_threads);
-#pragma omp parallel for num_threads(threads) schedule(dynamic)
-#endif
-  for (int i = 0; i < num_todo; ++i) {
+  // A patch the estimator cannot take (a failed DPSFM_CHECK) is rejected
+  // with its reason; anything else (an invariant, no memory) ends the run
+  // after the loop (ParallelFor).
+  ParallelFor(num_todo, options.num_threads, [&](int i) {
     const int k = todo[i];
     const cv::Rect& interior = candidates[k].interior;
     const cv::Rect r = PatchCrop(interior, border);
@@ -240,11 +239,11 @@ void SearchChosenPatches(const WorkingView& working,
       estimates[k] =
           estimators[PatchCell(field, interior, working.left.size())]->Estimate(
               working.gray_left(r).clone(), working.gray_right(r).clone());
-    } catch (const std::exception& e) {
+    } catch (const CheckFailure& e) {
       estimates[k].valid = false;
       estimates[k].reject_reason = e.what();
     }
-  }
+  });
   for (const int k : todo) search->searched[k] = 1;
   search->num_searched += num_todo;
 }

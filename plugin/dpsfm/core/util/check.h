@@ -1,7 +1,13 @@
-// Validation for the core. The core never aborts the process: a violated
-// precondition throws std::invalid_argument with a readable message, which the
-// command turns into one error line and a non-zero exit (COLMAP's THROW_CHECK
-// style, without depending on COLMAP).
+// Validation for the core. The core never aborts the process. Two kinds of
+// check, told apart by what a failure means:
+// - DPSFM_CHECK: a precondition the caller's data can violate (a view too
+//   small, lens data out of range). It throws CheckFailure (a
+//   std::invalid_argument) with a readable message; a patch, a view or the
+//   command reports it as that input's problem (COLMAP's THROW_CHECK style,
+//   without depending on COLMAP).
+// - DPSFM_INVARIANT: what the code guarantees itself (buffers it made, sizes
+//   it chose). It throws InternalError, which nothing turns into an input's
+//   problem: the command reports it as a bug, with the file and line.
 #pragma once
 
 #include <sstream>
@@ -25,7 +31,35 @@ class CheckFailure : public std::invalid_argument {
   std::string message_;
 };
 
+// What a failed DPSFM_INVARIANT throws: a bug, not the input's fault.
+// what() has the condition, the source line and the message.
+class InternalError : public std::logic_error {
+ public:
+  explicit InternalError(const std::string& what) : std::logic_error(what) {}
+};
+
 namespace internal {
+
+class InvariantMessage {
+ public:
+  InvariantMessage(const char* file, int line, const char* condition) {
+    stream_ << condition << " does not hold (" << file << ":" << line << ")";
+  }
+  ~InvariantMessage() noexcept(false) { throw InternalError(stream_.str()); }
+  template <typename T>
+  InvariantMessage& operator<<(const T& value) {
+    if (first_) {
+      stream_ << ": ";
+      first_ = false;
+    }
+    stream_ << value;
+    return *this;
+  }
+
+ private:
+  std::ostringstream stream_;
+  bool first_ = true;
+};
 
 class CheckMessage {
  public:
@@ -61,6 +95,12 @@ class CheckMessage {
   if (condition) {             \
   } else                       \
     ::dpsfm::internal::CheckMessage(__FILE__, __LINE__, #condition)
+
+// DPSFM_INVARIANT(spectrum.isContinuous()) << "the spectrum it allocated";
+#define DPSFM_INVARIANT(condition) \
+  if (condition) {                 \
+  } else                           \
+    ::dpsfm::internal::InvariantMessage(__FILE__, __LINE__, #condition)
 
 #define DPSFM_CHECK_GT(a, b) DPSFM_CHECK((a) > (b))
 #define DPSFM_CHECK_GE(a, b) DPSFM_CHECK((a) >= (b))

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define DPSFM_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
@@ -33,42 +34,89 @@
 
 namespace dpsfm {
 
-// Four doubles: partial sums kept apart. Plain C++ whose element-wise loops
-// GCC and Clang vectorise (one AVX2 or two SSE2 operations each, checked in
-// the assembly of MomentsOfValues and DotInLanes); each lane is its own
-// chain of IEEE operations, so the bits depend neither on the vector width
-// nor on the compiler, provided none of it is contracted into FMAs (the
-// core is built with -ffp-contract=off, plugin/CMakeLists.txt).
-struct Lanes {
+// Four doubles: partial sums kept apart, each lane its own chain of IEEE
+// operations, so the bits depend neither on the vector width nor on the
+// compiler, provided nothing is contracted into FMAs (dp-sfm is built with
+// -ffp-contract=off, CMakeLists.txt). Two forms with the same operations:
+// - PortableLanes: plain C++ for any compiler;
+// - VectorLanes: GCC's and Clang's vector extension, compiled to one AVX2 or
+//   two SSE2 (NEON) operations. GCC 12 did not vectorise PortableLanes'
+//   loops inside MomentsOfValues (intensity_loss.cc), which then took twice
+//   as long.
+// Lanes is the second where the compiler has it; lanes_test checks that
+// both give the same bits.
+struct PortableLanes {
   double v[4] = {0, 0, 0, 0};
 
   double& operator[](int k) { return v[k]; }
   double operator[](int k) const { return v[k]; }
-  Lanes& operator+=(const Lanes& other) {
+  PortableLanes& operator+=(const PortableLanes& other) {
     for (int k = 0; k < 4; ++k) v[k] += other.v[k];
     return *this;
   }
 };
 
-inline Lanes operator+(Lanes a, const Lanes& b) { return a += b; }
+inline PortableLanes operator+(PortableLanes a, const PortableLanes& b) {
+  return a += b;
+}
 
-inline Lanes operator*(const Lanes& a, const Lanes& b) {
-  Lanes product;
+inline PortableLanes operator*(const PortableLanes& a,
+                               const PortableLanes& b) {
+  PortableLanes product;
   for (int k = 0; k < 4; ++k) product.v[k] = a.v[k] * b.v[k];
   return product;
 }
 
 // Four consecutive floats from p as doubles, into *lanes.
-inline void LoadLanes(const float* p, Lanes* lanes) {
+inline void LoadLanes(const float* p, PortableLanes* lanes) {
   for (int k = 0; k < 4; ++k) lanes->v[k] = p[k];
 }
 
-// The sum of the four partial sums, in the fixed order.
-inline double LanesTotal(const Lanes& sums) {
-  return (sums.v[0] + sums.v[1]) + (sums.v[2] + sums.v[3]);
+#if defined(__GNUC__)
+typedef double VectorLanes __attribute__((vector_size(32)));
+typedef float VectorLaneFloats __attribute__((vector_size(16)));
+
+// Not returned: a 32-byte vector return would depend on the AVX2 clone's
+// ABI (DPSFM_VECTOR_CLONES).
+inline void LoadLanes(const float* p, VectorLanes* lanes) {
+  VectorLaneFloats floats;
+  std::memcpy(&floats, p, sizeof(floats));
+  *lanes = __builtin_convertvector(floats, VectorLanes);
 }
 
-// sum a[i] b[i] over count floats, in double, in lanes.
+using Lanes = VectorLanes;
+#else
+using Lanes = PortableLanes;
+#endif
+
+// The sum of the four partial sums, in the fixed order.
+template <typename L>
+double LanesTotal(const L& sums) {
+  return (sums[0] + sums[1]) + (sums[2] + sums[3]);
+}
+
+// sum a[i] b[i] over count floats, in double, in lanes of type L (Lanes
+// or PortableLanes): two sets of lanes, eight values a step, since one
+// set's additions would wait on each other.
+template <typename L>
+double DotInLanesOf(const float* a, const float* b, size_t count) {
+  L low{}, high{};
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8) {
+    L u, v;
+    LoadLanes(a + i, &u);
+    LoadLanes(b + i, &v);
+    low += u * v;
+    LoadLanes(a + i + 4, &u);
+    LoadLanes(b + i + 4, &v);
+    high += u * v;
+  }
+  for (; i < count; ++i) low[0] += static_cast<double>(a[i]) * b[i];
+  return LanesTotal(low + high);
+}
+
+// DotInLanesOf<Lanes>, compiled for AVX2 and the baseline
+// (DPSFM_VECTOR_CLONES).
 double DotInLanes(const float* a, const float* b, size_t count);
 
 }  // namespace dpsfm
