@@ -62,29 +62,18 @@ std::map<std::string, std::string> ModelFiles(const std::string& dir,
   return files;
 }
 
-// The rescale's type of a model file, if it has one (cameras are not
-// metric).
-bool RescaleType(const std::string& name, ArtefactType* type) {
-  static const std::map<std::string, ArtefactType> kTypes = {
-      {"images.bin", ArtefactType::kImagesBinary},
-      {"points3D.bin", ArtefactType::kPoints3DBinary},
-      {"rigs.bin", ArtefactType::kRigsBinary},
-      {"frames.bin", ArtefactType::kFramesBinary},
-      {"images.txt", ArtefactType::kImagesText},
-      {"points3D.txt", ArtefactType::kPoints3DText},
-      {"rigs.txt", ArtefactType::kRigsText},
-      {"frames.txt", ArtefactType::kFramesText}};
-  const auto it = kTypes.find(name);
-  if (it == kTypes.end()) return false;
-  *type = it->second;
-  return true;
-}
-
 // Each model file mutated in turn, the others valid: the check reads the
 // whole model, the rescale's parser the one file.
 TEST(MutatedModels, CheckedAndRescaledOrRefused) {
   TempDir dir;
   WriteModel(dir / "model", /*binary=*/true, /*text=*/true);
+  // The rescale's type of each metric model file (cameras are not), as the
+  // rescale lists them.
+  std::map<std::string, ArtefactType> types;
+  for (const Artefact& artefact : ListArtefactsToRescale(dir / "model")) {
+    types[fs::path(artefact.path).filename().string()] = artefact.type;
+  }
+  ASSERT_GE(types.size(), 4u);
   std::mt19937 rng(20261207);
   int cases = 0;
   for (const std::string suffix : {".bin", ".txt"}) {
@@ -101,8 +90,8 @@ TEST(MutatedModels, CheckedAndRescaledOrRefused) {
     for (const auto& file : files) {
       const std::string& name = file.first;
       const std::string& bytes = file.second;
-      ArtefactType type;
-      const bool metric = RescaleType(name, &type);
+      const auto typed = types.find(name);
+      const bool metric = typed != types.end();
       for (int i = 0; i < 400; ++i, ++cases) {
         const std::string mutated = Mutate(bytes, i, &rng);
         const std::string path = model + "/" + name;
@@ -115,7 +104,7 @@ TEST(MutatedModels, CheckedAndRescaledOrRefused) {
         if (metric) {
           std::string contents = mutated;
           Count(what, name,
-                [&] { RescaleContents(type, 2.0, path, &contents); },
+                [&] { RescaleContents(typed->second, 2.0, path, &contents); },
                 &rescale);
         }
       }
