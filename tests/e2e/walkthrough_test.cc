@@ -3,9 +3,12 @@
 // with the build's programs on PATH, HOME in a temporary folder and
 // DPSFM_REALDP_DIR at the real captures, as the guide tells a user to set
 // them. What the guide promises of it is checked: the calibrator's verdict,
-// the answer's last line, and an interval that holds the true 0.37.
+// the answer's last line, an interval that holds the true 0.37, and the
+// figures the guide prints (GuideFigures), so that they cannot go stale.
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <regex>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -43,6 +46,78 @@ std::string WalkthroughBlock() {
     block += line + "\n";
   }
   return "";
+}
+
+// The figures the guide prints for the walkthrough's answer: the scale, its
+// interval and the DP cue's ratio to the truth, and the precision each is
+// printed to.
+struct GuideFigures {
+  double scale = 0, low = 0, high = 0, dp_cue_ratio = 0;
+  double scale_digit = 0, interval_digit = 0, ratio_digit = 0;
+  bool found = false;
+};
+
+// The unit of the last printed digit of `number` ("0.3696": 1e-4).
+double LastDigit(const std::string& number) {
+  const size_t dot = number.find('.');
+  return dot == std::string::npos
+             ? 1.0
+             : std::pow(10.0, -static_cast<int>(number.size() - dot - 1));
+}
+
+GuideFigures ReadGuideFigures() {
+  std::ifstream file(std::string(DPSFM_SOURCE_DIR) + "/docs/user-guide.md");
+  std::stringstream text;
+  text << file.rdbuf();
+  // Line breaks and indentation as single blanks.
+  const std::string guide =
+      std::regex_replace(text.str(), std::regex("\\s+"), " ");
+  GuideFigures f;
+  std::smatch m;
+  if (!std::regex_search(guide, m,
+                         std::regex("Here: `Scale ([0-9.]+) \\.\\.\\. \\(95 % "
+                                    "interval \\[([0-9.]+), ([0-9.]+)\\]"))) {
+    return f;
+  }
+  f.scale = std::stod(m[1]);
+  f.low = std::stod(m[2]);
+  f.high = std::stod(m[3]);
+  f.scale_digit = LastDigit(m[1]);
+  f.interval_digit = LastDigit(m[2]);
+  if (!std::regex_search(guide, m,
+                         std::regex("the DP cue alone, ([0-9.]+) of the "
+                                    "truth"))) {
+    return f;
+  }
+  f.dp_cue_ratio = std::stod(m[1]);
+  f.ratio_digit = LastDigit(m[1]);
+  f.found = true;
+  return f;
+}
+
+// The guide's figures against the run's report: each within half its last
+// printed digit plus a tenth of the interval's half-width, the move a
+// change may make to an answer (a larger move means the guide needs the
+// new figures).
+void ExpectTheGuidesFigures(const nlohmann::json& report) {
+  const GuideFigures guide = ReadGuideFigures();
+  ASSERT_TRUE(guide.found)
+      << "docs/user-guide.md no longer prints the walkthrough's answer as "
+         "\"Here: `Scale <s> ... (95 % interval [<low>, <high>]\" and \"the "
+         "DP cue alone, <r> of the truth\"";
+  const double scale = report.at("scale").get<double>();
+  const double low = report.at("scale_ci_low").get<double>();
+  const double high = report.at("scale_ci_high").get<double>();
+  const double allowed = 0.1 * 0.5 * (high - low);
+  EXPECT_NEAR(guide.scale, scale, 0.5 * guide.scale_digit + allowed);
+  EXPECT_NEAR(guide.low, low, 0.5 * guide.interval_digit + allowed);
+  EXPECT_NEAR(guide.high, high, 0.5 * guide.interval_digit + allowed);
+  const nlohmann::json& dp = report.at("cues").at("dual_pixel");
+  const double dp_scale = dp.at("scale").get<double>();
+  const double dp_allowed =
+      0.1 * 0.5 * (dp.at("ci")[1].get<double>() - dp.at("ci")[0].get<double>());
+  EXPECT_NEAR(guide.dp_cue_ratio, dp_scale / 0.37,
+              0.5 * guide.ratio_digit + dp_allowed / 0.37);
 }
 
 // Runs `block` with the programs in `bin` first on PATH and checks what the
@@ -86,6 +161,7 @@ void RunWalkthrough(const std::string& block,
   const double high = report.at("scale_ci_high").get<double>();
   EXPECT_LE(low, 0.37) << report.at("scale");
   EXPECT_GE(high, 0.37) << report.at("scale");
+  ExpectTheGuidesFigures(report);
   // The log is not a terminal: no colour codes in it.
   EXPECT_EQ(run.err.find("\x1b["), std::string::npos) << run.err;
   // The search bound is the view's own, and shown: first 4.78 px (the
