@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/changed_fields.h"
 #include "tests/core/synthetic_dp.h"
 
 namespace dpsfm {
@@ -282,6 +283,35 @@ TEST(ProfileSearchCache, ALaterCalibrationFitsAsWithoutIt) {
   EXPECT_EQ(CalibrateSplitProfile(first, 1, wider, 0.02, true, &cache)
                 .searches_reused,
             0);
+}
+
+// The searches depend on the crop's pixels and every blur option: pixels
+// changed in place (the same buffers) or any one option changed read no
+// earlier search.
+TEST(ProfileSearchCache, EachInputOfTheKeyChangedMisses) {
+  SplitProfileParams sharp;
+  sharp.split_exponent = 0.6;
+  const SplitProfilePsf psf(sharp);
+  std::vector<ProfilePatch> patches = RenderPatches(psf, 36, 0.004, false, 81);
+  patches.resize(12);
+  const SplitProfileFitOptions options = FastOptions();
+  ProfileSearchCache cache;
+  auto reused = [&](const SplitProfileFitOptions& o) {
+    return CalibrateSplitProfile(patches, 1, o, 0.02, true, &cache)
+        .searches_reused;
+  };
+  reused(options);
+  EXPECT_GT(reused(options), 0);
+  for (ProfilePatch& p : patches) p.left += cv::Scalar::all(1e-3);
+  EXPECT_EQ(reused(options), 0);
+  EXPECT_GT(reused(options), 0);
+  test::ForEachFieldChanged(
+      options.blur, [&](std::size_t i, const BlurEstimationOptions& changed) {
+        SplitProfileFitOptions o = options;
+        o.blur = changed;
+        EXPECT_EQ(reused(o), 0) << "blur option " << i;
+        EXPECT_EQ(reused(options), 0) << "blur option " << i;
+      });
 }
 
 // Nothing but near-focus patches: the profile cannot be seen, and the fit

@@ -394,6 +394,49 @@ TEST(IntensityStatsCache, ALaterSearchAnswersAsWithoutIt) {
   EXPECT_EQ(other_later.num_nodes_reused, 0);
 }
 
+// A crop is known by its pixels, its border and its grid: the same pixels
+// in other buffers are found, pixels changed in place (the same buffer) or
+// another border are not, and each answer is the one without the cache.
+TEST(IntensityStatsCache, KnowsACropByPixelsBorderAndGrid) {
+  const TranslatingDiskPsf psf;
+  const double scale = 0.25;
+  test::RenderOptions render;
+  render.noise_sigma = 0.01;
+  const Scene scene = MakeScene(psf, scale, 2, 4, render);
+  IntensitySearchOptions options;
+  options.num_bootstrap = 20;
+  IntensityStatsCache cache;
+  ASSERT_TRUE(SearchScaleByIntensity(
+                  scene.views, scene.patches, scale, psf, options, &cache)
+                  .success);
+  auto search = [&](const std::vector<IntensityPatch>& patches) {
+    const IntensitySearchResult with = SearchScaleByIntensity(
+        scene.views, patches, scale, psf, options, &cache);
+    ExpectSameAnswer(
+        with,
+        SearchScaleByIntensity(scene.views, patches, scale, psf, options));
+    return with;
+  };
+  std::vector<IntensityPatch> copies = scene.patches;
+  for (IntensityPatch& p : copies) {
+    p.left = p.left.clone();
+    p.right = p.right.clone();
+  }
+  const IntensitySearchResult same = search(copies);
+  EXPECT_GT(same.num_nodes_reused, 0);
+  EXPECT_EQ(same.num_nodes_computed, 0);
+
+  for (IntensityPatch& p : copies) p.right += cv::Scalar::all(1e-3);
+  const IntensitySearchResult changed = search(copies);
+  EXPECT_EQ(changed.num_nodes_reused, 0);
+  EXPECT_GT(changed.num_nodes_computed, 0);
+
+  for (IntensityPatch& p : copies) ++p.border;
+  const IntensitySearchResult bordered = search(copies);
+  EXPECT_EQ(bordered.num_nodes_reused, 0);
+  EXPECT_GT(bordered.num_nodes_computed, 0);
+}
+
 // Notes sec. 5: on noisy data the paper's loss drifts towards larger blur
 // (smaller s). Measure both losses on the same noisy scene; the noise-aware
 // loss must be within 2 % and no worse than the paper's.

@@ -15,6 +15,8 @@
 #include "dpsfm/core/blur/patch_selection.h"
 #include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/view_patches.h"
+#include "dpsfm/core/util/fields.h"
+#include "tests/changed_fields.h"
 
 namespace dpsfm {
 namespace test {
@@ -141,9 +143,9 @@ TEST(LargerSearchBound, SixtyPercentOrTwoPixelsUpToAHalfPixel) {
 
 TEST(SearchBoundReached, OnlyAnAutomaticBoundTheBlurReachesWhileGrowthsLast) {
   DPScaleOptions options;  // share 0.05, one growth
-  EXPECT_TRUE(SearchBoundReached(100, 5, 0, options));   // exactly 5 %
-  EXPECT_FALSE(SearchBoundReached(100, 4, 0, options));  // below
-  EXPECT_FALSE(SearchBoundReached(0, 0, 0, options));    // nothing searched
+  EXPECT_TRUE(SearchBoundReached(100, 5, 0, options));    // exactly 5 %
+  EXPECT_FALSE(SearchBoundReached(100, 4, 0, options));   // below
+  EXPECT_FALSE(SearchBoundReached(0, 0, 0, options));     // nothing searched
   EXPECT_FALSE(SearchBoundReached(100, 50, 1, options));  // growth spent
   DPScaleOptions explicit_bound = options;
   explicit_bound.max_radius_px = 5;  // the user's bound stands
@@ -173,11 +175,10 @@ TEST(GrownSearchBound, ToTheCapWhileTheCropsFit) {
   const int crop_larger = g.patch_size + 2 * BlurSearchBorder(field, blur, 8);
   ASSERT_LT(crop_larger, crop_cap);
   const int between = 2 * crop_larger + 1;  // the larger fits, the cap not
-  EXPECT_DOUBLE_EQ(
-      GrownSearchBound(g, cv::Size(between, between), field, blur), 8);
-  EXPECT_EQ(GrownSearchBound(g, cv::Size(2 * crop_larger - 1, 600), field,
-                             blur),
-            0);
+  EXPECT_DOUBLE_EQ(GrownSearchBound(g, cv::Size(between, between), field, blur),
+                   8);
+  EXPECT_EQ(
+      GrownSearchBound(g, cv::Size(2 * crop_larger - 1, 600), field, blur), 0);
 }
 
 // By hand, bound 5 px (cap 10), share 0.05: of 100 searched, two standard
@@ -200,9 +201,9 @@ TEST(EarlyGrownSearchBound, OnlyWhenTheShareSettlesIt) {
   EXPECT_EQ(early(0, 0, 0), 0);     // nothing searched
   DPScaleOptions explicit_bound = options;
   explicit_bound.max_radius_px = 5;
-  EXPECT_EQ(EarlyGrownSearchBound(
-                100, 50, 0, g, frame, field, blur, explicit_bound),
-            0);
+  EXPECT_EQ(
+      EarlyGrownSearchBound(100, 50, 0, g, frame, field, blur, explicit_bound),
+      0);
   // No grown bound's crops fit twice into 60 px: the bound stays.
   EXPECT_EQ(EarlyGrownSearchBound(
                 100, 50, 0, g, cv::Size(60, 60), field, blur, options),
@@ -230,9 +231,9 @@ TEST(GrowthSample, EveryFourthChosenPatch) {
   EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
 }
 
-// The blur search's estimators are built once per (crop, bound) and kept
-// across views; a geometry beyond the last two used is dropped and built
-// again when it comes back.
+// The blur search's estimators are built once per geometry (crop, search
+// options) and kept across views; a geometry beyond the last two used is
+// dropped and built again when it comes back.
 TEST(BlurSearchEstimators, BuiltOncePerGeometryTheLastTwoKept) {
   DPPsfField field;
   field.layout = DPPsfLayout::ColumnBands(2);
@@ -242,26 +243,74 @@ TEST(BlurSearchEstimators, BuiltOncePerGeometryTheLastTwoKept) {
   BlurEstimationOptions blur;
   blur.max_radius_px = 4;
   const int crop = 16 + 2 * BlurSearchBorder(field, blur, 4);
-  const PatchBlurEstimator* first = estimators.For(blur, crop)[0].get();
+  const PatchBlurEstimator* first = (*estimators.For(blur, crop))[0].get();
   EXPECT_EQ(estimators.NumBuilt(), 2);  // one per cell
-  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);
+  EXPECT_EQ((*estimators.For(blur, crop))[0].get(), first);
   EXPECT_EQ(estimators.NumBuilt(), 2);
   BlurEstimationOptions grown = blur;
   grown.max_radius_px = 6.5;
-  const auto& larger = estimators.For(grown, crop + 6);
-  ASSERT_EQ(larger.size(), 2u);
-  EXPECT_EQ(larger[1]->PatchSize(), cv::Size(crop + 6, crop + 6));
-  EXPECT_DOUBLE_EQ(larger[1]->Options().max_radius_px, 6.5);
+  const auto larger = estimators.For(grown, crop + 6);
+  ASSERT_EQ(larger->size(), 2u);
+  EXPECT_EQ((*larger)[1]->PatchSize(), cv::Size(crop + 6, crop + 6));
+  EXPECT_DOUBLE_EQ((*larger)[1]->Options().max_radius_px, 6.5);
   EXPECT_EQ(estimators.NumBuilt(), 4);
-  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);  // still kept
+  EXPECT_EQ((*estimators.For(blur, crop))[0].get(), first);  // still kept
   EXPECT_EQ(estimators.NumBuilt(), 4);
   // A third geometry drops the least recently used (the grown one).
   estimators.For(grown, crop);
   EXPECT_EQ(estimators.NumBuilt(), 6);
-  EXPECT_EQ(estimators.For(blur, crop)[0].get(), first);
+  EXPECT_EQ((*estimators.For(blur, crop))[0].get(), first);
   EXPECT_EQ(estimators.NumBuilt(), 6);
   estimators.For(grown, crop + 6);
   EXPECT_EQ(estimators.NumBuilt(), 8);
+}
+
+// Estimators a caller holds stay usable after the cache drops them.
+TEST(BlurSearchEstimators, HeldEstimatorsOutliveTheirEviction) {
+  const DPPsfField field =
+      DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  BlurSearchEstimators estimators(field);
+  BlurEstimationOptions blur;
+  blur.max_radius_px = 4;
+  const int crop = 16 + 2 * BlurSearchBorder(field, blur, 4);
+  const auto held = estimators.For(blur, crop);
+  for (int k = 1; k <= BlurSearchEstimators::kMaxGeometries; ++k) {
+    estimators.For(blur, crop + 2 * k);
+  }
+  const int built = estimators.NumBuilt();
+  EXPECT_NE((*estimators.For(blur, crop))[0].get(), (*held)[0].get());
+  EXPECT_EQ(estimators.NumBuilt(), built + 1);  // dropped, so built again
+  ASSERT_EQ(held->size(), 1u);
+  EXPECT_EQ((*held)[0]->PatchSize(), cv::Size(crop, crop));
+  cv::Mat left(crop, crop, CV_32FC1), right(crop, crop, CV_32FC1);
+  cv::randu(left, 0, 1);
+  cv::randu(right, 0, 1);
+  EXPECT_NO_THROW((*held)[0]->Estimate(left, right));
+}
+
+// Every field of the search options is part of the key: each one changed
+// alone builds new estimators (the tables and searches depend on them).
+TEST(BlurSearchEstimators, EachSearchOptionIsPartOfTheKey) {
+  const DPPsfField field =
+      DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
+  BlurSearchEstimators estimators(field);
+  BlurEstimationOptions blur;
+  blur.max_radius_px = 4;
+  const int crop = 16 + 2 * BlurSearchBorder(field, blur, 8);
+  estimators.For(blur, crop);
+  ASSERT_EQ(estimators.NumBuilt(), 1);
+  int expected = 1;
+  test::ForEachFieldChanged(
+      blur, [&](std::size_t i, const BlurEstimationOptions& changed) {
+        estimators.For(changed, crop);
+        EXPECT_EQ(estimators.NumBuilt(), ++expected) << "field " << i;
+        estimators.For(blur, crop);  // still held: the last two are kept
+        EXPECT_EQ(estimators.NumBuilt(), expected) << "field " << i;
+      });
+  EXPECT_EQ(expected,
+            1 + static_cast<int>(FieldCount<BlurEstimationOptions>()));
+  estimators.For(blur, crop + 2);
+  EXPECT_EQ(estimators.NumBuilt(), expected + 1);  // the crop too
 }
 
 }  // namespace

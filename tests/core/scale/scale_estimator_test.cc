@@ -446,12 +446,17 @@ TEST(DPScaleEstimator, AnEarlierEstimateLeavesTheAnswerAsItIs) {
     const DPScaleOptions& options = fit ? self : disk;
     DPScaleEstimator checked(options, std::make_shared<TranslatingDiskPsf>());
     for (int k = 0; k < 4; ++k) checked.AddView(views[k]);
-    const DPScaleResult early = checked.Estimate();
+    EstimateCaches caches;
+    const DPScaleResult early = checked.Estimate(&caches);
     ASSERT_TRUE(early.success) << Why(early);
     EXPECT_EQ(early.intensity_nodes_reused, 0);
     EXPECT_EQ(early.psf_fit_searches_reused, 0);
     for (int k = 4; k < 6; ++k) checked.AddView(views[k]);
-    const DPScaleResult later = checked.Estimate();
+    // Without the run's caches, nothing is read.
+    const DPScaleResult uncached = checked.Estimate();
+    EXPECT_EQ(uncached.intensity_nodes_reused, 0);
+    EXPECT_EQ(uncached.psf_fit_searches_reused, 0);
+    const DPScaleResult later = checked.Estimate(&caches);
     const DPScaleResult alone = RunPipeline(views, options).result;
     ASSERT_TRUE(later.success && alone.success) << Why(later) << Why(alone);
     EXPECT_TRUE(later.intensity_used) << later.intensity_status;

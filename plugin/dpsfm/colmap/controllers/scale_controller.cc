@@ -74,6 +74,8 @@ ScaleRun DPScaleController::Run() {
   ScaleRun run;
   const int num_views = static_cast<int>(reader_->NumViews());
   ViewBudget budget(budget_, num_views);
+  // The checkpoints' searches, read again by the next estimate.
+  EstimateCaches caches;
   run.planned = budget.Planned();
   const std::vector<int> order = VisitingOrder();
   colmap::Timer views_timer;
@@ -148,7 +150,7 @@ ScaleRun DPScaleController::Run() {
     if (budget.IsCheckpoint(k + 1)) {
       colmap::Timer check_timer;
       check_timer.Start();
-      const DPScaleResult provisional = estimator_->Estimate();
+      const DPScaleResult provisional = estimator_->Estimate(&caches);
       Checkpoint checkpoint;
       checkpoint.views = k + 1;
       checkpoint.success = provisional.success;
@@ -197,7 +199,7 @@ ScaleRun DPScaleController::Run() {
   LOG_HEADING2("Scale estimation");
   if (run.checkpoints.empty() ||
       run.checkpoints.back().views != static_cast<int>(run.visited.size())) {
-    run.result = estimator_->Estimate();
+    run.result = estimator_->Estimate(&caches);
   } else {
     LOG(INFO) << "  the estimate of the last checkpoint (" << run.visited.size()
               << " views)";
@@ -477,8 +479,7 @@ void LogResult(const DPScaleResult& result) {
   const SearchBoundAccount& bound = result.search_bound;
   if (bound.views_grown > 0) {
     LOG(INFO) << "Blur-search bound grown from " << bound.initial_max_radius_px
-              << " to " << bound.max_radius_px << " px in "
-              << bound.views_grown
+              << " to " << bound.max_radius_px << " px in " << bound.views_grown
               << " view(s) whose blur reached it";
   }
   const std::string psf_status = PsfStatusText(result);
@@ -665,10 +666,10 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   for (const ViewSource& source : sources) {
     const colmap::Camera& camera = reader.reconstruction().Camera(
         reader.reconstruction().Image(source.image_id).CameraId());
-    check_views.push_back({source.image_name,
-                           &source.lens,
-                           static_cast<int>(std::max(camera.width,
-                                                     camera.height))});
+    check_views.push_back(
+        {source.image_name,
+         &source.lens,
+         static_cast<int>(std::max(camera.width, camera.height))});
   }
   CheckViewsAgainstProfile(psf, check_views, options.profile_applies);
   psf.ApplyTo(&core_options);

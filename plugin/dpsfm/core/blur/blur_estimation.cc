@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <tuple>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -260,24 +259,6 @@ bool BlurEstimationOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(std::isfinite(min_evidence_z) && min_evidence_z >= 0,
                            min_evidence_z);
   return true;
-}
-
-bool operator==(const BlurEstimationOptions& a,
-                const BlurEstimationOptions& b) {
-  auto fields = [](const BlurEstimationOptions& o) {
-    return std::tie(o.max_radius_px,
-                    o.grid_step_px,
-                    o.coarse_step_px,
-                    o.coarse_band,
-                    o.normalize_gain,
-                    o.subtract_noise_floor,
-                    o.min_texture,
-                    o.min_fit_quality,
-                    o.fit_quality_offset_px,
-                    o.max_refinement_evaluations,
-                    o.min_evidence_z);
-  };
-  return fields(a) == fields(b);
 }
 
 PatchBlurEstimate PatchBlurEstimator::Estimate(const cv::Mat& left,

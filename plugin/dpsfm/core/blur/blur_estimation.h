@@ -19,7 +19,8 @@
 //   residual is linear in r inside a grid interval and the loss quadratic, so
 //   each interval's minimum is closed-form. A handful of inverse FFTs walk
 //   from the coarse minimum downhill; the result resolves r far below 0.1 px.
-// - Noise bias (docs/method.md, "Blur search"): with i.i.d. noise of std sigma on both
+// - Noise bias (docs/method.md, "Blur search"): with i.i.d. noise of std sigma
+// on both
 //   views the loss gains sigma^2 (|H_l|^2 + |H_r|^2), largest for the
 //   sharpest kernels, so noise makes small blurs read large and in-focus
 //   patches read ~0.5-0.7 px. The estimator subtracts that expected floor with
@@ -128,9 +129,6 @@ struct BlurEstimationOptions {
 
   bool Check(std::string* failure = nullptr) const;
 };
-
-// Every field equal: the same search (a field added above belongs here too).
-bool operator==(const BlurEstimationOptions& a, const BlurEstimationOptions& b);
 
 struct PatchBlurEstimate {
   // True if radius_px is a usable estimate; otherwise reject_reason says why.

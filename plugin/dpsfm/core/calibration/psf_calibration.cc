@@ -14,6 +14,7 @@
 
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
+#include "dpsfm/core/util/fields.h"
 #include "dpsfm/core/util/matrices.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
@@ -24,22 +25,18 @@ struct ProfileSearchCache::Impl {
   // A crop's searches: per profile key (ProfileSearches), the radius (NaN:
   // no estimate) and relative residual.
   struct Crop {
-    cv::Mat left, right;  // the pixels it is known by (or its origin)
+    cv::Mat left, right;  // the pixels it is known by
     std::map<double, std::pair<double, double>> by_key;
     int reused = 0, run = 0;  // in the current calibration
   };
   bool has_options = false;
   BlurEstimationOptions blur;  // the options every held search used
-  std::unordered_multimap<uint64_t, Crop> crops;  // by PixelHash
-  std::map<const uchar*, Crop> by_origin;         // ProfilePatch::origin's data
+  std::unordered_multimap<uint64_t, Crop> crops;  // by HashBytes
 
-  // Starts a calibration with `blur`: what other options searched is
-  // dropped.
+  // Starts a calibration with `blur`: searches under other options (any
+  // field: SameFields) are dropped.
   void Begin(const BlurEstimationOptions& options) {
-    if (!has_options || !(blur == options)) {
-      crops.clear();
-      by_origin.clear();
-    }
+    if (!has_options || !SameFields(blur, options)) crops.clear();
     blur = options;
     has_options = true;
   }
@@ -52,21 +49,6 @@ struct ProfileSearchCache::Impl {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// FNV-1a over the rows of both crops.
-uint64_t PixelHash(const cv::Mat& left, const cv::Mat& right) {
-  uint64_t hash = 1469598103934665603ull;
-  for (const cv::Mat* m : {&left, &right}) {
-    const size_t row_bytes = m->cols * m->elemSize();
-    for (int y = 0; y < m->rows; ++y) {
-      const uchar* p = m->ptr(y);
-      for (size_t i = 0; i < row_bytes; ++i) {
-        hash = (hash ^ p[i]) * 1099511628211ull;
-      }
-    }
-  }
-  return hash;
-}
 
 // Per-patch outcome of the blur search under one profile.
 struct Evaluation {
@@ -211,7 +193,7 @@ class ProfileSearches {
   std::vector<PreparedBlurPatch> prepared_;
   std::vector<bool> is_prepared_;
   std::vector<ProfileSearchCache::Impl::Crop*> records_;  // null: no cache
-  std::map<double, std::vector<Outcome>> outcomes_;  // by key
+  std::map<double, std::vector<Outcome>> outcomes_;       // by key
 };
 
 // 0, 1, ..., n - 1.
@@ -724,12 +706,7 @@ SplitProfileFit FitProfile(ProfileSearches* searches,
 
 ProfileSearchCache::Impl::Crop* ProfileSearchCache::Impl::Find(
     const ProfilePatch& patch) {
-  if (!patch.origin.empty()) {
-    Crop& crop = by_origin[patch.origin.data];
-    if (crop.left.empty()) crop.left = patch.origin;  // held: never reused
-    return &crop;
-  }
-  const uint64_t hash = PixelHash(patch.left, patch.right);
+  const uint64_t hash = HashBytes(patch.right, HashBytes(patch.left));
   const auto range = crops.equal_range(hash);
   for (auto it = range.first; it != range.second; ++it) {
     if (SameBytes(it->second.left, patch.left) &&
@@ -748,16 +725,13 @@ void ProfileSearchCache::Impl::KeepOnly(const std::vector<Crop*>& used) {
   for (auto it = crops.begin(); it != crops.end();) {
     it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
   }
-  for (auto it = by_origin.begin(); it != by_origin.end();) {
-    it = keep.count(&it->second) > 0 ? std::next(it) : by_origin.erase(it);
-  }
 }
 
 ProfileSearchCache::ProfileSearchCache() : impl_(new Impl) {}
 ProfileSearchCache::~ProfileSearchCache() = default;
 
 int ProfileSearchCache::NumCrops() const {
-  return static_cast<int>(impl_->crops.size() + impl_->by_origin.size());
+  return static_cast<int>(impl_->crops.size());
 }
 
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,

@@ -52,11 +52,6 @@ struct ProfilePatch {
   // 1 (right edge): profiles change across the frame.
   double x_fraction = 0.5;
   double y_fraction = 0.5;  // vertical, 0 (top) to 1 (bottom)
-  // The crop these were made from (e.g. a stored colour crop), when the
-  // caller keeps it unchanged across calibrations: ProfileSearchCache then
-  // knows the patch by it instead of holding a copy of the pixels. Empty:
-  // known by the pixels.
-  cv::Mat origin;
 };
 
 struct SplitProfileFitOptions {
@@ -177,11 +172,11 @@ struct SplitProfileCalibration {
 // The blur searches of one CalibrateSplitProfile kept for the next (the
 // view budget's checkpoints fit the profile again to the stored crops of
 // the views they share): per crop, known by its pixels, and per profile,
-// the estimate's radius and residual (a crop with an origin is known by
-// the origin's buffer, held). A search depends on nothing but the
-// crop, the profile and the blur options, so a later calibration with the
-// same options reads it where it would search and fits the same, to the
-// bit. Holds what the last calibration used; one calibration at a time.
+// the estimate's radius and residual. A search depends on nothing but the
+// crop's pixels (compared byte for byte), the profile and the blur options
+// (every field), so a later calibration with the same options reads it
+// where it would search and fits the same, to the bit. Holds what the last
+// calibration used; one calibration at a time.
 class ProfileSearchCache {
  public:
   ProfileSearchCache();

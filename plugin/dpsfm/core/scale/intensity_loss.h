@@ -5,9 +5,10 @@
 // entry points are in intensity_search.h.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <memory>
-#include <tuple>
+#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -68,7 +69,11 @@ struct Prepared {
 
 // A crop's statistics on one grid, kept across searches.
 struct CachedCrop {
-  cv::Mat left, right;  // the crop's buffers, alive while known by them
+  // What it is known by: the crop's pixels, border and grid (held by the
+  // cache, one per distinct set of kernels).
+  cv::Mat left, right;
+  int border = 0;
+  const DPKernelGrid* grid = nullptr;
   std::vector<double> noise_sigma;  // EstimatePairNoiseSigma (empty: not yet)
   std::map<int, Prepared::NodeEntry> nodes;  // cross terms where has_next
   int reused = 0, computed = 0;              // nodes, in the current search
@@ -77,16 +82,15 @@ struct CachedCrop {
 }  // namespace intensity
 
 struct IntensityStatsCache::Impl {
-  // A crop on a grid: its two buffers, size, border and the grid.
-  using CropKey = std::
-      tuple<const uchar*, const uchar*, int, int, int, const DPKernelGrid*>;
   std::vector<std::unique_ptr<DPKernelGrid>> grids;
-  std::map<CropKey, intensity::CachedCrop> crops;
+  // By HashBytes of both crops; the record's own fields decide.
+  std::unordered_multimap<uint64_t, intensity::CachedCrop> crops;
 
   // The cached grid whose kernels equal *grid's (then *grid is dropped),
   // else *grid, now held here.
   const DPKernelGrid* Share(std::unique_ptr<DPKernelGrid>* grid);
-  // The record of a crop on a grid (created empty).
+  // The record of a crop (the same pixels, border and grid) on a grid
+  // (created empty, holding the crop).
   intensity::CachedCrop* Crop(const cv::Mat& left,
                               const cv::Mat& right,
                               int border,

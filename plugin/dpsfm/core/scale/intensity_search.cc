@@ -96,12 +96,21 @@ intensity::CachedCrop* IntensityStatsCache::Impl::Crop(
     const cv::Mat& right,
     int border,
     const DPKernelGrid* grid) {
-  const CropKey key(left.data, right.data, left.cols, left.rows, border, grid);
-  intensity::CachedCrop& record = crops[key];
-  if (record.left.empty()) {
-    record.left = left;
-    record.right = right;
+  const uint64_t hash = HashBytes(right, HashBytes(left));
+  const auto range = crops.equal_range(hash);
+  for (auto it = range.first; it != range.second; ++it) {
+    const intensity::CachedCrop& held = it->second;
+    if (held.border == border && held.grid == grid &&
+        SameBytes(held.left, left) && SameBytes(held.right, right)) {
+      return &it->second;
+    }
   }
+  intensity::CachedCrop& record =
+      crops.emplace(hash, intensity::CachedCrop())->second;
+  record.left = left;
+  record.right = right;
+  record.border = border;
+  record.grid = grid;
   return &record;
 }
 

@@ -155,10 +155,10 @@ std::vector<double> EstimatePairNoiseSigma(const cv::Mat& left,
 // share again): each crop's noise estimate and kernel-grid node statistics,
 // with the grids they were taken on. A statistic depends on nothing but the
 // crop and its grid's kernels, so a later search takes it where it would
-// compute it and answers the same, to the bit. Crops are known by their
-// pixel buffers (kept alive here); a grid is reused only where its kernels
-// equal the new search's. Holds what the last search used; one search at a
-// time.
+// compute it and answers the same, to the bit. A crop is known by its
+// pixels (compared byte for byte), its border and its grid; a grid is
+// reused only where its kernels equal the new search's. Holds what the last
+// search used; one search at a time.
 class IntensityStatsCache {
  public:
   IntensityStatsCache();

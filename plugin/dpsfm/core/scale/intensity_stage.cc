@@ -88,6 +88,7 @@ void DPScaleEstimator::IntensityStage(
     const std::vector<std::vector<PatchSample>>& samples,
     const DPPsfField& field,
     const IntervalTerms& terms,
+    IntensityStatsCache* cache,
     DPScaleResult* result) const {
   const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
   const bool banded = field.cells.size() > 1;
@@ -143,7 +144,7 @@ void DPScaleEstimator::IntensityStage(
     IntensitySearchResult intensity;
     try {
       intensity = SearchScaleByIntensity(
-          iviews, ipatches, linear.scale, *psf, search, &intensity_cache_);
+          iviews, ipatches, linear.scale, *psf, search, cache);
     } catch (const CheckFailure& e) {
       intensity.success = false;
       intensity.failure_reason = e.what();

@@ -13,8 +13,8 @@
 #include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/scale_estimator.h"
 #include "dpsfm/core/scale/scale_estimator_data.h"
-#include "dpsfm/core/util/threads.h"
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/threads.h"
 
 namespace dpsfm {
 namespace {
@@ -107,7 +107,6 @@ std::vector<ProfilePatch> DPScaleEstimator::ProfileFitPatches(
     ProfilePatch patch;
     patch.left = GreyOfStoredCrop(st.left);
     patch.right = GreyOfStoredCrop(st.right);
-    patch.origin = st.left;  // the view keeps it (the profile fit's cache)
     const ViewData& v = *views_[flat[k].view];
     patch.x_fraction =
         (v.samples[st.sample].x + 0.5) / v.summary.frame_size.width;
@@ -158,8 +157,8 @@ int DPScaleEstimator::ReestimateStoredPatches(
         refused[k] = 1;
       }
     });
-    reestimated += static_cast<int>(
-        std::count(redone.begin(), redone.end(), 1));
+    reestimated +=
+        static_cast<int>(std::count(redone.begin(), redone.end(), 1));
     failed += static_cast<int>(std::count(refused.begin(), refused.end(), 1));
   }
   *failures = failed;
@@ -169,6 +168,7 @@ int DPScaleEstimator::ReestimateStoredPatches(
 void DPScaleEstimator::CalibrateProfile(
     std::vector<std::vector<PatchSample>>* samples,
     DPPsfField* field,
+    ProfileSearchCache* cache,
     DPScaleResult* result) const {
   // FitSplitProfile takes one geometry (crop size, radius bound); the
   // largest group of stored crops feeds it.
@@ -202,7 +202,7 @@ void DPScaleEstimator::CalibrateProfile(
                                         fit_options,
                                         0.02,
                                         /*bands_when_frame_fits=*/false,
-                                        &profile_cache_);
+                                        cache);
   } catch (const CheckFailure& e) {
     calibration.summary = e.what();  // said in the status below
   }

@@ -182,15 +182,14 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
       const std::vector<char> share = GrowthSample(search);
       search_patches(&share);
       if (search.num_searched > 0) {
-        grown = EarlyGrownSearchBound(
-            search.num_searched,
-            PatchesAtSearchBound(search),
-            summary.search_bound_growths,
-            geometry,
-            working.left.size(),
-            field_,
-            blur,
-            options_);
+        grown = EarlyGrownSearchBound(search.num_searched,
+                                      PatchesAtSearchBound(search),
+                                      summary.search_bound_growths,
+                                      geometry,
+                                      working.left.size(),
+                                      field_,
+                                      blur,
+                                      options_);
       }
     }
     if (!(grown > 0)) {
@@ -277,7 +276,8 @@ bool DPScaleEstimator::LinearStage(
     linear_views[i].lens = v.lens;
     linear_views[i].pixel_pitch_mm = v.working_pitch_mm;
     for (const PatchSample& s : samples[i]) {
-      if (s.selected) linear_views[i].samples.push_back(
+      if (s.selected)
+        linear_views[i].samples.push_back(
             {s.depth, s.radius_px, s.radius_se_px});
     }
   }
@@ -432,9 +432,8 @@ void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
   } else {
     // A measured profile extended beyond the blur it covered
     // (AccountForSearchBound) is less certain there.
-    const double u =
-        std::hypot(options_.profile_relative_uncertainty,
-                   result->search_bound.extrapolation_uncertainty);
+    const double u = std::hypot(options_.profile_relative_uncertainty,
+                                result->search_bound.extrapolation_uncertainty);
     result->profile_scale_factor_low = 1 - u;
     result->profile_scale_factor_high = 1 + u;
   }
@@ -526,7 +525,7 @@ void DPScaleEstimator::PredictUnderFinalScale(DPScaleResult* result) const {
   }
 }
 
-DPScaleResult DPScaleEstimator::Estimate() const {
+DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
   DPScaleResult result;
   const int num_views = static_cast<int>(views_.size());
   for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
@@ -544,7 +543,10 @@ DPScaleResult DPScaleEstimator::Estimate() const {
   if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff &&
       field_.cells.size() == 1) {
     const auto fit_start = std::chrono::steady_clock::now();
-    CalibrateProfile(&samples, &field, &result);
+    CalibrateProfile(&samples,
+                     &field,
+                     caches != nullptr ? &caches->profile : nullptr,
+                     &result);
     result.psf_fit_ran = true;
     result.seconds_psf_fit = SecondsSince(fit_start);
   }
@@ -637,7 +639,12 @@ DPScaleResult DPScaleEstimator::Estimate() const {
 
   // --- Intensity stage on the selected views and their stored patches. ---
   const auto start_intensity = std::chrono::steady_clock::now();
-  IntensityStage(linear, samples, field, terms, &result);
+  IntensityStage(linear,
+                 samples,
+                 field,
+                 terms,
+                 caches != nullptr ? &caches->intensity : nullptr,
+                 &result);
   result.seconds_intensity = SecondsSince(start_intensity);
   if (!result.scale_from_cues &&
       !JoinRecordedFocus(linear, use_focus, &result)) {

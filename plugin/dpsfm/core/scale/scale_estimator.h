@@ -291,8 +291,8 @@ struct DPViewSummary {
   int search_bound_growths = 0;
   int patches_beyond_bound = 0;
   int patches_undetermined = 0;
-  int patches_valid = 0;     // usable blur estimates
-  int patches_kept = 0;      // top-T_c
+  int patches_valid = 0;  // usable blur estimates
+  int patches_kept = 0;   // top-T_c
   double seconds = 0;
   // Patch rejection counts by reason (e.g. {"without depth", 12}).
   std::vector<std::pair<std::string, int>> rejections;
@@ -455,6 +455,17 @@ struct DPScaleResult {
   SearchBoundAccount search_bound;
 };
 
+// What one run's estimates keep for the next: the view budget's checkpoints
+// estimate again over the views they share, and read here the searches an
+// earlier estimate made instead of repeating them (the same answers, to the
+// bit: each cache's key holds everything its values depend on;
+// intensity_search.h, psf_calibration.h). Owned by the run; one estimate at
+// a time.
+struct EstimateCaches {
+  IntensityStatsCache intensity;  // the intensity stage's crop statistics
+  ProfileSearchCache profile;     // the profile fit's patch searches
+};
+
 class DPScaleEstimator {
  public:
   DPScaleEstimator(const DPScaleOptions& options,
@@ -494,8 +505,10 @@ class DPScaleEstimator {
 
   // Linear stage (per-view solves, view selection, joint solve) then the
   // intensity stage. Never throws for bad data: success = false with a reason
-  // a user understands.
-  DPScaleResult Estimate() const;
+  // a user understands. `caches` (optional, the run's): the searches an
+  // earlier estimate over some of the same views made, read where this one
+  // would repeat them, and this one's kept for the next.
+  DPScaleResult Estimate(EstimateCaches* caches = nullptr) const;
 
  private:
   struct ViewData;
@@ -554,6 +567,7 @@ class DPScaleEstimator {
                       const std::vector<std::vector<PatchSample>>& samples,
                       const DPPsfField& field,
                       const IntervalTerms& terms,
+                      IntensityStatsCache* cache,
                       DPScaleResult* result) const;
   // Self-calibration (profile_self_calibration.cc): fits the split profile
   // to the stored patches and, if it replaces the given PSF, re-estimates
@@ -561,6 +575,7 @@ class DPScaleEstimator {
   // sets *field.
   void CalibrateProfile(std::vector<std::vector<PatchSample>>* samples,
                         DPPsfField* field,
+                        ProfileSearchCache* cache,
                         DPScaleResult* result) const;
   // SelfCalibration::kCheck: what the fit says of the given translating
   // disk (agrees, cannot tell, or rejects it: psf_rejected).
@@ -617,12 +632,6 @@ class DPScaleEstimator {
   std::vector<std::unique_ptr<ViewData>> views_;
   // The blur search's tables, kept across views (view_patches.h).
   std::unique_ptr<BlurSearchEstimators> blur_estimators_;
-  // The intensity stage's statistics of the stored crops, kept from one
-  // Estimate to the next (the view budget's checkpoints; the same answers,
-  // intensity_search.h). Estimate is not called concurrently.
-  mutable IntensityStatsCache intensity_cache_;
-  // The profile fit's patch searches, likewise (psf_calibration.h).
-  mutable ProfileSearchCache profile_cache_;
 };
 
 }  // namespace dpsfm

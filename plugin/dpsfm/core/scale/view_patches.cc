@@ -10,6 +10,7 @@
 
 #include "dpsfm/core/optics/kernel_grid.h"
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/fields.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -151,27 +152,27 @@ BlurSearchEstimators::BlurSearchEstimators(const DPPsfField& field,
                                            int num_threads)
     : field_(field), num_threads_(num_threads) {}
 
-const BlurSearchEstimators::Estimators& BlurSearchEstimators::For(
-    const BlurEstimationOptions& blur, int crop) {
-  const std::pair<int, double> key(crop, blur.max_radius_px);
-  auto it = std::find_if(geometries_.begin(),
-                         geometries_.end(),
-                         [&](const auto& g) { return g.first == key; });
+std::shared_ptr<const BlurSearchEstimators::Estimators>
+BlurSearchEstimators::For(const BlurEstimationOptions& blur, int crop) {
+  auto it = std::find_if(
+      geometries_.begin(), geometries_.end(), [&](const Geometry& g) {
+        return g.crop == crop && SameFields(g.blur, blur);
+      });
   if (it != geometries_.end()) {
     std::rotate(it, it + 1, geometries_.end());  // most recently used last
-    return *geometries_.back().second;
+    return geometries_.back().estimators;
   }
   if (static_cast<int>(geometries_.size()) >= kMaxGeometries) {
     geometries_.erase(geometries_.begin());
   }
-  std::unique_ptr<Estimators> estimators(new Estimators);
+  auto estimators = std::make_shared<Estimators>();
   for (const auto& psf : field_.cells) {
     estimators->emplace_back(
         new PatchBlurEstimator(*psf, blur, cv::Size(crop, crop), num_threads_));
     ++num_built_;
   }
-  geometries_.emplace_back(key, std::move(estimators));
-  return *geometries_.back().second;
+  geometries_.push_back({crop, blur, estimators});
+  return estimators;
 }
 
 ViewBlurSearch ChooseViewSearch(const WorkingView& working,
@@ -220,8 +221,9 @@ void SearchChosenPatches(const WorkingView& working,
     }
   }
   if (todo.empty()) return;
-  const BlurSearchEstimators::Estimators& estimators =
+  const std::shared_ptr<const BlurSearchEstimators::Estimators> held =
       cache->For(blur, patch_size + 2 * border);
+  const BlurSearchEstimators::Estimators& estimators = *held;
   DPSFM_INVARIANT(estimators.size() == field.cells.size());
   for (const auto& estimator : estimators) {
     DPSFM_INVARIANT(estimator->Border() <= border);

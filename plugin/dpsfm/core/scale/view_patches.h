@@ -94,9 +94,10 @@ struct ViewBlurSearch {
 // their kernel tables cost tens of ms for the translating disk and up to a
 // second for a measured kernel pair at a large bound, a measured field has
 // one per cell, and the views of a project search crops of one size at one
-// or two bounds (the first and the grown one). The least recently used
-// geometry beyond the last kMaxGeometries is dropped (each holds a cell's
-// tables: a few MB, tens for a large bound).
+// or two bounds (the first and the grown one). Known by the crop's side and
+// every field of the search options (SameFields); the least recently used
+// beyond the last kMaxGeometries is dropped (each holds a cell's tables: a
+// few MB, tens for a large bound), and lives on while a caller holds it.
 class BlurSearchEstimators {
  public:
   using Estimators = std::vector<std::unique_ptr<PatchBlurEstimator>>;
@@ -106,20 +107,23 @@ class BlurSearchEstimators {
   // (-1: all).
   explicit BlurSearchEstimators(const DPPsfField& field, int num_threads = 1);
 
-  // The field's estimators for square crops of side `crop` with the search
-  // options `blur`. The key is (crop, blur.max_radius_px): the other options
-  // must be the same on every call.
-  const Estimators& For(const BlurEstimationOptions& blur, int crop);
+  // The field's estimators for square crops of side `crop` searched with
+  // `blur`.
+  std::shared_ptr<const Estimators> For(const BlurEstimationOptions& blur,
+                                        int crop);
 
   // Tables built so far (for tests: views of one geometry build them once).
   int NumBuilt() const { return num_built_; }
 
  private:
+  struct Geometry {
+    int crop;
+    BlurEstimationOptions blur;
+    std::shared_ptr<const Estimators> estimators;
+  };
   const DPPsfField& field_;
   const int num_threads_;
-  // (crop, bound) -> the estimators; most recently used last.
-  std::vector<std::pair<std::pair<int, double>, std::unique_ptr<Estimators>>>
-      geometries_;
+  std::vector<Geometry> geometries_;  // most recently used last
   int num_built_ = 0;
 };
 

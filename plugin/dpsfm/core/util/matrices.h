@@ -1,7 +1,10 @@
 // Matrix helpers the core shares.
 #pragma once
 
+#include <cstdint>
 #include <cstring>
+#include <functional>
+#include <string_view>
 
 #include <opencv2/core.hpp>
 
@@ -16,6 +19,22 @@ inline bool SameBytes(const cv::Mat& a, const cv::Mat& b) {
     if (std::memcmp(a.ptr(y), b.ptr(y), row_bytes) != 0) return false;
   }
   return true;
+}
+
+// A hash of size, type and bytes (equal for SameBytes matrices): where a
+// cache keyed by a matrix's contents looks first, before SameBytes.
+inline uint64_t HashBytes(const cv::Mat& m, uint64_t seed = 0) {
+  const std::hash<std::string_view> hash;
+  uint64_t h = seed ^ (static_cast<uint64_t>(m.type()) << 48) ^
+               (static_cast<uint64_t>(m.rows) << 24) ^
+               static_cast<uint64_t>(m.cols);
+  const size_t row_bytes = m.cols * m.elemSize();
+  for (int y = 0; y < m.rows; ++y) {
+    const std::string_view row(reinterpret_cast<const char*>(m.ptr(y)),
+                               row_bytes);
+    h = (h ^ hash(row)) * 1099511628211ull;  // FNV-1a's prime
+  }
+  return h;
 }
 
 }  // namespace dpsfm
