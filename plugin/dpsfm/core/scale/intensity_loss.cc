@@ -409,76 +409,141 @@ void CacheNodes(const std::vector<int>& nodes,
   }
 }
 
+// The nodes of the intervals whose statistics, or cross terms with the
+// next node, p lacks (both ends of each such interval), sorted.
+std::vector<int> NodesToAdd(const std::vector<int>& intervals,
+                            const Prepared& p) {
+  std::vector<int> nodes;
+  for (const int n : intervals) {
+    const auto it = p.stats.find(n);
+    if (it == p.stats.end() || !it->second.has_next) {
+      nodes.push_back(n);
+      nodes.push_back(n + 1);
+    }
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return nodes;
+}
+
+// A view blurred at a node: the mean-removed part on the interior, its
+// sum, and the constant the mean contributes.
+struct BlurredView {
+  cv::Mat image;
+  double sum = 0, constant = 0;
+};
+
+// The arithmetic of the nodes' statistics from a patch's crops (the
+// cross-blurred views A = G_l * H_r(r_n), B = G_r * H_l(r_n) by the grid's
+// spectra): the channels mean-removed once (the means come back as
+// constants), their spectra per class when a node first needs them, and
+// the last node's blurred views for the cross terms with the next.
+class NodeStatistics {
+ public:
+  NodeStatistics(const IntensityPatch& patch, const Prepared& p)
+      : grid_(*p.grid),
+        border_(p.border),
+        count_(p.num_interior),
+        spec_left_(grid_.NumSpectrumClasses()),
+        spec_right_(grid_.NumSpectrumClasses()) {
+    cv::split(ToFloat(patch.left), left_);
+    cv::split(ToFloat(patch.right), right_);
+    for (size_t c = 0; c < left_.size(); ++c) {
+      mean_left_.push_back(SumD(left_[c]) / left_[c].total());
+      mean_right_.push_back(SumD(right_[c]) / right_[c].total());
+      left_[c] -= mean_left_[c];
+      right_[c] -= mean_right_[c];
+    }
+    previous_a_.resize(left_.size());
+    previous_b_.resize(left_.size());
+  }
+
+  int Channels() const { return static_cast<int>(left_.size()); }
+
+  // Node n's own statistics into *entry and, when `before` is given (node
+  // n - 1, computed by the previous call), the cross terms with it.
+  void Compute(int n, Prepared::NodeEntry* entry, Prepared::NodeEntry* before) {
+    const int k = grid_.SpectrumClassOf(n);
+    Transform(k);
+    for (int c = 0; c < Channels(); ++c) {
+      BlurredView a, b;
+      a.image = Blurred(spec_left_[k][c], grid_.RightSpectrum(n), k);
+      b.image = Blurred(spec_right_[k][c], grid_.LeftSpectrum(n), k);
+      const NodeMoments m =
+          MomentsOf(a.image,
+                    b.image,
+                    before != nullptr ? previous_a_[c].image : cv::Mat(),
+                    before != nullptr ? previous_b_[c].image : cv::Mat());
+      a.sum = m.sum_a;
+      b.sum = m.sum_b;
+      a.constant = mean_left_[c] * grid_.RightSum(n);
+      b.constant = mean_right_[c] * grid_.LeftSum(n);
+      NodeChannelStats& s = entry->channel[c];
+      s.sum_a = a.sum + count_ * a.constant;
+      s.sum_b = b.sum + count_ * b.constant;
+      s.aa = Inner(m.aa, a, a);
+      s.bb = Inner(m.bb, b, b);
+      s.ab = Inner(m.ab, a, b);
+      if (before != nullptr) {
+        NodeChannelStats& prev = before->channel[c];
+        prev.aa_next = Inner(m.pa_a, previous_a_[c], a);
+        prev.bb_next = Inner(m.pb_b, previous_b_[c], b);
+        prev.ab_next = Inner(m.pa_b, previous_a_[c], b);
+        prev.ba_next = Inner(m.pb_a, previous_b_[c], a);
+      }
+      previous_a_[c] = a;
+      previous_b_[c] = b;
+    }
+    if (before != nullptr) before->has_next = true;
+  }
+
+ private:
+  // The views' spectra of class k, per channel.
+  void Transform(int k) {
+    if (!spec_left_[k].empty()) return;
+    for (int c = 0; c < Channels(); ++c) {
+      spec_left_[k].push_back(grid_.TransformInput(left_[c], border_, k));
+      spec_right_[k].push_back(grid_.TransformInput(right_[c], border_, k));
+    }
+  }
+  // The interior of a view's spectrum times a kernel's, back in space.
+  cv::Mat Blurred(const cv::Mat& view_spectrum,
+                  const cv::Mat& kernel_spectrum,
+                  int k) {
+    SpectraProduct(view_spectrum, kernel_spectrum, &product_);
+    return grid_.InteriorOfInverse(k, &product_, &image_).clone();
+  }
+  // <x + cx, y + cy> from <x, y> = xy, the sums of x and y and the
+  // constants.
+  double Inner(double xy, const BlurredView& x, const BlurredView& y) const {
+    return xy + x.constant * y.sum + y.constant * x.sum +
+           count_ * x.constant * y.constant;
+  }
+
+  const DPKernelGrid& grid_;
+  const int border_;
+  const double count_;
+  std::vector<cv::Mat> left_, right_;  // mean removed
+  std::vector<double> mean_left_, mean_right_;
+  std::vector<std::vector<cv::Mat>> spec_left_, spec_right_;  // per class
+  std::vector<BlurredView> previous_a_, previous_b_;
+  cv::Mat product_, image_;
+};
+
 }  // namespace
 
 void AddIntervals(const IntensityPatch& patch,
                   const std::vector<int>& intervals,
                   Prepared* p) {
-  std::vector<int> nodes;
-  for (const int n : intervals) {
-    const auto it = p->stats.find(n);
-    if (it == p->stats.end() || !it->second.has_next) {
-      nodes.push_back(n);
-      nodes.push_back(n + 1);
-    }
-  }
+  const std::vector<int> nodes = NodesToAdd(intervals, *p);
   if (nodes.empty()) return;
-  std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   CachedCrop* cached = p->cached;
   const std::vector<char> compute = NodesToCompute(nodes, cached);
-
-  const DPKernelGrid& grid = *p->grid;
-  std::vector<cv::Mat> left_channels, right_channels;
-  int channels = p->channels;
-  std::vector<double> mean_left, mean_right;
+  std::unique_ptr<NodeStatistics> statistics;
   if (std::find(compute.begin(), compute.end(), 1) != compute.end()) {
-    cv::split(ToFloat(patch.left), left_channels);
-    cv::split(ToFloat(patch.right), right_channels);
-    channels = static_cast<int>(left_channels.size());
-    mean_left.resize(channels);
-    mean_right.resize(channels);
-    for (int c = 0; c < channels; ++c) {
-      mean_left[c] = SumD(left_channels[c]) / left_channels[c].total();
-      mean_right[c] = SumD(right_channels[c]) / right_channels[c].total();
-      left_channels[c] -= mean_left[c];
-      right_channels[c] -= mean_right[c];
-    }
+    statistics.reset(new NodeStatistics(patch, *p));
   }
-  // Per class, the views' spectra per channel, when a node needs them.
-  std::vector<std::vector<cv::Mat>> spec_left(grid.NumSpectrumClasses()),
-      spec_right(grid.NumSpectrumClasses());
-  auto transformed = [&](int c) {
-    if (spec_left[c].empty()) {
-      for (int k = 0; k < channels; ++k) {
-        spec_left[c].push_back(
-            grid.TransformInput(left_channels[k], p->border, c));
-        spec_right[c].push_back(
-            grid.TransformInput(right_channels[k], p->border, c));
-      }
-    }
-  };
-  cv::Mat product, image;
-  // The interior of a view's spectrum times a kernel's, back in space.
-  auto blurred =
-      [&](const cv::Mat& view_spectrum, const cv::Mat& kernel_spectrum, int c) {
-        SpectraProduct(view_spectrum, kernel_spectrum, &product);
-        return cv::Mat(grid.InteriorOfInverse(c, &product, &image).clone());
-      };
-  // A view blurred at a node: the mean-removed part on the interior, its
-  // sum, and the constant the mean contributes.
-  struct BlurredView {
-    cv::Mat image;
-    double sum = 0, constant = 0;
-  };
-  const double count = p->num_interior;
-  // <x + cx, y + cy> from <x, y> = xy, the sums of x and y and the
-  // constants.
-  auto inner = [count](double xy, const BlurredView& x, const BlurredView& y) {
-    return xy + x.constant * y.sum + y.constant * x.sum +
-           count * x.constant * y.constant;
-  };
-  std::vector<BlurredView> previous_a(channels), previous_b(channels);
+  const int channels = statistics ? statistics->Channels() : p->channels;
   for (size_t i = 0; i < nodes.size(); ++i) {
     const int n = nodes[i];
     Prepared::NodeEntry& entry = p->stats[n];
@@ -508,39 +573,7 @@ void AddIntervals(const IntensityPatch& patch,
       continue;
     }
     if (cached != nullptr) ++cached->computed;
-    const bool with_previous = before != nullptr && !cached_pair;
-    const int k = grid.SpectrumClassOf(n);
-    transformed(k);
-    for (int c = 0; c < channels; ++c) {
-      BlurredView a, b;
-      a.image = blurred(spec_left[k][c], grid.RightSpectrum(n), k);
-      b.image = blurred(spec_right[k][c], grid.LeftSpectrum(n), k);
-      const NodeMoments m =
-          MomentsOf(a.image,
-                    b.image,
-                    with_previous ? previous_a[c].image : cv::Mat(),
-                    with_previous ? previous_b[c].image : cv::Mat());
-      a.sum = m.sum_a;
-      b.sum = m.sum_b;
-      a.constant = mean_left[c] * grid.RightSum(n);
-      b.constant = mean_right[c] * grid.LeftSum(n);
-      NodeChannelStats& s = entry.channel[c];
-      s.sum_a = a.sum + count * a.constant;
-      s.sum_b = b.sum + count * b.constant;
-      s.aa = inner(m.aa, a, a);
-      s.bb = inner(m.bb, b, b);
-      s.ab = inner(m.ab, a, b);
-      if (with_previous) {
-        NodeChannelStats& prev = before->channel[c];
-        prev.aa_next = inner(m.pa_a, previous_a[c], a);
-        prev.bb_next = inner(m.pb_b, previous_b[c], b);
-        prev.ab_next = inner(m.pa_b, previous_a[c], b);
-        prev.ba_next = inner(m.pb_a, previous_b[c], a);
-      }
-      previous_a[c] = a;
-      previous_b[c] = b;
-    }
-    if (with_previous) before->has_next = true;
+    statistics->Compute(n, &entry, cached_pair ? nullptr : before);
   }
   if (cached != nullptr) CacheNodes(nodes, *p, cached);
 }

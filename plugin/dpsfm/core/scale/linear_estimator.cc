@@ -85,98 +85,127 @@ bool LinearFailure::SwappedViewsLikely() const {
          view_rejections[0].second == ViewRejection::kNonPositiveScale;
 }
 
+namespace {
+
+// The system's weighted normal equations in column-scaled unknowns (unit
+// weighted L2 norm per column): each row touches only (v, v), (v, n) and
+// (n, n) of the normal matrix.
+class ScaledNormalEquations {
+ public:
+  ScaledNormalEquations(const DPLinearSystem& system,
+                        const std::vector<double>* row_weights)
+      : system_(system),
+        row_weights_(row_weights),
+        n_(system.num_views),
+        col_norm_(Eigen::VectorXd::Zero(n_ + 1)),
+        normal_(n_ + 1, n_ + 1),
+        rhs_(n_ + 1) {
+    for (int k = 0; k < system.NumRows(); ++k) {
+      const int v = system.row_view[k];
+      DPSFM_CHECK(v >= 0 && v < n_) << "row " << k << " has view " << v;
+      const double w = RowWeight(k);
+      col_norm_[v] += w * system.rows[k].gamma * system.rows[k].gamma;
+      col_norm_[n_] += w * system.rows[k].minus_l * system.rows[k].minus_l;
+    }
+    col_norm_ = col_norm_.cwiseSqrt();
+  }
+
+  // Every column has a finite, positive norm.
+  bool ColumnsUsable() const {
+    return col_norm_.allFinite() && (col_norm_.array() > 0).all();
+  }
+  // The row's precision times the caller's weight.
+  double RowWeight(int k) const {
+    const double precision =
+        system_.row_weight.empty() ? 1.0 : system_.row_weight[k];
+    return precision * (row_weights_ == nullptr ? 1.0 : (*row_weights_)[k]);
+  }
+  // Assembles the equations with `weights` (null: RowWeight).
+  void Assemble(const Eigen::VectorXd* weights) {
+    normal_.setZero();
+    rhs_.setZero();
+    for (int k = 0; k < system_.NumRows(); ++k) {
+      const int v = system_.row_view[k];
+      const double w = weights == nullptr ? RowWeight(k) : (*weights)[k];
+      if (w == 0) continue;
+      const double a0 = system_.rows[k].gamma / col_norm_[v];
+      const double a1 = system_.rows[k].minus_l / col_norm_[n_];
+      const double b = system_.rows[k].rhs;
+      normal_(v, v) += w * a0 * a0;
+      normal_(v, n_) += w * a0 * a1;
+      normal_(n_, n_) += w * a1 * a1;
+      rhs_[v] += w * a0 * b;
+      rhs_[n_] += w * a1 * b;
+    }
+    for (int v = 0; v < n_; ++v) normal_(n_, v) = normal_(v, n_);
+  }
+  // The assembled matrix's reciprocal condition number.
+  double Rcond() const {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(normal_,
+                                                       Eigen::EigenvaluesOnly);
+    const double lmax = eig.eigenvalues().maxCoeff();
+    const double lmin = eig.eigenvalues().minCoeff();
+    return lmax > 0 ? std::max(0.0, lmin / lmax) : 0.0;
+  }
+  // The assembled equations' solution, in scaled unknowns.
+  Eigen::VectorXd Solve() const { return normal_.ldlt().solve(rhs_); }
+  // Each row's residual at the scaled unknowns y.
+  Eigen::VectorXd Residuals(const Eigen::VectorXd& y) const {
+    Eigen::VectorXd r(system_.NumRows());
+    for (int k = 0; k < system_.NumRows(); ++k) {
+      const int v = system_.row_view[k];
+      r[k] = system_.rows[k].gamma / col_norm_[v] * y[v] +
+             system_.rows[k].minus_l / col_norm_[n_] * y[n_] -
+             system_.rows[k].rhs;
+    }
+    return r;
+  }
+  // The unknowns of the unscaled system.
+  Eigen::VectorXd Unscaled(const Eigen::VectorXd& y) const {
+    return y.cwiseQuotient(col_norm_);
+  }
+
+ private:
+  const DPLinearSystem& system_;
+  const std::vector<double>* row_weights_;
+  const int n_;
+  Eigen::VectorXd col_norm_;
+  Eigen::MatrixXd normal_;
+  Eigen::VectorXd rhs_;
+};
+
+}  // namespace
+
 IrlsResult SolveL1Irls(const DPLinearSystem& system,
                        const IrlsOptions& options,
                        const std::vector<double>* row_weights) {
   DPSFM_CHECK_OPTIONS(options, "IrlsOptions");
-  const int n = system.num_views;
-  const int m = n + 1;
   const int num_rows = system.NumRows();
   DPSFM_CHECK_EQ(system.row_view.size(), system.rows.size());
   if (row_weights != nullptr) {
     DPSFM_CHECK_EQ(static_cast<int>(row_weights->size()), num_rows);
   }
   IrlsResult result;
-  if (n <= 0 || num_rows < m) return result;
-
+  if (system.num_views <= 0 || num_rows < system.num_views + 1) return result;
   DPSFM_CHECK(system.row_weight.empty() ||
               static_cast<int>(system.row_weight.size()) == num_rows);
-  auto row_weight = [&](int k) {
-    const double precision =
-        system.row_weight.empty() ? 1.0 : system.row_weight[k];
-    return precision * (row_weights == nullptr ? 1.0 : (*row_weights)[k]);
-  };
-
-  // Column scaling: unit (weighted) L2 norm per column.
-  Eigen::VectorXd col_norm = Eigen::VectorXd::Zero(m);
-  for (int k = 0; k < num_rows; ++k) {
-    const int v = system.row_view[k];
-    DPSFM_CHECK(v >= 0 && v < n) << "row " << k << " has view " << v;
-    const double w = row_weight(k);
-    col_norm[v] += w * system.rows[k].gamma * system.rows[k].gamma;
-    col_norm[n] += w * system.rows[k].minus_l * system.rows[k].minus_l;
-  }
-  for (int c = 0; c < m; ++c) {
-    if (!(col_norm[c] > 0) || !std::isfinite(col_norm[c])) return result;
-    col_norm[c] = std::sqrt(col_norm[c]);
-  }
-
-  // Normal equations of the weighted, column-scaled system; each row touches
-  // only (v, v), (v, n), (n, n).
-  Eigen::MatrixXd normal(m, m);
-  Eigen::VectorXd rhs(m);
-  auto assemble = [&](const Eigen::VectorXd* weights) {
-    normal.setZero();
-    rhs.setZero();
-    for (int k = 0; k < num_rows; ++k) {
-      const int v = system.row_view[k];
-      const double w = weights == nullptr ? row_weight(k) : (*weights)[k];
-      if (w == 0) continue;
-      const double a0 = system.rows[k].gamma / col_norm[v];
-      const double a1 = system.rows[k].minus_l / col_norm[n];
-      const double b = system.rows[k].rhs;
-      normal(v, v) += w * a0 * a0;
-      normal(v, n) += w * a0 * a1;
-      normal(n, n) += w * a1 * a1;
-      rhs[v] += w * a0 * b;
-      rhs[n] += w * a1 * b;
-    }
-    for (int v = 0; v < n; ++v) normal(n, v) = normal(v, n);
-  };
-
-  assemble(nullptr);
-  {
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(normal,
-                                                       Eigen::EigenvaluesOnly);
-    const double lmax = eig.eigenvalues().maxCoeff();
-    const double lmin = eig.eigenvalues().minCoeff();
-    result.rcond = lmax > 0 ? std::max(0.0, lmin / lmax) : 0.0;
-  }
+  ScaledNormalEquations equations(system, row_weights);
+  if (!equations.ColumnsUsable()) return result;
+  equations.Assemble(nullptr);
+  result.rcond = equations.Rcond();
   if (!(result.rcond > 1e-15)) return result;
-
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
-  Eigen::VectorXd y = ldlt.solve(rhs);  // first pass: plain least squares
+  Eigen::VectorXd y = equations.Solve();  // first pass: plain least squares
   if (!y.allFinite()) return result;
-
-  auto residuals_of = [&](const Eigen::VectorXd& ys) {
-    Eigen::VectorXd r(num_rows);
-    for (int k = 0; k < num_rows; ++k) {
-      const int v = system.row_view[k];
-      r[k] = system.rows[k].gamma / col_norm[v] * ys[v] +
-             system.rows[k].minus_l / col_norm[n] * ys[n] - system.rows[k].rhs;
-    }
-    return r;
-  };
 
   Eigen::VectorXd weights(num_rows);
   for (int it = 1; it <= options.max_iterations; ++it) {
-    const Eigen::VectorXd r = residuals_of(y);
+    const Eigen::VectorXd r = equations.Residuals(y);
     for (int k = 0; k < num_rows; ++k) {
-      weights[k] = row_weight(k) / std::max(std::abs(r[k]), options.epsilon);
+      weights[k] =
+          equations.RowWeight(k) / std::max(std::abs(r[k]), options.epsilon);
     }
-    assemble(&weights);
-    ldlt.compute(normal);
-    const Eigen::VectorXd y_new = ldlt.solve(rhs);
+    equations.Assemble(&weights);
+    const Eigen::VectorXd y_new = equations.Solve();
     result.iterations = it;
     if (!y_new.allFinite()) break;  // keep the last finite iterate
     const double step = (y_new - y).norm();
@@ -186,9 +215,8 @@ IrlsResult SolveL1Irls(const DPLinearSystem& system,
       break;
     }
   }
-
-  result.x = y.cwiseQuotient(col_norm);
-  result.residuals = residuals_of(y);
+  result.x = equations.Unscaled(y);
+  result.residuals = equations.Residuals(y);
   result.success = result.x.allFinite();
   return result;
 }

@@ -17,6 +17,7 @@
 #include "dpsfm/core/scale/refusal.h"
 #include "dpsfm/core/scale/scale_estimator_data.h"
 #include "dpsfm/core/scale/view_patches.h"
+#include "dpsfm/core/scale/view_search.h"
 #include "dpsfm/core/util/check.h"
 #include "dpsfm/core/util/curve_math.h"
 #include "dpsfm/core/util/statistics.h"
@@ -126,119 +127,40 @@ DPViewSummary DPScaleEstimator::AddView(const DPView& view) {
   summary.frame_size = FrameSize(view);
   data->lens = view.lens;
 
-  PatchGeometry geometry = ViewPatchGeometry(summary.frame_size, options_);
+  const PatchGeometry geometry =
+      ViewPatchGeometry(summary.frame_size, options_);
   const double rf = geometry.resize_factor;
   summary.resize_factor = rf;
   summary.initial_max_radius_px = geometry.max_radius_px;
   data->working_pitch_mm = view.lens.PixelPitchMm() / rf;
   const WorkingView working = MakeWorkingView(view, rf);
   summary.working_size = working.left.size();
-  BlurEstimationOptions blur = options_.blur;
-  int border = 0;
-  std::vector<PatchCandidate> candidates;
-  ViewBlurSearch search;
-  std::map<std::string, int> rejections;
-  std::vector<int> sample_candidate;  // grid index of each sample
-  // 1 to 4, for each search bound: the patch grid with each patch's depth
-  // (patch_grid.h), the screening, the blur-search share, the blur search,
-  // and the usable patches as samples (the others counted by reason). An
-  // automatic bound whose patches' blur lies beyond it is grown and the
-  // view searched again (SearchBoundReached, GrownSearchBound), as soon as
-  // a share of its patches settles it (EarlyGrownSearchBound).
-  for (;;) {
-    blur.max_radius_px = geometry.max_radius_px;
-    border = BlurSearchBorder(field_, blur, geometry.max_radius_px);
-    candidates = PatchesWithDepth(view, working, geometry, border, options_);
-    int with_depth = 0;
-    for (const PatchCandidate& c : candidates) with_depth += c.reject.empty();
-    search =
-        ChooseViewSearch(working, candidates, border, with_depth > 0, options_);
-    auto search_patches = [&](const std::vector<char>* which) {
-      SearchChosenPatches(working,
-                          candidates,
-                          field_,
-                          blur,
-                          border,
-                          geometry.patch_size,
-                          options_,
-                          blur_estimators_.get(),
-                          which,
-                          &search);
-    };
-    auto samples = [&](std::map<std::string, int>* reasons,
-                       std::vector<int>* index) {
-      return ViewSamples(candidates,
-                         search,
-                         working,
-                         field_,
-                         geometry,
-                         summary.index,
-                         options_,
-                         reasons,
-                         index);
-    };
-    double grown = 0;
-    if (SearchBoundMayGrow(summary.search_bound_growths, options_)) {
-      const std::vector<char> share = GrowthSample(search);
-      search_patches(&share);
-      if (search.num_searched > 0) {
-        grown = EarlyGrownSearchBound(search.num_searched,
-                                      PatchesAtSearchBound(search),
-                                      summary.search_bound_growths,
-                                      geometry,
-                                      working.left.size(),
-                                      field_,
-                                      blur,
-                                      options_);
-      }
-    }
-    if (!(grown > 0)) {
-      search_patches(nullptr);
-      rejections.clear();
-      sample_candidate.clear();
-      data->samples = samples(&rejections, &sample_candidate);
-      summary.patches_with_depth = with_depth;
-      summary.patches_beyond_bound = PatchesAtSearchBound(search);
-      // Counted among the rejections by their reason (ViewSamples).
-      const auto undetermined = rejections.find(kBlurUndetermined);
-      summary.patches_undetermined =
-          undetermined == rejections.end() ? 0 : undetermined->second;
-      if (!SearchBoundReached(search.num_searched,
-                              summary.patches_beyond_bound,
-                              summary.search_bound_growths,
-                              options_)) {
-        break;
-      }
-      grown = GrownSearchBound(geometry, working.left.size(), field_, blur);
-      if (!(grown > 0)) break;
-    }
-    // The patches stay as they were (an explicit max_radius_px keeps them
-    // too): larger ones straddle more depth edges and leave fewer patches
-    // (on box/002, 13 px patches gave 57 searched and a DP cue 26 % low).
-    geometry.max_radius_px = grown;
-    ++summary.search_bound_growths;
-  }
-  summary.patch_size = geometry.patch_size;
-  summary.stride = geometry.stride;
-  summary.max_radius_px = geometry.max_radius_px;
-  summary.patches_tried = static_cast<int>(candidates.size());
-  summary.patches_searched = search.num_searched;
-  summary.patches_valid = static_cast<int>(data->samples.size());
-  for (const auto& r : rejections) summary.rejections.emplace_back(r);
+  // 1 to 4: the usable patches, at a search bound that grows while the
+  // view's blur lies beyond it.
+  ViewSearch search(view,
+                    working,
+                    geometry,
+                    field_,
+                    options_,
+                    blur_estimators_.get(),
+                    summary.index);
+  search.Run();
+  search.Summarize(&summary);
+  data->samples = search.TakeSamples();
   // 5. Top-T_c selection.
   const std::vector<int> top =
-      SelectTopSamples(data->samples, search, options_);
+      SelectTopSamples(data->samples, search.Search(), options_);
   for (int i : top) data->samples[i].selected = true;
   summary.patches_kept = static_cast<int>(top.size());
   // 6. Crops of the best selected patches (crop_store.h), best first.
   data->stored = StoreBestCrops(working,
-                                candidates,
+                                search.Candidates(),
                                 data->samples,
                                 top,
-                                sample_candidate,
+                                search.SampleCandidates(),
                                 field_,
-                                geometry,
-                                border,
+                                search.Geometry(),
+                                search.Border(),
                                 options_);
 
   summary.seconds = SecondsSince(start);
@@ -525,37 +447,135 @@ void DPScaleEstimator::PredictUnderFinalScale(DPScaleResult* result) const {
   }
 }
 
+void DPScaleEstimator::SelfCalibrate(
+    EstimateCaches* caches,
+    std::vector<std::vector<PatchSample>>* samples,
+    DPPsfField* field,
+    DPScaleResult* result) const {
+  if (options_.psf_self_calibration == DPScaleOptions::SelfCalibration::kOff ||
+      field_.cells.size() != 1) {
+    return;
+  }
+  const auto fit_start = std::chrono::steady_clock::now();
+  CalibrateProfile(
+      samples, field, caches != nullptr ? &caches->profile : nullptr, result);
+  result->psf_fit_ran = true;
+  result->seconds_psf_fit = SecondsSince(fit_start);
+}
+
+void DPScaleEstimator::RefuseLinearFailure(const LinearEstimate& linear,
+                                           const DPPsfField& field,
+                                           const PatchAccount& account,
+                                           DPScaleResult* result) const {
+  result->refusal.code = ScaleRefusal::kLinearStageFailed;
+  result->refusal.linear_failure = linear.failure;
+  result->refusal.patches = account;
+  if (result->psf_fit_ran) {
+    // Whether the blur the views show is small, or only read small by a
+    // profile the data leave open.
+    SetProfileScaleFactors(field, result);
+    const double low = result->profile_scale_factor_low;
+    result->refusal.blur_read_factor =
+        low > 0 ? 1 / low : std::numeric_limits<double>::infinity();
+  }
+}
+
+DPScaleEstimator::IntervalTerms DPScaleEstimator::WidenLinearInterval(
+    const std::vector<std::vector<PatchSample>>& samples,
+    const DPPsfField& field,
+    LinearEstimate* linear,
+    StatisticalInterval* statistical,
+    DPScaleResult* result) const {
+  // The bootstrap's interval, widened by the systematic terms: the
+  // estimator's own, and the thin lens's single plane against a real
+  // lens's principal planes and entrance pupil (the origin of SfM depth),
+  // which lie within about a focal length of each other: a relative depth
+  // error of up to f / z at the patches' median distance. Then the
+  // profile's own uncertainty (scale ~ the assumed centroid offset, so the
+  // offsets the data allow move it by their ratio).
+  const double lens_geometry = LensGeometryTerm(*linear, samples);
+  result->lens_geometry_uncertainty = lens_geometry;
+  AccountForExtrapolation(*linear, samples, &result->search_bound);
+  SetProfileScaleFactors(field, result);
+  IntervalTerms terms;
+  terms.systematic = options_.scale_systematic_uncertainty;
+  terms.lens_geometry = lens_geometry;
+  terms.profile_low = result->profile_scale_factor_low;
+  terms.profile_high = result->profile_scale_factor_high;
+  statistical->width =
+      (linear->scale_ci_high - linear->scale_ci_low) / linear->scale;
+  terms.Widen(linear->scale, &linear->scale_ci_low, &linear->scale_ci_high);
+  statistical->ci_low = linear->scale_ci_low;
+  statistical->ci_high = linear->scale_ci_high;
+  terms.ApplyProfile(&linear->scale_ci_low, &linear->scale_ci_high);
+  return terms;
+}
+
+bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
+                                        const StatisticalInterval& statistical,
+                                        const PatchAccount& account,
+                                        DPScaleResult* result) const {
+  // The recorded-focus cue (profile-free); used in the answer when
+  // pin_to_recorded_focus allows it, reported as evidence either way.
+  result->focus_cue =
+      RecordedFocusCue(linear, result->lens_geometry_uncertainty);
+  const bool use_focus =
+      options_.pin_to_recorded_focus && result->focus_cue.valid;
+  result->dp_cue = DPCue(linear);
+  // What the linear stage found, kept in the result (and the report) even
+  // when the interval check below refuses it.
+  result->scale_initial = linear.scale;
+  result->scale_initial_ci_low = linear.scale_ci_low;
+  result->scale_initial_ci_high = linear.scale_ci_high;
+  result->num_views_used = static_cast<int>(linear.selected_views.size());
+  const OpenScale open = LinearRefusal(linear,
+                                       statistical.width,
+                                       statistical.ci_low,
+                                       statistical.ci_high,
+                                       *result);
+  if (open.cause != OpenScaleCause::kNone) {
+    // The DP data alone give no answer; with the recorded focus they may.
+    CueRefusal cues;
+    if (!(use_focus && AdoptCombinedCues(linear, result, &cues))) {
+      result->refusal.code = ScaleRefusal::kScaleOpen;
+      result->refusal.open = open;
+      result->refusal.cues = cues;
+      result->refusal.recorded_focus_missing = options_.pin_to_recorded_focus &&
+                                               !result->focus_cue.valid &&
+                                               RecordedFocusMissing(linear);
+      result->refusal.patches = account;
+      return false;
+    }
+  }
+  result->linear_median_abs_residual_px = linear.median_abs_residual_px;
+  if (!result->scale_from_cues) {
+    result->scale = linear.scale;
+    result->scale_ci_low = linear.scale_ci_low;
+    result->scale_ci_high = linear.scale_ci_high;
+  }
+  result->num_patches = linear.num_rows;
+  return true;
+}
+
 DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
   DPScaleResult result;
-  const int num_views = static_cast<int>(views_.size());
   for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
   result.search_bound = AccountForSearchBound();
-  if (num_views == 0) {
+  if (views_.empty()) {
     result.refusal.code = ScaleRefusal::kNoViews;
     return result;
   }
-
   // The patches as the stages see them, and the PSF they use:
   // self-calibration may replace both.
-  std::vector<std::vector<PatchSample>> samples(num_views);
-  for (int i = 0; i < num_views; ++i) samples[i] = views_[i]->samples;
+  std::vector<std::vector<PatchSample>> samples;
+  for (const auto& v : views_) samples.push_back(v->samples);
   DPPsfField field = field_;
-  if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff &&
-      field_.cells.size() == 1) {
-    const auto fit_start = std::chrono::steady_clock::now();
-    CalibrateProfile(&samples,
-                     &field,
-                     caches != nullptr ? &caches->profile : nullptr,
-                     &result);
-    result.psf_fit_ran = true;
-    result.seconds_psf_fit = SecondsSince(fit_start);
-  }
+  SelfCalibrate(caches, &samples, &field, &result);
   result.psf_model = field.Name();
   if (result.psf_rejected) {
     result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
     return result;
   }
-
   // --- Linear stage. ---
   LinearEstimate linear;
   if (!LinearStage(samples, &linear, &result)) return result;
@@ -563,80 +583,13 @@ DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
   // Where the patches went, summed over views, for refusals (refusal.h).
   const PatchAccount account = AccountForPatches();
   if (!linear.success) {
-    result.refusal.code = ScaleRefusal::kLinearStageFailed;
-    result.refusal.linear_failure = linear.failure;
-    result.refusal.patches = account;
-    if (result.psf_fit_ran) {
-      // Whether the blur the views show is small, or only read small by a
-      // profile the data leave open.
-      SetProfileScaleFactors(field, &result);
-      const double low = result.profile_scale_factor_low;
-      result.refusal.blur_read_factor =
-          low > 0 ? 1 / low : std::numeric_limits<double>::infinity();
-    }
+    RefuseLinearFailure(linear, field, account, &result);
     return result;
   }
-  // Intervals: the bootstrap's, widened by the systematic terms: the
-  // estimator's own, and the thin lens's single plane against a real
-  // lens's principal planes and entrance pupil (the origin of SfM depth),
-  // which lie within about a focal length of each other: a relative depth
-  // error of up to f / z at the patches' median distance. Then the
-  // profile's own uncertainty (scale ~ the assumed centroid offset, so the
-  // offsets the data allow move it by their ratio).
-  const double lens_geometry = LensGeometryTerm(linear, samples);
-  result.lens_geometry_uncertainty = lens_geometry;
-  AccountForExtrapolation(linear, samples, &result.search_bound);
-  SetProfileScaleFactors(field, &result);
-  IntervalTerms terms;
-  terms.systematic = options_.scale_systematic_uncertainty;
-  terms.lens_geometry = lens_geometry;
-  terms.profile_low = result.profile_scale_factor_low;
-  terms.profile_high = result.profile_scale_factor_high;
-  const double statistical_width =
-      (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
-  terms.Widen(linear.scale, &linear.scale_ci_low, &linear.scale_ci_high);
-  const double statistical_ci_low = linear.scale_ci_low;
-  const double statistical_ci_high = linear.scale_ci_high;
-  terms.ApplyProfile(&linear.scale_ci_low, &linear.scale_ci_high);
-  // The recorded-focus cue (profile-free); used in the answer when
-  // pin_to_recorded_focus allows it, reported as evidence either way.
-  result.focus_cue = RecordedFocusCue(linear, lens_geometry);
-  const bool use_focus =
-      options_.pin_to_recorded_focus && result.focus_cue.valid;
-  result.dp_cue = DPCue(linear);
-  // What the linear stage found, kept in the result (and the report) even
-  // when the interval check below refuses it.
-  result.scale_initial = linear.scale;
-  result.scale_initial_ci_low = linear.scale_ci_low;
-  result.scale_initial_ci_high = linear.scale_ci_high;
-  result.num_views_used = static_cast<int>(linear.selected_views.size());
-  const OpenScale open = LinearRefusal(linear,
-                                       statistical_width,
-                                       statistical_ci_low,
-                                       statistical_ci_high,
-                                       result);
-  if (open.cause != OpenScaleCause::kNone) {
-    // The DP data alone give no answer; with the recorded focus they may.
-    CueRefusal cues;
-    if (!(use_focus && AdoptCombinedCues(linear, &result, &cues))) {
-      result.refusal.code = ScaleRefusal::kScaleOpen;
-      result.refusal.open = open;
-      result.refusal.cues = cues;
-      result.refusal.recorded_focus_missing = options_.pin_to_recorded_focus &&
-                                              !result.focus_cue.valid &&
-                                              RecordedFocusMissing(linear);
-      result.refusal.patches = account;
-      return result;
-    }
-  }
-  result.linear_median_abs_residual_px = linear.median_abs_residual_px;
-  if (!result.scale_from_cues) {
-    result.scale = linear.scale;
-    result.scale_ci_low = linear.scale_ci_low;
-    result.scale_ci_high = linear.scale_ci_high;
-  }
-  result.num_patches = linear.num_rows;
-
+  StatisticalInterval statistical;
+  const IntervalTerms terms =
+      WidenLinearInterval(samples, field, &linear, &statistical, &result);
+  if (!AdoptLinearStage(linear, statistical, account, &result)) return result;
   // --- Intensity stage on the selected views and their stored patches. ---
   const auto start_intensity = std::chrono::steady_clock::now();
   IntensityStage(linear,
@@ -646,6 +599,8 @@ DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
                  caches != nullptr ? &caches->intensity : nullptr,
                  &result);
   result.seconds_intensity = SecondsSince(start_intensity);
+  const bool use_focus =
+      options_.pin_to_recorded_focus && result.focus_cue.valid;
   if (!result.scale_from_cues &&
       !JoinRecordedFocus(linear, use_focus, &result)) {
     return result;

@@ -513,7 +513,15 @@ class DPScaleEstimator {
  private:
   struct ViewData;
   struct IntervalTerms;
+  // The linear interval before the profile's term (scale_estimator_data.h).
+  struct StatisticalInterval;
   // The steps of Estimate, in order (scale_estimator.cc).
+  // Self-calibration, when the options ask for it: the fitted profile and
+  // the samples re-estimated with it replace *field and *samples.
+  void SelfCalibrate(EstimateCaches* caches,
+                     std::vector<std::vector<PatchSample>>* samples,
+                     DPPsfField* field,
+                     DPScaleResult* result) const;
   // The linear stage on the selected samples; false (the refusal set) if
   // it threw.
   bool LinearStage(const std::vector<std::vector<PatchSample>>& samples,
@@ -543,6 +551,28 @@ class DPScaleEstimator {
   // result->profile_scale_factor_low/high: what the profile leaves open.
   void SetProfileScaleFactors(const DPPsfField& field,
                               DPScaleResult* result) const;
+  // The refusal of a linear stage that found no scale, with how far the
+  // profile's reading of the blur could be off.
+  void RefuseLinearFailure(const LinearEstimate& linear,
+                           const DPPsfField& field,
+                           const PatchAccount& account,
+                           DPScaleResult* result) const;
+  // Widens linear's interval by the systematic terms, the lens geometry's
+  // and the profile's (returned; *statistical: the interval before the
+  // profile's term).
+  IntervalTerms WidenLinearInterval(
+      const std::vector<std::vector<PatchSample>>& samples,
+      const DPPsfField& field,
+      LinearEstimate* linear,
+      StatisticalInterval* statistical,
+      DPScaleResult* result) const;
+  // The cues, then the linear stage's answer (or the cues' combined one
+  // where the DP data alone leave the scale open) in *result; false with
+  // the refusal set when neither answers.
+  bool AdoptLinearStage(const LinearEstimate& linear,
+                        const StatisticalInterval& statistical,
+                        const PatchAccount& account,
+                        DPScaleResult* result) const;
   // Why the DP data alone give no scale (cause kNone when they give one):
   // too few patches, no interval, or an interval too wide (and whether the
   // profile or the data leave it open).

@@ -40,4 +40,12 @@ struct DPScaleEstimator::IntervalTerms {
   }
 };
 
+// The linear stage's interval widened by the systematic terms but not yet
+// by the profile's, and its relative width before either: LinearRefusal
+// tells by them whether the profile or the data leave the scale open.
+struct DPScaleEstimator::StatisticalInterval {
+  double width = 0;  // the bootstrap's, relative to the scale
+  double ci_low = 0, ci_high = 0;
+};
+
 }  // namespace dpsfm
