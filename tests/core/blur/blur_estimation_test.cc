@@ -104,8 +104,10 @@ TEST(EstimatePatchBlur, InFocusReadsNearZero) {
 }
 
 TEST(EstimatePatchBlur, NoiseDoesNotInflateSmallBlurs) {
-  // The bias of notes section 5: without the noise-floor correction, noise
-  // reads small blurs large. With it, the estimate stays put.
+  // The noise bias (docs/method.md, "Blur search"): noise adds
+  // sigma^2 (|H_l|^2 + |H_r|^2) to the loss, most for the sharpest kernels,
+  // so without the noise-floor correction small blurs read large. With it,
+  // the estimate stays put.
   const TranslatingDiskPsf psf;
   BlurEstimationOptions options;
   options.max_radius_px = 10;

@@ -241,8 +241,9 @@ TEST(SplitProfilePsf, EnergySymmetryAndCentroidSign) {
   }
 }
 
-// The sum of the views is the defocus disk whatever the split (notes,
-// section 5): the same for every split exponent and crosstalk.
+// The sum of the views is the defocus disk whatever the split
+// (docs/method.md, "DP PSF profile"): the same for every split exponent and
+// crosstalk.
 TEST(SplitProfilePsf, SumOfViewsDoesNotDependOnTheSplit) {
   const SplitProfilePsf linear{SplitProfileParams()};
   SplitProfileParams other;

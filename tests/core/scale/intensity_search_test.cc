@@ -437,9 +437,10 @@ TEST(IntensityStatsCache, KnowsACropByPixelsBorderAndGrid) {
   EXPECT_GT(bordered.num_nodes_computed, 0);
 }
 
-// Notes sec. 5: on noisy data the paper's loss drifts towards larger blur
-// (smaller s). Measure both losses on the same noisy scene; the noise-aware
-// loss must be within 2 % and no worse than the paper's.
+// docs/method.md, "Intensity stage": on noisy data the paper's loss drifts
+// towards larger blur (smaller s). Measure both losses on the same noisy
+// scene; the noise-aware loss must be within 2 % and no worse than the
+// paper's.
 TEST(SearchScaleByIntensity, NoiseCorrectedLossRemovesNoiseBias) {
   const TranslatingDiskPsf psf;
   const double scale = 0.5;

@@ -66,7 +66,7 @@ DPFrameFile ReadDPFrameFile(const std::string& path);
 cv::Mat DPFrameValues(const DPFrameFile& file,
                       const cv::Range& rows = cv::Range::all());
 
-// How a frame's values encode light (docs/user-guide.md, "DP frames"): the
+// How a frame's values encode light (docs/user-guide.md, "Capturing"): the
 // requested encoding when it is not kAuto; otherwise what the file declares
 // (DPFrameFile::declared: PNG sRGB / iCCP / gAMA chunks, EXIF ColorSpace
 // sRGB), else its bit depth: 8-bit files are sRGB (exports, phone

@@ -1,8 +1,8 @@
 // Fitting the DP split profile (SplitProfilePsf along its path by centroid
 // offset, SplitProfileParams::ForCentroidOffset) to data:
-// the profile is the largest systematic error source on real sensors (notes,
-// section 5): a wrong one scales every recovered radius, and the scale
-// inherits the factor.
+// the profile is the largest systematic error source on real sensors
+// (docs/psf-profiles.md): a wrong one scales every recovered radius, and the
+// scale inherits the factor.
 //
 // Two criteria, one search:
 // - Self-calibration (radii unknown): for every candidate profile each

@@ -5,8 +5,8 @@
 // sum is the ordinary defocus disk. Everything in the core that needs those
 // PSFs (the per-patch blur search, the intensity search, reports) gets them
 // through DPPsfModel only, because real DP profiles depend on the lens, the
-// aperture and the position in the frame and must stay replaceable (notes,
-// section 5).
+// aperture and the position in the frame and must stay replaceable
+// (docs/psf-profiles.md).
 //
 // Conventions (the CLI contract's, docs/user-guide.md "Capturing"):
 // - Signed blur radius r = b / (2 p) in pixels of the DP frame, r > 0 for a

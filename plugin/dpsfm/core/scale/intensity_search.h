@@ -27,7 +27,7 @@ enum class IntensityLoss {
   // kL2 minus its expected sensor-noise floor. The cross-blurred noise has
   // energy sigma^2 ||H||^2 per pixel, which falls as the kernels grow, so an
   // uncorrected loss prefers larger blur (smaller s) on noisy data; this
-  // removes that bias (notes sec. 5).
+  // removes that bias (docs/method.md, "Intensity stage").
   kNoiseCorrectedL2,
   // The default. Per channel, kNoiseCorrectedL2 divided by the signal power
   // of the two normalised cross-blurred patches (their variances) at the

@@ -4,7 +4,7 @@
 // through the DP profile (the linear and intensity stages); as uncertain as
 // the profile's strength. The recorded-focus cue: where the disparity
 // changes sign is the focal plane g' in model units whatever the profile,
-// and a recorded focus distance puts it in metres (docs/method.md, "The
+// and a recorded focus distance puts it in metres (docs/psf-profiles.md, "The
 // recorded focus"); as uncertain as the record. Each cue comes with a 95 %
 // interval that is meant to own its errors; the answer never rests on one
 // of two cues that disagree.
