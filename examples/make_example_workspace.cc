@@ -44,6 +44,7 @@
 #include "dpsfm/core/optics/dp_psf.h"
 #include "dpsfm/core/optics/dp_renderer.h"
 #include "dpsfm/core/optics/lens_model.h"
+#include "examples/aperture_renderer.h"
 #include "synthetic_scene.h"
 
 namespace fs = std::filesystem;
@@ -112,6 +113,14 @@ struct GeneratorOptions {
   double psf_crosstalk = 0;
   double psf_rim_softness = 0;
   double psf_split_exponent_right = 0;
+  // kernels: the views by convolution with the profile's kernels
+  // (dpsfm::RenderDPViews); aperture: by following each pixel's light
+  // through sample points of the aperture (aperture_renderer.h: no code
+  // shared with the estimator's optics), with a split between the halves
+  // that leaks aperture_crosstalk; the psf_* options then do not apply.
+  std::string renderer = "kernels";
+  int aperture_subsamples = 2;
+  double aperture_crosstalk = 0.1;
   // Calibration captures of a planar textured target at known distances
   // made with the same camera and profile (calibration/dp, targets.csv), for
   // colmap dp_psf_calibrator. 0 = none.
@@ -141,6 +150,14 @@ SensorPsf MakeSensorPsf(const GeneratorOptions& options) {
   } else {
     sensor.left_edge = make(options.psf_split_exponent);
   }
+  if (options.renderer == "aperture") {
+    std::ostringstream description;
+    description << "aperture sampling (" << options.aperture_subsamples
+                << " points per pixel of blur, crosstalk "
+                << options.aperture_crosstalk << ")";
+    sensor.description = description.str();
+    return sensor;
+  }
   sensor.description = sensor.left_edge->Name();
   if (options.psf_split_exponent_right > 0) {
     sensor.right_edge = make(options.psf_split_exponent_right);
@@ -149,14 +166,24 @@ SensorPsf MakeSensorPsf(const GeneratorOptions& options) {
   return sensor;
 }
 
-// DP views through the sensor's PSF.
-void RenderSensorViews(const SensorPsf& sensor,
+// DP views through the sensor's PSF, or through the aperture (the
+// generator's renderer option).
+void RenderSensorViews(const GeneratorOptions& options,
+                       const SensorPsf& sensor,
                        const cv::Mat& image,
                        const cv::Mat& depth,
                        const cv::Mat& radius,
                        const dpsfm::DPRenderOptions& render_options,
                        cv::Mat* left,
                        cv::Mat* right) {
+  if (options.renderer == "aperture") {
+    dpsfm::examples::ApertureRenderOptions aperture;
+    aperture.subsamples_per_pixel = options.aperture_subsamples;
+    aperture.crosstalk = options.aperture_crosstalk;
+    dpsfm::examples::RenderDPByApertureSampling(
+        image, radius, aperture, left, right);
+    return;
+  }
   dpsfm::RenderDPViews(
       image, depth, radius, *sensor.left_edge, render_options, left, right);
   if (!sensor.right_edge) return;
@@ -173,6 +200,23 @@ void RenderSensorViews(const SensorPsf& sensor,
     left->col(c) = (1 - w) * left->col(c) + w * other_left.col(c);
     right->col(c) = (1 - w) * right->col(c) + w * other_right.col(c);
   }
+}
+
+// The signed blur radius (pixels of `pitch_mm`) of a point at depth_m
+// (<= 0: at infinity) under the focus focus_m: the renderer's own thin lens
+// for the aperture renderer, the core's for the kernels.
+double BlurRadiusPx(const GeneratorOptions& options,
+                    const dpsfm::DPLensData& lens,
+                    double focus_m,
+                    double depth_m,
+                    double pitch_mm) {
+  const double depth_mm = depth_m > 0 ? depth_m * 1e3 : 1e12;
+  if (options.renderer == "aperture") {
+    return dpsfm::examples::ThinLensBlurRadiusPx(
+        lens.focal_length_mm, lens.f_number, pitch_mm, focus_m * 1e3, depth_mm);
+  }
+  return dpsfm::BlurRadiusPxFromDiameterMm(
+      dpsfm::SignedBlurDiameterMm(lens, focus_m * 1e3, depth_mm), pitch_mm);
 }
 
 // Fills the options left at 0 with the camera's defaults.
@@ -397,7 +441,7 @@ void WriteCalibrationCaptures(const GeneratorOptions& options,
     const cv::Mat radius(size, CV_32FC1, cv::Scalar(radius_full));
     cv::Mat left, right;
     RenderSensorViews(
-        sensor, texture, depth, radius, render_options, &left, &right);
+        options, sensor, texture, depth, radius, render_options, &left, &right);
     cv::RNG noise_rng((*rng)());
     const std::string name = "cal_" + std::to_string(k) + ".png";
     for (cv::Mat* view : {&left, &right}) {
@@ -584,14 +628,13 @@ int Run(const GeneratorOptions& options) {
       for (int r = 0; r < radius.rows; ++r) {
         for (int c = 0; c < radius.cols; ++c) {
           const float z = render.depth.at<float>(r, c);
-          const double b = dpsfm::SignedBlurDiameterMm(
-              lens, focus_m * 1e3, z > 0 ? z * 1e3 : 1e12);
           radius.at<float>(r, c) = static_cast<float>(
-              dpsfm::BlurRadiusPxFromDiameterMm(b, pitch_mm));
+              BlurRadiusPx(options, lens, focus_m, z, pitch_mm));
         }
       }
       cv::Mat left, right;
-      RenderSensorViews(sensor,
+      RenderSensorViews(options,
+                        sensor,
                         render.image,
                         render.depth,
                         radius,
@@ -837,6 +880,18 @@ int main(int argc, char** argv) {
   add("psf_split_exponent_right",
       &options.psf_split_exponent_right,
       "split exponent at the right edge (profile changing across the frame)");
+  add("renderer",
+      &options.renderer,
+      "kernels (the profile's kernels) | aperture (light through aperture "
+      "points; shares no code with the estimator's optics)");
+  add("aperture_subsamples",
+      &options.aperture_subsamples,
+      "aperture points landing per pixel of blur, along each axis (renderer "
+      "aperture)");
+  add("aperture_crosstalk",
+      &options.aperture_crosstalk,
+      "share of a half aperture's light in the other photodiode (renderer "
+      "aperture)");
   add("calibration_captures",
       &options.calibration_captures,
       "planar-target captures for dp_psf_calibrator (calibration/)");
@@ -858,12 +913,18 @@ int main(int argc, char** argv) {
         options.depth_holes >= 1 || options.right_gain <= 0 ||
         std::abs(options.gain_ramp) >= 2 || options.texture_contrast < 0 ||
         (options.compositing != "additive" &&
-         options.compositing != "layers")) {
+         options.compositing != "layers") ||
+        (options.renderer != "kernels" && options.renderer != "aperture") ||
+        options.aperture_subsamples < 1 || !(options.aperture_crosstalk >= 0) ||
+        !(options.aperture_crosstalk < 0.5)) {
       throw std::invalid_argument(
           "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
           "dp_factor in 1..8, positive lens and scene numbers, noise >= 0, "
           "depth_holes in [0, 1), right_gain > 0, |gain_ramp| < 2, "
-          "texture_contrast >= 0, compositing additive or layers");
+          "texture_contrast >= 0, compositing additive or layers, renderer "
+          "kernels or aperture, aperture_subsamples >= 1, aperture_crosstalk "
+          "in "
+          "[0, 0.5)");
     }
     return Run(options);
   } catch (const std::exception& error) {

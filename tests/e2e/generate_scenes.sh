@@ -29,3 +29,9 @@ mkdir -p "$out"
 # No texture at all: only the edges between flat surfaces.
 "$generator" --output_path "$out/textureless" --seed 24 --num_views 4 \
   --width 640 --height 432 --texture_contrast 0
+# Rendered by following light through the aperture (a half-aperture split
+# with 10 % crosstalk; examples/aperture_renderer.h), with captures of a
+# textured plane for dp_psf_calibrator made the same way: no kernel, profile
+# or thin-lens code shared with the estimator.
+"$generator" --output_path "$out/aperture" --seed 31 --num_views 6 \
+  --width 800 --height 540 --renderer aperture --calibration_captures 4
