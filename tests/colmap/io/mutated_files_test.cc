@@ -11,9 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include "dpsfm/colmap/io/calibration_targets.h"
 #include "dpsfm/colmap/io/lens_data.h"
 #include "dpsfm/colmap/io/npy.h"
-#include "dpsfm/colmap/io/psf_profile.h"
 #include "dpsfm/colmap/util/input_error.h"
 #include "tests/mutations.h"
 #include "tests/test_utils.h"
@@ -49,8 +49,7 @@ Outcomes ReadMutations(const std::string& valid,
       EXPECT_NE(std::string(error.what()).find(name), std::string::npos)
           << "case " << i << ": " << error.what();
     } catch (const std::exception& error) {
-      ADD_FAILURE() << "case " << i << ": not an input error: "
-                    << error.what();
+      ADD_FAILURE() << "case " << i << ": not an input error: " << error.what();
     }
   }
   return outcomes;
@@ -65,8 +64,9 @@ TEST(MutatedFiles, NpyArraysAreReadOrRefused) {
   const std::string valid = ReadTextFile(dir / "kernels.npy");
   ASSERT_EQ(ReadNpy(dir / "kernels.npy").values.size(), 150u);
   const Outcomes o = ReadMutations(
-      valid, dir / "kernels.npy", 3000, 20261207,
-      [](const std::string& path) { ReadNpy(path); });
+      valid, dir / "kernels.npy", 3000, 20261207, [](const std::string& path) {
+        ReadNpy(path);
+      });
   std::printf("3000 mutated .npy: %d read, %d refused\n", o.read, o.refused);
   EXPECT_GT(o.read, 0);
   EXPECT_GT(o.refused, 0);
@@ -82,10 +82,11 @@ TEST(MutatedFiles, LensCsvIsReadOrRefused) {
   WriteTextFile(dir / "lens.csv", valid);
   ASSERT_EQ(ReadLensCsv(dir / "lens.csv").size(), 3u);
   const Outcomes o = ReadMutations(
-      valid, dir / "lens.csv", 3000, 7,
-      [](const std::string& path) { ReadLensCsv(path); });
-  std::printf("3000 mutated lens.csv: %d read, %d refused\n", o.read,
-              o.refused);
+      valid, dir / "lens.csv", 3000, 7, [](const std::string& path) {
+        ReadLensCsv(path);
+      });
+  std::printf(
+      "3000 mutated lens.csv: %d read, %d refused\n", o.read, o.refused);
   EXPECT_GT(o.read, 0);
   EXPECT_GT(o.refused, 0);
 }
@@ -100,10 +101,11 @@ TEST(MutatedFiles, TargetsCsvIsReadOrRefused) {
   WriteTextFile(dir / "targets.csv", valid);
   ASSERT_EQ(ReadCalibrationTargets(dir / "targets.csv").size(), 2u);
   const Outcomes o = ReadMutations(
-      valid, dir / "targets.csv", 3000, 11,
-      [](const std::string& path) { ReadCalibrationTargets(path); });
-  std::printf("3000 mutated targets.csv: %d read, %d refused\n", o.read,
-              o.refused);
+      valid, dir / "targets.csv", 3000, 11, [](const std::string& path) {
+        ReadCalibrationTargets(path);
+      });
+  std::printf(
+      "3000 mutated targets.csv: %d read, %d refused\n", o.read, o.refused);
   EXPECT_GT(o.read, 0);
   EXPECT_GT(o.refused, 0);
 }

@@ -1,5 +1,7 @@
 // Profile files: measured kernels in the contract's form, read from .npy
 // files written here byte by byte (independently of the project's writer).
+#include "dpsfm/colmap/io/psf_choice.h"
+#include "dpsfm/colmap/io/psf_library.h"
 #include "dpsfm/colmap/io/psf_profile.h"
 
 #include <cstdint>
@@ -277,10 +279,9 @@ TEST(PsfProfileFile, ViewsCheckedAgainstTheConditions) {
   } catch (const InputError& e) {
     error = e.what();
   }
-  for (const char* part :
-       {"image box002.png: f/2.8 (lens.csv line 2)",
-        "r6m2_rf50_f4.dpsf was measured at f/4",
-        "--DPScaleEstimator.profile_applies 1"}) {
+  for (const char* part : {"image box002.png: f/2.8 (lens.csv line 2)",
+                           "r6m2_rf50_f4.dpsf was measured at f/4",
+                           "--DPScaleEstimator.profile_applies 1"}) {
     EXPECT_NE(error.find(part), std::string::npos) << part << " in " << error;
   }
   EXPECT_EQ(CheckViewsAgainstProfile(choice, views, true).size(), 1u);

@@ -14,6 +14,7 @@
 
 #include "colmap/util/logging.h"
 #include "colmap/util/timer.h"
+#include "dpsfm/colmap/io/calibration_targets.h"
 #include "dpsfm/colmap/io/dp_images.h"
 #include "dpsfm/colmap/io/psf_profile.h"
 #include "dpsfm/colmap/io/workspace.h"
@@ -262,10 +263,10 @@ void CheckTargetDistance(const CalibrationTarget& target,
   if (!(plane_m > 10)) return;
   std::ostringstream s;
   s << std::setprecision(4) << options.targets_path << ":" << target.line
-    << ": target_distance_m " << d_m << " puts " << target.name
-    << "'s target " << d_m << " m away, where a plane filling the frame ("
-    << sensor_width_mm << " mm of sensor behind " << f_mm
-    << " mm) would be " << std::setprecision(3) << plane_m << " m wide: ";
+    << ": target_distance_m " << d_m << " puts " << target.name << "'s target "
+    << d_m << " m away, where a plane filling the frame (" << sensor_width_mm
+    << " mm of sensor behind " << f_mm << " mm) would be "
+    << std::setprecision(3) << plane_m << " m wide: ";
   if (d_m >= 4 * f_mm) {  // as mm
     s << "is it in millimetres (" << d_m / 1000 << " m)? Give metres, or "
       << "write the unit (" << d_m << "mm)";
@@ -562,7 +563,7 @@ std::vector<size_t> BlurredCaptures(const TargetCalibration& calibration) {
 // differ by more than 1 %, or none has blur).
 double SharedValue(const std::vector<CalibrationTarget>& targets,
                    const std::vector<size_t>& blurred,
-                   double DPLensData::*member) {
+                   double DPLensData::* member) {
   double value = 0;
   for (const size_t i : blurred) {
     const double v = targets[i].lens.*member;

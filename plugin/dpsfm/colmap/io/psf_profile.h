@@ -1,4 +1,4 @@
-// DP PSF profiles on disk, and the PSF a run uses.
+// DP PSF profiles on disk: the profile file format, read and written.
 //
 // A profile file is plain text, one "key value" pair per line, '#' starts a
 // comment (docs/user-guide.md, "DP PSF profiles"). Three models:
@@ -42,7 +42,6 @@
 // checked against each view's lens data before an estimate).
 #pragma once
 
-#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -50,11 +49,8 @@
 #include <opencv2/core.hpp>
 
 #include "dpsfm/core/optics/dp_psf.h"
-#include "dpsfm/core/scale/scale_estimator.h"
 
 namespace dpsfm {
-
-struct ResolvedLens;
 
 // The conditions a calibrated profile was measured under, as
 // dp_psf_calibrator writes them (0 = not recorded: profiles written before,
@@ -62,7 +58,7 @@ struct ResolvedLens;
 struct ProfileConditions {
   double focal_length_mm = 0;
   double f_number = 0;
-  double pixel_pitch_um = 0;          // of the calibration's DP frames
+  double pixel_pitch_um = 0;              // of the calibration's DP frames
   int frame_width = 0, frame_height = 0;  // the DP frames', px
   // The |blur radius| of the captures whose blur measured the strength, in
   // px of the DP frames.
@@ -114,98 +110,5 @@ void WritePsfProfile(const std::string& path, const PsfProfileFile& profile);
 // other than linear light: `light srgb`, or a calibrator's profile that
 // records no light (written before frames were linearised).
 void CheckProfileLight(const PsfProfileFile& profile, const std::string& path);
-
-// What a --DPScaleEstimator.psf_model / psf_path choice found: the PSF
-// and what it means for the estimate's options. The controller applies it
-// (ApplyTo) before DPScaleOptions::Check().
-struct PsfChoice {
-  DPPsfField field;
-  // translating_disk: checked against the data (kCheck); auto: the
-  // translating disk self-calibrated from the data (kFit); calibrated: kOff.
-  DPScaleOptions::SelfCalibration self_calibration =
-      DPScaleOptions::SelfCalibration::kFit;
-  // A profile file's own relative uncertainty (0: none given).
-  double profile_relative_uncertainty = 0;
-  // The blur a measured-kernel profile was measured at: it bounds the
-  // automatic search radius from below (0: no bound).
-  double reference_radius_px = 0;
-  // The largest blur a measured-kernel profile's calibration covered:
-  // beyond it the kernels are magnified copies (0: a model profile).
-  double covered_radius_px = 0;
-
-  // A profile file's path and the conditions it records (calibrated).
-  std::string path;
-  ProfileConditions conditions;
-
-  // The choice written into the estimate's options.
-  void ApplyTo(DPScaleOptions* core) const;
-};
-
-// One view as CheckViewsAgainstProfile sees it.
-struct ProfileCheckView {
-  std::string image_name;
-  const ResolvedLens* lens = nullptr;  // pitch of the model camera's pixels
-  int camera_long_side_px = 0;         // the model camera's
-};
-
-// Each view's lens data against the conditions a calibrated profile was
-// measured under, before the estimate. An f-number other than the
-// profile's (by more than a sixth of a stop) throws InputError in one line
-// naming the image, its f-number and source, the profile's and
-// --DPScaleEstimator.profile_applies, unless `profile_applies`; another
-// focal length (5 %) or another sensor (the pitch at the profile's frame
-// size, 10 %) is a warning line (logged, and returned). A profile that
-// records no conditions is said so once in the log, and nothing checked.
-std::vector<std::string> CheckViewsAgainstProfile(
-    const PsfChoice& choice,
-    const std::vector<ProfileCheckView>& views,
-    bool profile_applies);
-
-// The PSF of --DPScaleEstimator.psf_model: "translating_disk" (the paper's
-// model, checked against the data), "calibrated" (the profile in psf_path: a
-// split profile from dp_psf_calibrator, one per column band if it has bands,
-// or measured kernels), or "auto" (the translating disk, self-calibrated from
-// the data). Throws InputError for an unknown model, a missing or malformed
-// psf_path, or a psf_path the model does not use.
-PsfChoice MakePsfField(const std::string& psf_model,
-                       const std::string& psf_path);
-
-// The profile library: a folder of profile files (`*.dpsf`) keyed by their
-// `camera` and `lens` lines, the way lensfun keys lens corrections. Returns
-// the path of the first file (by name) whose keys equal `camera` and
-// `lens` (case and surrounding blanks ignored), or "" if none does or a key
-// is empty. Files that are not readable profiles are skipped (and listed in
-// *skipped when given).
-std::string FindLibraryProfile(const std::string& library_dir,
-                               const std::string& camera,
-                               const std::string& lens,
-                               std::vector<std::string>* skipped = nullptr);
-
-// The library folder: --DPScaleEstimator.psf_library if given, else
-// $DPSFM_PROFILE_LIBRARY, else
-// ${XDG_DATA_HOME:-~/.local/share}/dp-sfm/profiles.
-std::string DefaultProfileLibrary();
-
-// One row of a calibration targets file (dp_psf_calibrator): a DP capture
-// of a planar, fronto-parallel textured target.
-struct CalibrationTarget {
-  std::string name;  // DP view file name (as under left/)
-  // From the camera's focal-plane mark (the sensor plane); the calibration
-  // turns them into the thin lens's object distances.
-  double target_distance_m = 0;
-  double focus_distance_m = 0;  // NaN = unknown (an empty cell): fitted
-  DPLensData lens;              // pitch: of the DP frame's pixels
-  int line = 0;                 // in targets.csv, for messages
-  // The capture's DP view files, relative to the captures folder; empty:
-  // left/<name> with right/<name> (or sum/<name>).
-  std::string left, right;
-};
-
-// A CSV whose header names its columns (text.h, CsvTable): name,
-// target_distance_m, focal_length_mm, f_number and pixel_pitch_um required;
-// focus_distance_m (empty cells: fitted) and left, right (both or neither)
-// optional. Lengths may carry a unit ("600mm", "60 cm"), converted to the
-// column's (logged).
-std::vector<CalibrationTarget> ReadCalibrationTargets(const std::string& path);
 
 }  // namespace dpsfm

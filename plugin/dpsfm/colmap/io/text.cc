@@ -1,6 +1,8 @@
 #include "dpsfm/colmap/io/text.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -14,6 +16,16 @@ std::string Trim(const std::string& text) {
   if (begin == std::string::npos) return "";
   const size_t end = text.find_last_not_of(" \t\r\n");
   return text.substr(begin, end - begin + 1);
+}
+
+double ParseNumber(const std::string& text, const std::string& where) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || *end != '\0' ||
+      !std::isfinite(value)) {
+    throw InputError(where + ": expected a number, got '" + text + "'");
+  }
+  return value;
 }
 
 std::string StripExtension(const std::string& name) {

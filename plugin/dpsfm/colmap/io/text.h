@@ -12,6 +12,10 @@ namespace dpsfm {
 // Without leading and trailing blanks (space, tab, CR, LF).
 std::string Trim(const std::string& text);
 
+// The whole of `text` as a finite number; otherwise throws InputError
+// "<where>: expected a number, got '<text>'".
+double ParseNumber(const std::string& text, const std::string& where);
+
 // The comma-separated cells of one line, each trimmed; a trailing comma
 // gives a last empty cell; a cell in double quotes may hold commas ("" is
 // one quote). An empty line has no cells.

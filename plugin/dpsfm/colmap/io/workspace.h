@@ -67,10 +67,10 @@ struct ScaleRunOptions {
   // (self-calibrated from the data; the default since the profile benchmark
   // showed it equal to translating_disk on translating-disk data and far
   // better on every other profile, docs/psf-profiles.md); see
-  // psf_profile.h.
+  // psf_choice.h.
   std::string psf_model = "auto";
   std::string psf_path;
-  // The DP profile library (psf_profile.h, FindLibraryProfile); "" = the
+  // The DP profile library (psf_library.h, FindLibraryProfile); "" = the
   // default folder. With psf_model auto, a library profile whose camera and
   // lens match every view's is used as calibrated.
   std::string psf_library;
