@@ -86,6 +86,93 @@ struct PlyHeader {
   size_t data_offset = 0;
 };
 
+// "bad PLY header line N: "<line>"".
+[[noreturn]] void BadHeaderLine(const std::string& path,
+                                size_t line_number,
+                                const std::string& line) {
+  Corrupt(path,
+          "bad PLY header line " + std::to_string(line_number) + ": \"" + line +
+              "\"");
+}
+
+// The format line's format; big-endian data are refused.
+PlyFormat ParsePlyFormat(const std::string& path, std::istringstream& stream) {
+  std::string format;
+  stream >> format;
+  if (format == "ascii") return PlyFormat::kAscii;
+  if (format == "binary_little_endian") return PlyFormat::kBinaryLittleEndian;
+  if (format == "binary_big_endian") {
+    throw InputError("cannot rescale " + path +
+                     ": binary_big_endian PLY is not supported (convert it to "
+                     "binary_little_endian or ascii first)");
+  }
+  Corrupt(path, "unknown PLY format \"" + format + "\"");
+}
+
+// An element line: its name and count.
+PlyElement ParsePlyElement(const std::string& path,
+                           size_t line_number,
+                           const std::string& line,
+                           std::istringstream& stream) {
+  PlyElement element;
+  std::string count;
+  stream >> element.name >> count;
+  long long value = -1;
+  if (element.name.empty() || !ParseInteger(count, &value) || value < 0) {
+    BadHeaderLine(path, line_number, line);
+  }
+  element.count = static_cast<uint64_t>(value);
+  return element;
+}
+
+// A property line of `element` (a scalar or a list), marked scaled when it
+// is the vertex's x, y or z, which must be float or double.
+PlyProperty ParsePlyProperty(const std::string& path,
+                             size_t line_number,
+                             const std::string& line,
+                             std::istringstream& stream,
+                             const PlyElement& element) {
+  PlyProperty property;
+  std::string type;
+  stream >> type;
+  bool ok = true;
+  if (type == "list") {
+    std::string count_type, item_type;
+    stream >> count_type >> item_type >> property.name;
+    property.is_list = true;
+    ok = ParsePlyScalar(count_type, &property.count_type) &&
+         !property.count_type.is_float &&
+         ParsePlyScalar(item_type, &property.type);
+  } else {
+    stream >> property.name;
+    ok = ParsePlyScalar(type, &property.type);
+  }
+  if (!ok || property.name.empty()) BadHeaderLine(path, line_number, line);
+  if (element.name == "vertex" &&
+      (property.name == "x" || property.name == "y" || property.name == "z")) {
+    if (property.is_list || !property.type.is_float) {
+      Corrupt(path,
+              "vertex property " + property.name + " is not float or double");
+    }
+    property.scaled = true;
+  }
+  return property;
+}
+
+// The header's vertex element has x, y and z (the properties scaled).
+void CheckPlyVertexXyz(const std::string& path, const PlyHeader& header) {
+  int num_xyz = 0;
+  for (const PlyElement& element : header.elements) {
+    if (element.name != "vertex") continue;
+    for (const PlyProperty& property : element.properties) {
+      num_xyz += property.scaled ? 1 : 0;
+    }
+  }
+  if (num_xyz != 3) {
+    Corrupt(path, "PLY has no vertex element with x, y and z");
+  }
+}
+
 PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
   PlyHeader header;
   size_t pos = 0;
@@ -116,71 +203,20 @@ PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
       break;
     }
     if (keyword == "format") {
-      std::string format;
-      stream >> format;
-      if (format == "ascii") {
-        header.format = PlyFormat::kAscii;
-      } else if (format == "binary_little_endian") {
-        header.format = PlyFormat::kBinaryLittleEndian;
-      } else if (format == "binary_big_endian") {
-        throw InputError(
-            "cannot rescale " + path +
-            ": binary_big_endian PLY is not supported (convert it to "
-            "binary_little_endian or ascii first)");
-      } else {
-        Corrupt(path, "unknown PLY format \"" + format + "\"");
-      }
+      header.format = ParsePlyFormat(path, stream);
       have_format = true;
     } else if (keyword == "element") {
-      PlyElement element;
-      std::string count;
-      stream >> element.name >> count;
-      long long value = -1;
-      if (element.name.empty() || !ParseInteger(count, &value) || value < 0) {
-        Corrupt(path,
-                "bad PLY header line " + std::to_string(line_number) + ": \"" +
-                    line + "\"");
-      }
-      element.count = static_cast<uint64_t>(value);
-      header.elements.push_back(element);
+      header.elements.push_back(
+          ParsePlyElement(path, line_number, line, stream));
     } else if (keyword == "property") {
       if (header.elements.empty()) {
         Corrupt(path,
                 "PLY property before any element (header line " +
                     std::to_string(line_number) + ")");
       }
-      PlyProperty property;
-      std::string type;
-      stream >> type;
-      bool ok = true;
-      if (type == "list") {
-        std::string count_type, item_type;
-        stream >> count_type >> item_type >> property.name;
-        property.is_list = true;
-        ok = ParsePlyScalar(count_type, &property.count_type) &&
-             !property.count_type.is_float &&
-             ParsePlyScalar(item_type, &property.type);
-      } else {
-        stream >> property.name;
-        ok = ParsePlyScalar(type, &property.type);
-      }
-      if (!ok || property.name.empty()) {
-        Corrupt(path,
-                "bad PLY header line " + std::to_string(line_number) + ": \"" +
-                    line + "\"");
-      }
       PlyElement& element = header.elements.back();
-      if (element.name == "vertex" &&
-          (property.name == "x" || property.name == "y" ||
-           property.name == "z")) {
-        if (property.is_list || !property.type.is_float) {
-          Corrupt(
-              path,
-              "vertex property " + property.name + " is not float or double");
-        }
-        property.scaled = true;
-      }
-      element.properties.push_back(property);
+      element.properties.push_back(
+          ParsePlyProperty(path, line_number, line, stream, element));
     } else {
       Corrupt(path,
               "unknown PLY header keyword \"" + keyword + "\" on line " +
@@ -189,16 +225,7 @@ PlyHeader ParsePlyHeader(const std::string& path, const std::string& bytes) {
   }
   if (!have_end) Corrupt(path, "PLY header has no end_header line");
   if (!have_format) Corrupt(path, "PLY header has no format line");
-  int num_xyz = 0;
-  for (const PlyElement& element : header.elements) {
-    if (element.name != "vertex") continue;
-    for (const PlyProperty& property : element.properties) {
-      num_xyz += property.scaled ? 1 : 0;
-    }
-  }
-  if (num_xyz != 3) {
-    Corrupt(path, "PLY has no vertex element with x, y and z");
-  }
+  CheckPlyVertexXyz(path, header);
   header.data_offset = pos;
   return header;
 }
