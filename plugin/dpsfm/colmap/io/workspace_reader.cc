@@ -178,9 +178,9 @@ void ReadModel(const std::string& dir,
   std::string overlay;
   if (redirected) {
     std::error_code error;
-    overlay = MakeUniqueDirectory(fs::temp_directory_path(), "dpsfm-model-",
-                                  &error)
-                  .string();
+    overlay =
+        MakeUniqueDirectory(fs::temp_directory_path(), "dpsfm-model-", &error)
+            .string();
     if (overlay.empty()) {
       throw std::runtime_error("cannot create a temporary folder in " +
                                fs::temp_directory_path().string() + ": " +
@@ -205,6 +205,19 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
                                  const WorkspaceReadOptions& read)
     : options_(options), layout_(layout), read_(read) {
   if (!read_.model_checked) CheckModel(layout_.model_path, read_.read_path);
+  const std::vector<colmap::image_t> image_ids = ReadModelImages();
+  if (!options_.database_path.empty()) {
+    database_check_ =
+        CheckModelAgainstDatabase(options_.database_path, reconstruction_);
+  }
+  if (!options_.original_model_path.empty()) {
+    ReadOriginalModelCameras(image_ids);
+  }
+  IndexDPViews(image_ids);
+  ResolveSources(image_ids);
+}
+
+std::vector<colmap::image_t> WorkspaceReader::ReadModelImages() {
   ReadModel(layout_.model_path, read_.read_path, &reconstruction_);
   std::vector<colmap::image_t> image_ids = reconstruction_.RegImageIds();
   if (image_ids.empty()) {
@@ -222,32 +235,33 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     image_ids = ImagesWithTriangulatedPoints(
         reconstruction_, image_ids, layout_.model_path);
   }
+  return image_ids;
+}
 
-  if (!options_.database_path.empty()) {
-    database_check_ =
-        CheckModelAgainstDatabase(options_.database_path, reconstruction_);
+void WorkspaceReader::ReadOriginalModelCameras(
+    const std::vector<colmap::image_t>& image_ids) {
+  colmap::Reconstruction original;
+  CheckModel(options_.original_model_path);
+  ReadModel(options_.original_model_path, nullptr, &original);
+  for (const auto& entry : original.Images()) {
+    original_model_cameras_[entry.second.Name()] =
+        original.Camera(entry.second.CameraId());
   }
-  if (!options_.original_model_path.empty()) {
-    colmap::Reconstruction original;
-    CheckModel(options_.original_model_path);
-    ReadModel(options_.original_model_path, nullptr, &original);
-    for (const auto& entry : original.Images()) {
-      original_model_cameras_[entry.second.Name()] =
-          original.Camera(entry.second.CameraId());
-    }
-    std::vector<std::string> missing;
-    for (const colmap::image_t image_id : image_ids) {
-      const std::string& name = reconstruction_.Image(image_id).Name();
-      if (original_model_cameras_.count(name) == 0) missing.push_back(name);
-    }
-    if (!missing.empty()) {
-      throw InputError(std::to_string(missing.size()) + " images of " +
-                       layout_.model_path + " are not in " +
-                       options_.original_model_path + " (e.g. " + missing[0] +
-                       "): pass the model image_undistorter was run on");
-    }
+  std::vector<std::string> missing;
+  for (const colmap::image_t image_id : image_ids) {
+    const std::string& name = reconstruction_.Image(image_id).Name();
+    if (original_model_cameras_.count(name) == 0) missing.push_back(name);
   }
+  if (!missing.empty()) {
+    throw InputError(std::to_string(missing.size()) + " images of " +
+                     layout_.model_path + " are not in " +
+                     options_.original_model_path + " (e.g. " + missing[0] +
+                     "): pass the model image_undistorter was run on");
+  }
+}
 
+void WorkspaceReader::IndexDPViews(
+    const std::vector<colmap::image_t>& image_ids) {
   dp_index_.reset(new DPImageIndex(layout_));
   std::vector<std::string> missing;
   for (const colmap::image_t image_id : image_ids) {
@@ -265,7 +279,10 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     if (missing.size() > 5) message << ", ...";
     throw InputError(message.str());
   }
+}
 
+void WorkspaceReader::ResolveSources(
+    const std::vector<colmap::image_t>& image_ids) {
   std::map<std::string, LensCsvRow> lens_csv;
   if (!options_.lens_path.empty()) {
     lens_csv = ReadLensCsv(options_.lens_path);
@@ -289,13 +306,13 @@ WorkspaceReader::WorkspaceReader(const ScaleRunOptions& options,
     source.image_id = image_id;
     source.dp = dp_index_->Find(image.Name());
 
-    source.lens = ResolveLens(
-        image.Name(),
-        lens_csv,
-        flags,
-        ReadImageMetadata(originals, image.Name(), source.dp.left),
-        camera.MeanFocalLength(),
-        check);
+    source.lens =
+        ResolveLens(image.Name(),
+                    lens_csv,
+                    flags,
+                    ReadImageMetadata(originals, image.Name(), source.dp.left),
+                    camera.MeanFocalLength(),
+                    check);
     notes.Add(image.Name(), source.lens);
     CameraGeometry geometry;
     geometry.focal_px = camera.MeanFocalLength();
@@ -373,6 +390,123 @@ cv::Mat ResampleDepthToFrame(const cv::Mat& depth,
   return mapped;
 }
 
+namespace {
+
+// The view as the core takes it from its frames, its lens data with the
+// pitch of a DP-frame pixel (k x k model camera pixels); no depth yet.
+DPView ViewOfFrames(const ViewSource& source,
+                    const DPFrames& frames,
+                    bool reduced,
+                    int k) {
+  DPView view;
+  view.name = source.image_name;
+  view.left = frames.left;
+  view.right = frames.right;
+  if (reduced) view.frame_size = frames.frame_size;
+  view.frames.encoding = frames.encoding;
+  view.frames.encoding_reason = frames.encoding_reason;
+  view.frames.bits = frames.bits;
+  view.frames.lossy = frames.lossy;
+  view.lens = source.lens.lens;
+  // A DP-frame pixel covers k x k model camera pixels.
+  view.lens.pixel_pitch_um *= k;
+  return view;
+}
+
+// A sparse model's depths: each triangulated point of `image` in front of
+// it, at its pixel in a DP frame downsampled by k.
+std::vector<DepthPoint> TrackDepthPoints(const colmap::Reconstruction& model,
+                                         const colmap::Image& image,
+                                         int k) {
+  std::vector<DepthPoint> points;
+  const Eigen::Matrix3x4d cam_from_world = image.CamFromWorld().ToMatrix();
+  for (const colmap::Point2D& point2D : image.Points2D()) {
+    if (!point2D.HasPoint3D()) continue;
+    const Eigen::Vector3d xyz = model.Point3D(point2D.point3D_id).xyz;
+    const double depth = cam_from_world.row(2).dot(xyz.homogeneous());
+    if (!(depth > 0) || !std::isfinite(depth)) continue;
+    DepthPoint sample;
+    // COLMAP's 2D points put the top-left pixel centre at (0.5, 0.5); the
+    // core puts it at (0, 0), in DP-frame pixels: a DP pixel covers k x k
+    // model pixels, so model u is u / k in the frame's continuous
+    // coordinates (the inverse of the dense path's (x + 0.5) k).
+    sample.x = point2D.xy.x() / k - 0.5;
+    sample.y = point2D.xy.y() / k - 0.5;
+    sample.depth = depth;
+    points.push_back(sample);
+  }
+  return points;
+}
+
+}  // namespace
+
+const colmap::Camera* WorkspaceReader::OriginalCamera(
+    const ViewSource& source, const colmap::Camera& camera) const {
+  if (!layout_.dense) return nullptr;
+  const auto from_model = original_model_cameras_.find(source.image_name);
+  const auto from_database =
+      database_check_.original_cameras.find(source.image_name);
+  if (from_model != original_model_cameras_.end()) {
+    if (!SameGeometry(from_model->second, camera)) {
+      return &from_model->second;
+    }
+  } else if (from_database != database_check_.original_cameras.end() &&
+             !SameGeometry(from_database->second, camera)) {
+    return &from_database->second;
+  }
+  return nullptr;
+}
+
+int WorkspaceReader::FrameDownsampling(const cv::Size& frame_size,
+                                       const colmap::Camera& camera,
+                                       const colmap::Camera* original,
+                                       const std::string& image_name) const {
+  const colmap::Camera& frame_camera = original ? *original : camera;
+  try {
+    return DPFrameDownsampling(frame_size,
+                               static_cast<int>(frame_camera.width),
+                               static_cast<int>(frame_camera.height),
+                               image_name);
+  } catch (const InputError& error) {
+    if (layout_.dense && original == nullptr &&
+        options_.database_path.empty() &&
+        options_.original_model_path.empty()) {
+      throw InputError(std::string(error.what()) +
+                       "; if the DP views keep the geometry of distorted "
+                       "original images, pass --original_model_path (the "
+                       "model image_undistorter was run on) so their "
+                       "cameras can be mapped");
+    }
+    throw;
+  }
+}
+
+cv::Mat WorkspaceReader::ReadDenseDepth(const ViewSource& source,
+                                        const colmap::Camera& camera,
+                                        const colmap::Camera* original,
+                                        const cv::Size& frame_size,
+                                        int k) const {
+  cv::Mat depth = ReadColmapDepthMap(ReadPath(source.depth_source));
+  if (original != nullptr) {
+    depth = ResampleDepthToFrame(
+        depth, camera, *original, frame_size, k, read_.num_threads);
+  }
+  // The depth map covers the camera's field at its own resolution; it
+  // must keep the camera's aspect (PatchMatch scales both sides alike).
+  const double aspect_camera =
+      static_cast<double>(camera.width) / camera.height;
+  const double aspect_depth = static_cast<double>(depth.cols) / depth.rows;
+  if (std::abs(aspect_camera - aspect_depth) > 0.02 * aspect_camera) {
+    std::ostringstream message;
+    message << "depth map is " << depth.cols << "x" << depth.rows
+            << " but image " << source.image_name << " is " << camera.width
+            << "x" << camera.height
+            << " (different aspect): " << source.depth_source;
+    throw InputError(message.str());
+  }
+  return depth;
+}
+
 DPView WorkspaceReader::LoadView(size_t index,
                                  const FrameReduction& reduction,
                                  bool decode_together) const {
@@ -388,94 +522,14 @@ DPView WorkspaceReader::LoadView(size_t index,
   // A dense workspace's model is undistorted; the DP frames keep the
   // geometry of the original images. With the original camera known (from
   // the database) and different, depths are mapped through both cameras.
-  const colmap::Camera* original = nullptr;
+  const colmap::Camera* original = OriginalCamera(source, camera);
+  const int k =
+      FrameDownsampling(frames.frame_size, camera, original, source.image_name);
+  DPView view = ViewOfFrames(source, frames, reduction.reduce != nullptr, k);
   if (layout_.dense) {
-    const auto from_model = original_model_cameras_.find(source.image_name);
-    const auto from_database =
-        database_check_.original_cameras.find(source.image_name);
-    if (from_model != original_model_cameras_.end()) {
-      if (!SameGeometry(from_model->second, camera)) {
-        original = &from_model->second;
-      }
-    } else if (from_database != database_check_.original_cameras.end() &&
-               !SameGeometry(from_database->second, camera)) {
-      original = &from_database->second;
-    }
-  }
-  const colmap::Camera& frame_camera = original ? *original : camera;
-  int k = 0;
-  try {
-    k = DPFrameDownsampling(frames.frame_size,
-                            static_cast<int>(frame_camera.width),
-                            static_cast<int>(frame_camera.height),
-                            source.image_name);
-  } catch (const InputError& error) {
-    if (layout_.dense && original == nullptr &&
-        options_.database_path.empty() &&
-        options_.original_model_path.empty()) {
-      throw InputError(std::string(error.what()) +
-                       "; if the DP views keep the geometry of distorted "
-                       "original images, pass --original_model_path (the "
-                       "model image_undistorter was run on) so their "
-                       "cameras can be mapped");
-    }
-    throw;
-  }
-  DPView view;
-  view.name = source.image_name;
-  view.left = frames.left;
-  view.right = frames.right;
-  if (reduction.reduce) view.frame_size = frames.frame_size;
-  view.frames.encoding = frames.encoding;
-  view.frames.encoding_reason = frames.encoding_reason;
-  view.frames.bits = frames.bits;
-  view.frames.lossy = frames.lossy;
-  view.lens = source.lens.lens;
-  // A DP-frame pixel covers k x k model camera pixels.
-  view.lens.pixel_pitch_um *= k;
-
-  if (layout_.dense) {
-    view.depth = ReadColmapDepthMap(ReadPath(source.depth_source));
-    if (original != nullptr) {
-      view.depth = ResampleDepthToFrame(view.depth,
-                                        camera,
-                                        *original,
-                                        frames.frame_size,
-                                        k,
-                                        read_.num_threads);
-    }
-    // The depth map covers the camera's field at its own resolution; it
-    // must keep the camera's aspect (PatchMatch scales both sides alike).
-    const double aspect_camera =
-        static_cast<double>(camera.width) / camera.height;
-    const double aspect_depth =
-        static_cast<double>(view.depth.cols) / view.depth.rows;
-    if (std::abs(aspect_camera - aspect_depth) > 0.02 * aspect_camera) {
-      std::ostringstream message;
-      message << "depth map is " << view.depth.cols << "x" << view.depth.rows
-              << " but image " << source.image_name << " is " << camera.width
-              << "x" << camera.height
-              << " (different aspect): " << source.depth_source;
-      throw InputError(message.str());
-    }
+    view.depth = ReadDenseDepth(source, camera, original, frames.frame_size, k);
   } else {
-    const Eigen::Matrix3x4d cam_from_world = image.CamFromWorld().ToMatrix();
-    for (const colmap::Point2D& point2D : image.Points2D()) {
-      if (!point2D.HasPoint3D()) continue;
-      const Eigen::Vector3d xyz =
-          reconstruction_.Point3D(point2D.point3D_id).xyz;
-      const double depth = cam_from_world.row(2).dot(xyz.homogeneous());
-      if (!(depth > 0) || !std::isfinite(depth)) continue;
-      DepthPoint sample;
-      // COLMAP's 2D points put the top-left pixel centre at (0.5, 0.5); the
-      // core puts it at (0, 0), in DP-frame pixels: a DP pixel covers k x k
-      // model pixels, so model u is u / k in the frame's continuous
-      // coordinates (the inverse of the dense path's (x + 0.5) k).
-      sample.x = point2D.xy.x() / k - 0.5;
-      sample.y = point2D.xy.y() / k - 0.5;
-      sample.depth = depth;
-      view.depth_points.push_back(sample);
-    }
+    view.depth_points = TrackDepthPoints(reconstruction_, image, k);
   }
   return view;
 }

@@ -92,6 +92,40 @@ class WorkspaceReader {
                   bool decode_together = false) const;
 
  private:
+  // The constructor's steps, in order.
+
+  // Reads the model: its registered images in name order (in a sparse
+  // model, those with triangulated points).
+  std::vector<colmap::image_t> ReadModelImages();
+  // --original_model_path: each image's camera there; every image in it.
+  void ReadOriginalModelCameras(const std::vector<colmap::image_t>& image_ids);
+  // The DP views' folder indexed; every image has a left view.
+  void IndexDPViews(const std::vector<colmap::image_t>& image_ids);
+  // Each image's DP views, lens data (checked against its camera) and depth
+  // source, into sources_.
+  void ResolveSources(const std::vector<colmap::image_t>& image_ids);
+
+  // LoadView's steps.
+
+  // The view's camera in the original, distorted geometry when a dense
+  // workspace's undistorted camera differs from it (null: none, or the
+  // same).
+  const colmap::Camera* OriginalCamera(const ViewSource& source,
+                                       const colmap::Camera& camera) const;
+  // k: the DP frames are the frame camera's size / k (the original camera
+  // when there is one); the error says how to map distorted views.
+  int FrameDownsampling(const cv::Size& frame_size,
+                        const colmap::Camera& camera,
+                        const colmap::Camera* original,
+                        const std::string& image_name) const;
+  // A dense view's depth map, mapped into the DP frame through the original
+  // camera when there is one, checked to keep the camera's aspect.
+  cv::Mat ReadDenseDepth(const ViewSource& source,
+                         const colmap::Camera& camera,
+                         const colmap::Camera* original,
+                         const cv::Size& frame_size,
+                         int k) const;
+
   std::string DepthMapPath(const std::string& image_name) const;
   std::string ReadPath(const std::string& path) const;
 
