@@ -71,6 +71,104 @@ std::vector<int> DPScaleController::VisitingOrder() const {
   return SpreadViewOrder(placements);
 }
 
+namespace {
+
+// The estimator's reduction of each frame to the working resolution.
+FrameReduction EstimatorReduction(const DPScaleEstimator* estimator) {
+  return FrameReduction{[estimator](const cv::Mat& rows, const cv::Size& size) {
+                          return estimator->ReduceFrame(rows, size);
+                        },
+                        [estimator](const cv::Size& size) {
+                          return estimator->ReduceFrameStripRows(size);
+                        }};
+}
+
+// The view added to the estimate; what the core cannot take is an
+// InputError naming the image.
+DPViewSummary AddViewNamed(DPScaleEstimator* estimator, const DPView& view) {
+  try {
+    return estimator->AddView(view);
+  } catch (const CheckFailure& error) {
+    // A view the core cannot take: its own words, without the check.
+    throw InputError("image " + view.name + ": " +
+                     (error.message().empty() ? std::string(error.what())
+                                              : error.message()));
+  } catch (const std::invalid_argument& error) {
+    throw InputError("image " + view.name + ": " + error.what());
+  }
+}
+
+// Overlays: the first, middle and last (k-th) view of those planned, each
+// once, 8-bit at the working resolution.
+void CaptureOverlay(int k,
+                    int planned,
+                    const DPView& view,
+                    std::vector<OverlayImage>* overlays) {
+  if (!(k == 0 || k == (planned - 1) / 2 || k == planned - 1) ||
+      !(overlays->empty() || overlays->back().view != k)) {
+    return;
+  }
+  OverlayImage overlay;
+  overlay.view = k;
+  cv::Mat(0.5 * (view.left + view.right))
+      .convertTo(overlay.image, CV_8U, 255.0);
+  overlay.frame_size = view.frame_size;
+  overlays->push_back(overlay);
+}
+
+// "[k/planned] name: ..." with the time so far and the most left to go.
+void LogView(int k,
+             int planned,
+             const std::string& name,
+             const DPViewSummary& summary,
+             double elapsed) {
+  LOG(INFO) << "[" << k + 1 << "/" << planned << "] " << name << ": "
+            << summary.patches_valid << " of " << summary.patches_tried
+            << " patches with a blur estimate, " << summary.patches_kept
+            << " kept (" << Seconds(summary.seconds) << "; " << Seconds(elapsed)
+            << " so far"
+            << (k + 1 < planned
+                    ? ", at most " +
+                          Seconds(elapsed / (k + 1) * (planned - k - 1)) +
+                          " to go"
+                    : std::string())
+            << ")";
+}
+
+// A checkpoint's estimate, for the log.
+void LogCheckpoint(int views,
+                   const DPScaleResult& provisional,
+                   double seconds) {
+  if (provisional.success) {
+    LOG(INFO) << "  after " << views << " views: scale " << provisional.scale
+              << " (95% interval " << provisional.scale_ci_low << " .. "
+              << provisional.scale_ci_high << "; " << Seconds(seconds) << ")";
+  } else {
+    LOG(INFO) << "  after " << views << " views: no scale yet ("
+              << RefusalLine(provisional.refusal) << "; " << Seconds(seconds)
+              << ")";
+  }
+}
+
+// The views never visited, and why when the budget ran out.
+void RecordSkipped(const std::vector<int>& order,
+                   int num_views,
+                   ScaleRun* run) {
+  for (int k = static_cast<int>(run->visited.size()); k < num_views; ++k) {
+    run->skipped.push_back(order[k]);
+  }
+  if (run->stop_reason.empty() && !run->skipped.empty()) {
+    std::ostringstream why;
+    why << "the view budget (--DPScaleEstimator.max_views " << run->planned
+        << ") was reached before the scale settled";
+    run->stop_reason = why.str();
+    LOG(INFO) << "  " << run->stop_reason << ": " << run->skipped.size()
+              << " views left unvisited";
+  }
+}
+
+}  // namespace
+
 ScaleRun DPScaleController::Run() {
   ScaleRun run;
   const int num_views = static_cast<int>(reader_->NumViews());
@@ -79,9 +177,20 @@ ScaleRun DPScaleController::Run() {
   EstimateCaches caches;
   run.planned = budget.Planned();
   const std::vector<int> order = VisitingOrder();
+  VisitViews(order, &budget, &caches, &run);
+  RecordSkipped(order, num_views, &run);
+  run.checkpoints = budget.Checkpoints();
+  FinalEstimate(&caches, &run);
+  return run;
+}
+
+void DPScaleController::VisitViews(const std::vector<int>& order,
+                                   ViewBudget* budget,
+                                   EstimateCaches* caches,
+                                   ScaleRun* run) {
   colmap::Timer views_timer;
   views_timer.Start();
-  const int planned = run.planned;
+  const int planned = run->planned;
   // Views are read ahead (decoding and depth maps overlap the blur search),
   // never beyond those planned, and no read starts while a checkpoint
   // decides (the run may end there: with one view read ahead, the default,
@@ -89,125 +198,77 @@ ScaleRun DPScaleController::Run() {
   // working resolution as soon as it is decoded (a strip at a time where it
   // can be), so a read holds a view's frames as decoded (both at once with
   // decode_together) and a view waiting no more than the search needs.
-  const DPScaleEstimator* estimator = estimator_;
   ViewPrefetcher prefetcher(
       reader_,
       std::vector<int>(order.begin(), order.begin() + planned),
       prefetch_views_,
-      FrameReduction{[estimator](const cv::Mat& rows, const cv::Size& size) {
-                       return estimator->ReduceFrame(rows, size);
-                     },
-                     [estimator](const cv::Size& size) {
-                       return estimator->ReduceFrameStripRows(size);
-                     }},
+      EstimatorReduction(estimator_),
       decode_together_);
-  // Overlays: the first, middle and last view of those planned.
   for (int k = 0; k < planned; ++k) {
-    const int index = order[k];
     // No read starts before a checkpoint's decision: the run may end there.
-    ViewPrefetcher::Read read = prefetcher.Next(!budget.IsCheckpoint(k + 1));
+    ViewPrefetcher::Read read = prefetcher.Next(!budget->IsCheckpoint(k + 1));
     const DPView& view = read.view;
-    run.timings.read += read.seconds;
-    run.timings.read_wait += read.waited;
-    DPViewSummary summary;
-    try {
-      summary = estimator_->AddView(view);
-    } catch (const CheckFailure& error) {
-      // A view the core cannot take: its own words, without the check.
-      throw InputError("image " + view.name + ": " +
-                       (error.message().empty() ? std::string(error.what())
-                                                : error.message()));
-    } catch (const std::invalid_argument& error) {
-      throw InputError("image " + view.name + ": " + error.what());
+    run->timings.read += read.seconds;
+    run->timings.read_wait += read.waited;
+    const DPViewSummary summary = AddViewNamed(estimator_, view);
+    run->timings.blur += summary.seconds;
+    if (capture_overlays_) {
+      CaptureOverlay(k, planned, view, &run->overlay_images);
     }
-    run.timings.blur += summary.seconds;
-    if (capture_overlays_ &&
-        (k == 0 || k == (planned - 1) / 2 || k == planned - 1) &&
-        (run.overlay_images.empty() || run.overlay_images.back().view != k)) {
-      OverlayImage overlay;
-      overlay.view = k;
-      cv::Mat(0.5 * (view.left + view.right))
-          .convertTo(overlay.image, CV_8U, 255.0);
-      overlay.frame_size = view.frame_size;
-      run.overlay_images.push_back(overlay);
-    }
-    run.visited.push_back(index);
-    const double elapsed = views_timer.ElapsedSeconds();
-    LOG(INFO) << "[" << k + 1 << "/" << planned << "] " << view.name << ": "
-              << summary.patches_valid << " of " << summary.patches_tried
-              << " patches with a blur estimate, " << summary.patches_kept
-              << " kept (" << Seconds(summary.seconds) << "; "
-              << Seconds(elapsed) << " so far"
-              << (k + 1 < planned
-                      ? ", at most " +
-                            Seconds(elapsed / (k + 1) * (planned - k - 1)) +
-                            " to go"
-                      : std::string())
-              << ")";
-    run.summaries.push_back(summary);
+    run->visited.push_back(order[k]);
+    LogView(k, planned, view.name, summary, views_timer.ElapsedSeconds());
+    run->summaries.push_back(summary);
     // The view's frames and depth map are done with: the checkpoint below
     // runs on what AddView kept.
     read = ViewPrefetcher::Read();
-    if (budget.IsCheckpoint(k + 1)) {
-      colmap::Timer check_timer;
-      check_timer.Start();
-      const DPScaleResult provisional = estimator_->Estimate(&caches);
-      Checkpoint checkpoint;
-      checkpoint.views = k + 1;
-      checkpoint.success = provisional.success;
-      checkpoint.scale = provisional.scale;
-      checkpoint.ci_low = provisional.scale_ci_low;
-      checkpoint.ci_high = provisional.scale_ci_high;
-      checkpoint.seconds = check_timer.ElapsedSeconds();
-      std::string why;
-      const bool stop = budget.Record(checkpoint, &why);
-      if (provisional.success) {
-        LOG(INFO) << "  after " << k + 1 << " views: scale "
-                  << provisional.scale << " (95% interval "
-                  << provisional.scale_ci_low << " .. "
-                  << provisional.scale_ci_high << "; "
-                  << Seconds(checkpoint.seconds) << ")";
-      } else {
-        LOG(INFO) << "  after " << k + 1 << " views: no scale yet ("
-                  << RefusalLine(provisional.refusal) << "; "
-                  << Seconds(checkpoint.seconds) << ")";
-      }
-      if (stop) {
-        // The final estimate would repeat this one (the same views).
-        run.result = provisional;
-        run.stop_reason = why;
-        LOG(INFO) << "  " << why << ": " << num_views - (k + 1)
-                  << " views left unvisited ("
-                  << "--DPScaleEstimator.all_views 1 visits them all)";
-        break;
-      }
+    if (budget->IsCheckpoint(k + 1)) {
+      if (RunCheckpoint(k + 1, budget, caches, run)) break;
       prefetcher.Resume();
     }
   }
-  for (int k = static_cast<int>(run.visited.size()); k < num_views; ++k) {
-    run.skipped.push_back(order[k]);
-  }
-  if (run.stop_reason.empty() && !run.skipped.empty()) {
-    std::ostringstream why;
-    why << "the view budget (--DPScaleEstimator.max_views " << planned
-        << ") was reached before the scale settled";
-    run.stop_reason = why.str();
-    LOG(INFO) << "  " << run.stop_reason << ": " << run.skipped.size()
-              << " views left unvisited";
-  }
-  run.checkpoints = budget.Checkpoints();
+}
 
-  LOG_HEADING2("Scale estimation");
-  if (run.checkpoints.empty() ||
-      run.checkpoints.back().views != static_cast<int>(run.visited.size())) {
-    run.result = estimator_->Estimate(&caches);
-  } else {
-    LOG(INFO) << "  the estimate of the last checkpoint (" << run.visited.size()
-              << " views)";
+bool DPScaleController::RunCheckpoint(int views,
+                                      ViewBudget* budget,
+                                      EstimateCaches* caches,
+                                      ScaleRun* run) const {
+  colmap::Timer check_timer;
+  check_timer.Start();
+  const DPScaleResult provisional = estimator_->Estimate(caches);
+  Checkpoint checkpoint;
+  checkpoint.views = views;
+  checkpoint.success = provisional.success;
+  checkpoint.scale = provisional.scale;
+  checkpoint.ci_low = provisional.scale_ci_low;
+  checkpoint.ci_high = provisional.scale_ci_high;
+  checkpoint.seconds = check_timer.ElapsedSeconds();
+  std::string why;
+  const bool stop = budget->Record(checkpoint, &why);
+  LogCheckpoint(views, provisional, checkpoint.seconds);
+  if (stop) {
+    // The final estimate would repeat this one (the same views).
+    run->result = provisional;
+    run->stop_reason = why;
+    LOG(INFO) << "  " << why << ": "
+              << static_cast<int>(reader_->NumViews()) - views
+              << " views left unvisited ("
+              << "--DPScaleEstimator.all_views 1 visits them all)";
   }
-  run.timings.linear = run.result.seconds_linear;
-  run.timings.intensity = run.result.seconds_intensity;
-  return run;
+  return stop;
+}
+
+void DPScaleController::FinalEstimate(EstimateCaches* caches,
+                                      ScaleRun* run) const {
+  LOG_HEADING2("Scale estimation");
+  if (run->checkpoints.empty() ||
+      run->checkpoints.back().views != static_cast<int>(run->visited.size())) {
+    run->result = estimator_->Estimate(caches);
+  } else {
+    LOG(INFO) << "  the estimate of the last checkpoint ("
+              << run->visited.size() << " views)";
+  }
+  run->timings.linear = run->result.seconds_linear;
+  run->timings.intensity = run->result.seconds_intensity;
 }
 
 nlohmann::json ViewBudgetReport(const ScaleRun& run,
@@ -624,12 +685,10 @@ RescaleWorkspaceResult Rescale(const ScaleRunOptions& options,
   return rescaled;
 }
 
-}  // namespace
-
-RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
-                              DPScaleOptions core_options) {
-  colmap::Timer total_timer;
-  total_timer.Start();
+// Step 0: the workspace's layout, the estimate's options checked, and the
+// model named in the log.
+WorkspaceLayout StartRun(const ScaleRunOptions& options,
+                         const DPScaleOptions& core_options) {
   LOG_HEADING1("DP scale estimation");
   const WorkspaceLayout layout = ResolveWorkspaceLayout(options);
   std::string failure;
@@ -638,31 +697,32 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   }
   LOG(INFO) << "Model: " << layout.model_path << " ("
             << (layout.dense ? "dense workspace" : "sparse model") << ")";
+  return layout;
+}
 
-  // The folder whose metric files are rescaled and which holds the record.
-  const std::string root =
-      layout.dense ? options.workspace_path : options.input_path;
-  const bool in_place = !options.dry_run && options.output_path.empty();
-  if (in_place && FinishInterruptedCommit(root)) {
-    return RunOutcome::Success();
-  }
-  const RescalePlan plan = PlanRun(options, layout, root);
+// How the workspace is read: the model as the plan checked it, the files
+// of an interrupted rescale as it will leave them.
+WorkspaceReadOptions ReadOptions(const RescalePlan& plan, int num_threads) {
   WorkspaceReadOptions read;
   read.model_checked = true;
-  read.num_threads = core_options.num_threads;
+  read.num_threads = num_threads;
   if (plan.interrupted()) {
     read.read_path = [&plan](const std::string& path) {
       return plan.ReadPath(path);
     };
   }
-  const WorkspaceReader reader(options, layout, read);
-  const std::vector<ViewSource> sources = LogInputs(options, reader);
+  return read;
+}
 
-  LOG_HEADING2("Per-patch DP blur estimation");
-  const ProfileChoice profile = ChooseProfile(options, sources);
+// Step 4 (continued): the chosen profile's PSF, each view's lens data
+// checked against the conditions it was measured under (before the long
+// work), and written into the estimate's options.
+PsfChoice ApplyProfile(const ScaleRunOptions& options,
+                       const WorkspaceReader& reader,
+                       const std::vector<ViewSource>& sources,
+                       const ProfileChoice& profile,
+                       DPScaleOptions* core_options) {
   const PsfChoice psf = MakePsfField(profile.model, profile.path);
-  // Before the long work: each view's lens data against the conditions
-  // the profile was measured under.
   std::vector<ProfileCheckView> check_views;
   for (const ViewSource& source : sources) {
     const colmap::Camera& camera = reader.reconstruction().Camera(
@@ -673,25 +733,122 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
          static_cast<int>(std::max(camera.width, camera.height))});
   }
   CheckViewsAgainstProfile(psf, check_views, options.profile_applies);
-  psf.ApplyTo(&core_options);
-  if (!core_options.Check(&failure)) {
+  psf.ApplyTo(core_options);
+  std::string failure;
+  if (!core_options->Check(&failure)) {
     throw InputError("invalid DPScaleEstimator option with the DP profile " +
                      profile.source + ": " + failure);
   }
   LOG(INFO) << "DP PSF: " << profile.source << " (" << psf.field.Name()
-            << SelfCalibrationNote(core_options.psf_self_calibration) << ")";
+            << SelfCalibrationNote(core_options->psf_self_calibration) << ")";
+  return psf;
+}
 
-  // Step 5: the view loop and the estimate. One thread asked for means no
-  // reading thread either, and one frame file decoded at a time.
-  DPScaleEstimator estimator(core_options, psf.field);
-  const bool one_thread = core_options.num_threads == 1;
+// Step 5: the view loop and the estimate. One thread asked for means no
+// reading thread either, and one frame file decoded at a time.
+ScaleRun VisitAndEstimate(const ScaleRunOptions& options,
+                          int num_threads,
+                          const WorkspaceReader& reader,
+                          DPScaleEstimator* estimator) {
+  const bool one_thread = num_threads == 1;
   DPScaleController controller(options.view_budget,
                                &reader,
-                               &estimator,
+                               estimator,
                                !options.report_path.empty(),
                                one_thread ? 0 : options.prefetch_views,
                                !one_thread);
-  ScaleRun run = controller.Run();
+  return controller.Run();
+}
+
+// The report written, and where, in the log.
+void WriteReport(const std::string& path, const nlohmann::json& report) {
+  WriteJsonFile(path, report);
+  LOG(INFO) << "Report: " << path;
+}
+
+// No scale: the full account before the one line that says what decided.
+RunOutcome Refused(const DPScaleResult& result) {
+  LOG(INFO) << "No scale; the refusal in full:";
+  for (const std::string& line : RefusalAccount(result.refusal)) {
+    LOG(INFO) << "  " << line;
+  }
+  return RunOutcome::Failure("no scale: " + RefusalLine(result.refusal) +
+                             "; nothing was changed");
+}
+
+// The scale found, the stages' answers and where the time went.
+void LogEstimate(const DPScaleResult& result, const RunTimings& timings) {
+  LOG(INFO) << "Linear estimate s* = " << result.scale_initial
+            << ", final s = " << result.scale << " (95% interval "
+            << result.scale_ci_low << " .. " << result.scale_ci_high
+            << "; intensity stage: " << result.intensity_status << ")";
+  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
+            << Seconds(timings.read_wait) << " not overlapped), blur "
+            << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
+            << ", intensity " << Seconds(timings.intensity);
+}
+
+// A dry run's last line: the scale, and that nothing was changed.
+void LogDryRun(const DPScaleResult& result, const RescalePlan& plan) {
+  LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed"
+            << (plan.interrupted()
+                    ? " (estimated on the state that finishing the "
+                      "interrupted rescale will leave: " +
+                          std::to_string(plan.StagedFilesRead().size()) +
+                          " staged files read)"
+                    : std::string());
+}
+
+// The report after a rescale: the run's, with what was rescaled.
+nlohmann::json RescaledReport(nlohmann::json report,
+                              const RescaleWorkspaceResult& rescaled) {
+  report["rescaled_files"] = rescaled.rescaled_files;
+  report["cumulative_scale"] = rescaled.entry.cumulative_scale;
+  report["record_path"] = rescaled.record_path;
+  return report;
+}
+
+// A rescale's last line: the scale, what was rescaled where, and the record.
+void LogRescaled(const ScaleRunOptions& options,
+                 const std::string& root,
+                 const DPScaleResult& result,
+                 double seconds,
+                 const RescaleWorkspaceResult& rescaled) {
+  LOG(INFO) << ScaleLine(result) << ": " << rescaled.rescaled_files.size()
+            << " files rescaled "
+            << (options.output_path.empty() ? "in place in " + root
+                                            : "into " + options.output_path)
+            << " (" << Seconds(seconds)
+            << "); the model is now in metres. Record: "
+            << rescaled.record_path;
+}
+
+}  // namespace
+
+RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
+                              DPScaleOptions core_options) {
+  colmap::Timer total_timer;
+  total_timer.Start();
+  const WorkspaceLayout layout = StartRun(options, core_options);
+  // The folder whose metric files are rescaled and which holds the record.
+  const std::string root =
+      layout.dense ? options.workspace_path : options.input_path;
+  const bool in_place = !options.dry_run && options.output_path.empty();
+  if (in_place && FinishInterruptedCommit(root)) {
+    return RunOutcome::Success();
+  }
+  const RescalePlan plan = PlanRun(options, layout, root);
+  const WorkspaceReader reader(
+      options, layout, ReadOptions(plan, core_options.num_threads));
+  const std::vector<ViewSource> sources = LogInputs(options, reader);
+
+  LOG_HEADING2("Per-patch DP blur estimation");
+  const ProfileChoice profile = ChooseProfile(options, sources);
+  const PsfChoice psf =
+      ApplyProfile(options, reader, sources, profile, &core_options);
+  DPScaleEstimator estimator(core_options, psf.field);
+  ScaleRun run =
+      VisitAndEstimate(options, core_options.num_threads, reader, &estimator);
   const DPScaleResult& result = run.result;
   RunTimings& timings = run.timings;
   LogResult(result);
@@ -702,59 +859,30 @@ RunOutcome RunScaleEstimation(const ScaleRunOptions& options,
   const ReportPlotFiles plots =
       WritePlots(options, run, core_options.num_threads);
   if (!options.report_path.empty() && !rescale) {
-    WriteJsonFile(options.report_path,
-                  RunReport(run, sources, reader, profile.source, plots, plan));
-    LOG(INFO) << "Report: " << options.report_path;
+    WriteReport(options.report_path,
+                RunReport(run, sources, reader, profile.source, plots, plan));
   }
-  if (!result.success) {
-    // The full account before the one line that says what decided.
-    LOG(INFO) << "No scale; the refusal in full:";
-    for (const std::string& line : RefusalAccount(result.refusal)) {
-      LOG(INFO) << "  " << line;
-    }
-    return RunOutcome::Failure("no scale: " + RefusalLine(result.refusal) +
-                               "; nothing was changed");
-  }
-  LOG(INFO) << "Linear estimate s* = " << result.scale_initial
-            << ", final s = " << result.scale << " (95% interval "
-            << result.scale_ci_low << " .. " << result.scale_ci_high
-            << "; intensity stage: " << result.intensity_status << ")";
-  LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
-            << Seconds(timings.read_wait) << " not overlapped), blur "
-            << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)
-            << ", intensity " << Seconds(timings.intensity);
+  if (!result.success) return Refused(result);
+  LogEstimate(result, timings);
   if (options.dry_run) {
-    LOG(INFO) << ScaleLine(result) << "; dry run: nothing was changed"
-              << (plan.interrupted()
-                      ? " (estimated on the state that finishing the "
-                        "interrupted rescale will leave: " +
-                            std::to_string(plan.StagedFilesRead().size()) +
-                            " staged files read)"
-                      : std::string());
+    LogDryRun(result, plan);
     return RunOutcome::Success();
   }
 
+  // Step 7: the rescale, and the report with what it wrote.
   colmap::Timer rescale_timer;
   rescale_timer.Start();
   const RescaleWorkspaceResult rescaled = Rescale(options, plan, result.scale);
   timings.rescale = rescale_timer.ElapsedSeconds();
   timings.total = total_timer.ElapsedSeconds();
   if (!options.report_path.empty()) {
-    nlohmann::json report =
-        RunReport(run, sources, reader, profile.source, plots, plan);
-    report["rescaled_files"] = rescaled.rescaled_files;
-    report["cumulative_scale"] = rescaled.entry.cumulative_scale;
-    report["record_path"] = rescaled.record_path;
-    WriteJsonFile(options.report_path, report);
-    LOG(INFO) << "Report: " << options.report_path;
+    WriteReport(
+        options.report_path,
+        RescaledReport(
+            RunReport(run, sources, reader, profile.source, plots, plan),
+            rescaled));
   }
-  LOG(INFO) << ScaleLine(result) << ": " << rescaled.rescaled_files.size()
-            << " files rescaled "
-            << (options.output_path.empty() ? "in place in " + root
-                                            : "into " + options.output_path)
-            << " (" << Seconds(timings.rescale)
-            << "); the model is now in metres. Record: "
-            << rescaled.record_path;
+  LogRescaled(options, root, result, timings.rescale, rescaled);
   return RunOutcome::Success();
 }
 

@@ -50,7 +50,25 @@ class DPScaleController {
   ScaleRun Run();
 
  private:
+  // Run's steps, in order.
+
+  // The views in SpreadViewOrder.
   std::vector<int> VisitingOrder() const;
+  // The planned views read (ahead, ViewPrefetcher), added to the estimate
+  // and logged, with a checkpoint wherever the budget has one, until the
+  // budget stops the run or the planned views are done.
+  void VisitViews(const std::vector<int>& order,
+                  ViewBudget* budget,
+                  EstimateCaches* caches,
+                  ScaleRun* run);
+  // The estimate after `views` views, recorded in the budget and logged;
+  // true when the budget stops the run there (its estimate is the result).
+  bool RunCheckpoint(int views,
+                     ViewBudget* budget,
+                     EstimateCaches* caches,
+                     ScaleRun* run) const;
+  // The estimate of the visited views, unless the last checkpoint made it.
+  void FinalEstimate(EstimateCaches* caches, ScaleRun* run) const;
 
   ViewBudgetOptions budget_;
   const WorkspaceReader* reader_;
