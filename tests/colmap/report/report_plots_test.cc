@@ -666,29 +666,110 @@ TEST(ReportPlots, LossPlotWithoutCurveDrawsTheCuesAsBars) {
   }
 }
 
-TEST(ReportPlots, BlurFitTitleResidualIsTheReports) {
-  // A residual unlike the points' scatter about y = x (DP-frame pixels,
-  // final scale), so that a title recomputing it would show another number.
+// Pixels with a colour (not white, grey or black): the views' points.
+int ColouredPixels(const cv::Mat& bgr) {
+  int count = 0;
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      const int hi = std::max({p[0], p[1], p[2]});
+      const int lo = std::min({p[0], p[1], p[2]});
+      count += hi - lo > 60;
+    }
+  }
+  return count;
+}
+
+// The median |measured - predicted| over the used patches of used views,
+// in DP-frame px, with predictions under `scale` (NaN: the result's own).
+double MedianResidual(const DPScaleResult& result, double scale) {
+  std::vector<double> residuals;
+  for (const PatchSample& s : result.patches) {
+    if (!s.used || !result.views[s.view].used) continue;
+    const DPViewResult& view = result.views[s.view];
+    // RealisticResult: DP-frame px are the lens's pixels.
+    const double predicted =
+        std::isnan(scale)
+            ? s.predicted_radius_px * s.radius_frame_px / s.radius_px
+            : PredictBlurRadiusPx(view.lens,
+                                  view.lens.PixelPitchMm(),
+                                  scale,
+                                  view.focus_distance_model,
+                                  s.depth);
+    residuals.push_back(std::abs(s.radius_frame_px - predicted));
+  }
+  std::sort(residuals.begin(), residuals.end());
+  return residuals[residuals.size() / 2];
+}
+
+// The number after "median |residual| " in a title.
+double TitleResidual(const std::string& title) {
+  const std::string key = "median |residual| ";
+  const size_t at = title.find(key);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(title.c_str() + at + key.size(), nullptr);
+}
+
+// The blur-fit title names the scale its lines and predictions are drawn
+// under, and the median residual of the points it draws under that scale:
+// the answer's, or for a refused run the DP data's own reading s*.
+TEST(ReportPlots, BlurFitTitleNamesItsScaleAndTheDrawnResidual) {
   DPScaleResult result = RealisticResult(3, 2.0);
-  result.linear_median_abs_residual_px = 0.106;
-  const nlohmann::json report = MakeReport(result, {}, {}, RunTimings());
-  const double reported =
-      report.at("linear_median_abs_residual_px").get<double>();
   const std::string title = BlurFitTitle(result);
   SCOPED_TRACE(title);
   MaybeDump(RenderBlurFitPlot(result), "residual_blur_fit.png");
-  const size_t at = title.find("= ");
-  ASSERT_NE(at, std::string::npos);
-  const double shown = std::strtod(title.c_str() + at + 2, nullptr);
-  EXPECT_NEAR(shown, reported, 5e-4 * reported);
-  EXPECT_NE(title.find("px"), std::string::npos);
-  EXPECT_NE(title.find("linear fit"), std::string::npos);
+  EXPECT_NE(title.find("final s = 0.42"), std::string::npos);
+  const double expected = MedianResidual(result, std::nan(""));
+  EXPECT_NEAR(TitleResidual(title), expected, 5e-3 * expected);
 
-  // No linear fit (a refusal before it): no number.
+  // Refused with the DP data's reading: drawn under s*, said so.
   DPScaleResult refused = result;
   refused.success = false;
-  refused.linear_median_abs_residual_px = 0;
+  refused.scale = std::nan("");
+  refused.scale_initial = 0.35;
+  for (PatchSample& s : refused.patches) s.predicted_radius_px = std::nan("");
+  const std::string refused_title = BlurFitTitle(refused);
+  SCOPED_TRACE(refused_title);
+  MaybeDump(RenderBlurFitPlot(refused), "residual_refused_blur_fit.png");
+  EXPECT_NE(refused_title.find("s* = 0.35"), std::string::npos);
+  EXPECT_NE(refused_title.find("not adopted"), std::string::npos);
+  const double under_s_star = MedianResidual(refused, 0.35);
+  EXPECT_NEAR(TitleResidual(refused_title), under_s_star, 5e-3 * under_s_star);
+  EXPECT_GT(std::abs(under_s_star - expected), 0.05 * expected);
+  // Its right panel has the points (measured against predicted under s*).
+  const BlurFitPanels panels = BlurFitAxes(refused);
+  const cv::Mat picture = RenderBlurFitPlot(refused);
+  EXPECT_GT(ColouredPixels(picture(panels.right.area)), 200);
+
+  // No reading at all (a refusal before the linear stage): no number.
+  refused.scale_initial = std::nan("");
   EXPECT_EQ(BlurFitTitle(refused).find("="), std::string::npos);
+}
+
+// A reason of any length is drawn whole: the picture grows to hold it, and
+// no line is shortened.
+TEST(ReportPlots, LongReasonsAreWrappedNotCut) {
+  DPScaleResult result = RealisticResult(3, 2.0);
+  result.success = false;
+  std::string reason;
+  for (int k = 0; k < 40; ++k) reason += "word" + std::to_string(k) + " ";
+  const std::vector<std::string> lines =
+      plot::WrapText(reason, 0.62, 2, 960, 60);
+  std::string joined;
+  for (const std::string& line : lines) {
+    EXPECT_EQ(line.find("..."), std::string::npos) << line;
+    joined += (joined.empty() ? "" : " ") + line;
+  }
+  EXPECT_EQ(joined + " ", reason);
+  const cv::Mat header = plot::HeaderStrip(
+      cv::Mat(1, 1000, CV_8UC3), 80, reason, "title", "subtitle");
+  EXPECT_GT(header.rows, 80 + 26 * 2);
+  // Long names lose their middle, keeping start and end.
+  const std::string name = "casual_iphone_capture_of_the_box_number_002.png";
+  const std::string shortened = plot::Ellipsize(name, 0.45, 1, 180);
+  EXPECT_EQ(shortened.substr(0, 4), "casu");
+  EXPECT_EQ(shortened.substr(shortened.size() - 4), ".png");
+  EXPECT_NE(shortened.find("..."), std::string::npos);
 }
 
 TEST(ReportPlots, ReportPlotsAreNamedAfterTheReportAndSanitisedViews) {

@@ -47,6 +47,11 @@ const cv::Scalar kPalette[] = {{180, 119, 31},
 constexpr int kNumPaletteColours = 10;
 const cv::Scalar kOtherViewsColour(200, 200, 200);
 
+// Where the panels start; the header above them grows the picture when it
+// needs more room (plot::WithHeader).
+constexpr int kPanelTop = 108;
+constexpr int kHeaderRows = kPanelTop - 28;
+
 // One patch as the picture shows it (radii in DP-frame pixels).
 struct BlurPoint {
   int view;
@@ -72,7 +77,42 @@ struct BlurFitData {
   // Points outside a panel's ranges.
   int off_scale = 0;
   Axes left, right;
+  // The scale the model is drawn under (ModelScale), and whether it is the
+  // answer's.
+  double model_scale = kNaN;
+  bool model_is_answer = false;
+  // Median |measured - predicted| of the points drawn (DP-frame px).
+  double median_residual = kNaN;
 };
+
+// The scale the model is drawn under: the answer's, else the DP data's own
+// reading s* (a refused run's, not adopted); NaN without either.
+double ModelScale(const DPScaleResult& result, bool* is_answer) {
+  *is_answer = result.success && Finite(result.scale) && result.scale > 0;
+  if (*is_answer) return result.scale;
+  if (Finite(result.scale_initial) && result.scale_initial > 0) {
+    return result.scale_initial;
+  }
+  return kNaN;
+}
+
+// A patch's radius predicted under `scale` from the report's lens and
+// fitted focus distance of its view (DP-frame px); NaN without them.
+double PredictedUnder(const DPScaleResult& result,
+                      const PatchSample& s,
+                      double scale) {
+  if (!Finite(scale) || s.view < 0 ||
+      s.view >= static_cast<int>(result.views.size()) || !(s.depth > 0)) {
+    return kNaN;
+  }
+  const DPViewResult& view = result.views[s.view];
+  if (!view.lens.Check() || !Finite(view.focus_distance_model)) return kNaN;
+  return PredictBlurRadiusPx(view.lens,
+                             view.lens.PixelPitchMm(),
+                             scale,
+                             view.focus_distance_model,
+                             s.depth);
+}
 
 // What to show: used patches of used views; if there are none (a failed
 // estimate), the selected ones, so that the reader sees why it failed.
@@ -91,10 +131,11 @@ void CollectPoints(const DPScaleResult& result, BlurFitData* data) {
     p.view = s.view;
     p.inv_depth = s.depth > 0 && Finite(s.depth) ? 1.0 / s.depth : kNaN;
     p.measured = s.radius_frame_px;
+    // The core's prediction under the answer; a refused run's under s*.
     const auto ratio = frame_per_working.find(s.view);
-    p.predicted = ratio != frame_per_working.end()
+    p.predicted = data->model_is_answer && ratio != frame_per_working.end()
                       ? s.predicted_radius_px * ratio->second
-                      : kNaN;
+                      : PredictedUnder(result, s, data->model_scale);
     if (!Finite(p.measured)) continue;
     data->by_view[s.view].push_back(p);
   }
@@ -140,15 +181,22 @@ void SetDataRanges(BlurFitData* data) {
   }
   data->have_left = !inv_depths.empty();
   data->have_right = !residuals.empty();
+  if (data->have_right) {
+    std::nth_element(residuals.begin(),
+                     residuals.begin() + residuals.size() / 2,
+                     residuals.end());
+    data->median_residual = residuals[residuals.size() / 2];
+  }
   data->left.x = plot::RobustRange(inv_depths);
   data->left.y = plot::RobustRange(measured_left);
   data->right.x = plot::RobustRange(both_right);
 }
 
-// The lens formula's line r(1/z') under the final scale, from r at
+// The lens formula's line r(1/z') under `scale`, from r at
 // 1/z' = 1 and 2; false without a usable lens, focus distance or scale.
 bool LensModelLine(const DPScaleResult& result,
                    int view_index,
+                   double scale,
                    double* slope,
                    double* intercept) {
   if (view_index < 0 || view_index >= static_cast<int>(result.views.size())) {
@@ -156,17 +204,17 @@ bool LensModelLine(const DPScaleResult& result,
   }
   const DPViewResult& view = result.views[view_index];
   if (!view.lens.Check() || !Finite(view.focus_distance_model) ||
-      !(result.scale > 0) || !Finite(result.scale)) {
+      !(scale > 0) || !Finite(scale)) {
     return false;
   }
   const double r1 = PredictBlurRadiusPx(view.lens,
                                         view.lens.PixelPitchMm(),
-                                        result.scale,
+                                        scale,
                                         view.focus_distance_model,
                                         1.0);
   const double r2 = PredictBlurRadiusPx(view.lens,
                                         view.lens.PixelPitchMm(),
-                                        result.scale,
+                                        scale,
                                         view.focus_distance_model,
                                         0.5);
   *slope = r2 - r1;
@@ -176,9 +224,10 @@ bool LensModelLine(const DPScaleResult& result,
 
 // A view's prediction line over its points' 1/z' within `left_x`: the
 // thin-lens radius is affine in 1/z', so a least-squares line through the
-// core's own predictions reproduces them exactly (and stays what the core
-// computed); without predictions, the lens formula under the final scale.
+// points' predictions reproduces them exactly; without predictions, the
+// lens formula under the model's scale.
 std::optional<ModelLine> FitModelLine(const DPScaleResult& result,
+                                      double data_scale,
                                       int view,
                                       const std::vector<BlurPoint>& points,
                                       const Range& left_x) {
@@ -204,7 +253,7 @@ std::optional<ModelLine> FitModelLine(const DPScaleResult& result,
     slope = (n * sxy - sx * sy) / det;
     intercept = (sy - slope * sx) / n;
   } else {
-    LensModelLine(result, view, &slope, &intercept);
+    LensModelLine(result, view, data_scale, &slope, &intercept);
   }
   if (!Finite(slope) || !Finite(intercept)) return std::nullopt;
   const double pad = 0.03 * std::max(xr.hi - xr.lo, 1e-12);
@@ -219,8 +268,8 @@ std::optional<ModelLine> FitModelLine(const DPScaleResult& result,
 // Model lines of the views; the left panel's radius range takes them in.
 void AddModelLines(const DPScaleResult& result, BlurFitData* data) {
   for (const auto& v : data->by_view) {
-    const std::optional<ModelLine> line =
-        FitModelLine(result, v.first, v.second, data->left.x);
+    const std::optional<ModelLine> line = FitModelLine(
+        result, data->model_scale, v.first, v.second, data->left.x);
     if (!line) continue;
     data->lines[v.first] = *line;
     data->left.y.Add(line->y0);
@@ -251,6 +300,7 @@ int CountOffScale(const BlurFitData& data) {
 // panels sit below the header, which takes more room for a failure.
 BlurFitData PrepareBlurFit(const DPScaleResult& result) {
   BlurFitData data;
+  data.model_scale = ModelScale(result, &data.model_is_answer);
   CollectPoints(result, &data);
   AssignColours(&data);
   SetDataRanges(&data);
@@ -260,42 +310,33 @@ BlurFitData PrepareBlurFit(const DPScaleResult& result) {
   plot::PadRange(&data.right.x, 0.06);
   data.right.y = data.right.x;
   data.off_scale = CountOffScale(data);
-  const int top = result.success ? 108 : 150;
+  const int top = kPanelTop;
   const int height = 520 - top;
   data.left.area = cv::Rect(95, top, 385, height);
   data.right.area = cv::Rect(590, top, 385, height);
   return data;
 }
 
-// The title's residual is the report's linear_median_abs_residual_px: the
-// median |measured - fitted| blur over the rows of the linear stage's joint
-// fit, in working-frame pixels, under s* (scale_initial) and the fitted focus
-// distances. (The points drawn are in DP-frame pixels under the final scale;
-// their scatter about y = x is a different number and not in the report.)
-// The subtitle says what it is measured in (the title has no room).
-bool HaveLinearResidual(const DPScaleResult& result) {
-  const double residual = result.linear_median_abs_residual_px;
-  return Finite(residual) && residual > 0 && Finite(result.scale_initial) &&
-         result.scale_initial > 0;
-}
-
-std::string TitleOf(const DPScaleResult& result) {
-  std::string title = "Measured blur vs thin-lens model";
-  if (HaveLinearResidual(result)) {
-    title += ": linear fit's median |residual| = " +
-             plot::Format("%.3g", result.linear_median_abs_residual_px) + " px";
+// The title names the scale the model lines and predictions are drawn
+// under and the median |measured - predicted| of the points drawn, both
+// from the report's own values (DP-frame px).
+std::string TitleOf(const BlurFitData& data) {
+  std::string title = "Blur vs thin-lens model";
+  if (!Finite(data.model_scale)) return title;
+  title += data.model_is_answer
+               ? " (final s = " + plot::ScaleText(data.model_scale) + ")"
+               : " (the DP data's s* = " + plot::ScaleText(data.model_scale) +
+                     ", not adopted)";
+  if (Finite(data.median_residual)) {
+    title += ": median |residual| " +
+             plot::Format("%.3g", data.median_residual) + " px";
   }
   return title;
 }
 
-std::string BlurFitSubtitle(const DPScaleResult& result,
-                            const BlurFitData& data) {
+std::string BlurFitSubtitle(const BlurFitData& data) {
   const size_t num_views = data.by_view.size();
   std::ostringstream subtitle;
-  if (HaveLinearResidual(result)) {
-    subtitle << "residual in working-frame px under s* = "
-             << plot::FormatValue(result.scale_initial) << "; ";
-  }
   subtitle << data.num_points << (data.any_used ? " used" : " selected")
            << " patches in " << num_views << " view"
            << (num_views == 1 ? "" : "s");
@@ -304,8 +345,12 @@ std::string BlurFitSubtitle(const DPScaleResult& result,
     subtitle << ", " << data.off_scale << " off the axes";
   }
   subtitle << "; radii signed (+ = farther than the focus), DP-frame px";
-  if (Finite(result.scale) && result.scale > 0) {
-    subtitle << "; model under final s = " << plot::ScaleText(result.scale);
+  if (Finite(data.median_residual)) {
+    subtitle << "; residual = measured - predicted";
+  }
+  if (Finite(data.model_scale) && !data.model_is_answer) {
+    subtitle << "; the model under the scale the DP data read, which the "
+                "run did not adopt (the reason above)";
   }
   return subtitle.str();
 }
@@ -470,18 +515,17 @@ void DrawBlurFitLegend(cv::Mat& canvas,
 cv::Mat RenderBlurFitPlot(const DPScaleResult& result) {
   cv::Mat canvas(700, 1000, CV_8UC3, plot::kWhite);
   const BlurFitData data = PrepareBlurFit(result);
-  plot::DrawHeader(canvas,
-                   plot::FailureAlert(result),
-                   TitleOf(result),
-                   BlurFitSubtitle(result, data),
-                   data.left.area.y - 28);
   DrawPanelAxes(canvas, data);
   DrawReferenceLines(canvas, data);
   DrawModelLines(canvas, data);
   DrawPoints(canvas, data);
   DrawPanelFrames(canvas, data);
   DrawBlurFitLegend(canvas, BlurFitLegendEntries(result, data));
-  return canvas;
+  return plot::WithHeader(canvas,
+                          kHeaderRows,
+                          plot::FailureAlert(result),
+                          TitleOf(data),
+                          BlurFitSubtitle(data));
 }
 
 bool WriteBlurFitPlot(const DPScaleResult& result,
@@ -492,11 +536,21 @@ bool WriteBlurFitPlot(const DPScaleResult& result,
 }
 
 std::string BlurFitTitle(const DPScaleResult& result) {
-  return TitleOf(result);
+  return TitleOf(PrepareBlurFit(result));
 }
 
 BlurFitPanels BlurFitAxes(const DPScaleResult& result) {
-  const BlurFitData data = PrepareBlurFit(result);
+  BlurFitData data = PrepareBlurFit(result);
+  // Where the panels are in the picture: below a header that may have grown.
+  const int growth = plot::HeaderStrip(cv::Mat(1, 1000, CV_8UC3),
+                                       kHeaderRows,
+                                       plot::FailureAlert(result),
+                                       TitleOf(data),
+                                       BlurFitSubtitle(data))
+                         .rows -
+                     kHeaderRows;
+  data.left.area.y += growth;
+  data.right.area.y += growth;
   return {data.left, data.right};
 }
 

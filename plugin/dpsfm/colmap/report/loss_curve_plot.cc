@@ -33,6 +33,12 @@ const cv::Scalar kCurveColour(60, 60, 60);
 const cv::Scalar kFinalColour(170, 90, 20);
 const cv::Scalar kLinearColour(20, 130, 250);
 const cv::Scalar kMinimumColour(50, 40, 215);
+// Where the plot area starts (the header's rows end 12 px above it) and
+// where the status under it starts.
+constexpr int kAxesTop = 100;
+constexpr int kHeaderRows = kAxesTop - 12;
+constexpr int kStatusTop = 588;
+
 // The cues' bars (no curve: the cues decided).
 const cv::Scalar kDpCueColour(189, 103, 148);
 const cv::Scalar kFocusCueColour(44, 160, 44);
@@ -197,8 +203,8 @@ double CurveHeightAt(const Curve& curve, double s) {
   return kNaN;
 }
 
-// The curve, what to show and where; the plot area sits below the header,
-// which takes more room for a failure.
+// The curve, what to show and where; the plot area sits below the header
+// (which grows the picture when it needs more room: plot::WithHeader).
 LossCurveData PrepareLossCurve(const DPScaleResult& result) {
   LossCurveData data;
   data.curve = SortedCurve(result);
@@ -207,8 +213,7 @@ LossCurveData PrepareLossCurve(const DPScaleResult& result) {
   if (data.have_minimum) {
     data.minimum_loss = CurveHeightAt(data.curve, result.scale_intensity);
   }
-  const int top = result.success ? 100 : 140;
-  data.axes.area = cv::Rect(105, top, 860, 530 - top);
+  data.axes.area = cv::Rect(105, kAxesTop, 860, 530 - kAxesTop);
   return data;
 }
 
@@ -355,20 +360,22 @@ void DrawIntervalEdges(cv::Mat& canvas,
   }
 }
 
-// The final scale (solid; the cues' panel has it as a bar) and the linear
-// estimate (dashed) across the area.
+// With the curve: the linear estimate where the search started (dashed,
+// underneath) and the final scale over it (solid). The cues' panel has
+// both as bars.
 void DrawScaleLines(cv::Mat& canvas,
                     const DPScaleResult& result,
                     const LossCurveData& data) {
+  if (data.show_cues) return;
   cv::Mat roi = data.axes.Roi(canvas);
   const double h = data.axes.area.height;
-  if (data.have_final && !data.show_cues) {
-    const double x = data.axes.ToLocal(result.scale, 0).x;
-    DrawSegment(roi, {x, 0.0}, {x, h}, kFinalColour, 2);
-  }
   if (data.have_linear) {
     const double x = data.axes.ToLocal(result.scale_initial, 0).x;
     DrawSegment(roi, {x, 0.0}, {x, h}, kLinearColour, 2, true);
+  }
+  if (data.have_final) {
+    const double x = data.axes.ToLocal(result.scale, 0).x;
+    DrawSegment(roi, {x, 0.0}, {x, h}, kFinalColour, 2);
   }
 }
 
@@ -442,9 +449,10 @@ std::vector<LegendEntry> LossCurveLegendEntries(const DPScaleResult& result,
          kMinimumColour,
          Glyph::kDiamond});
   }
-  if (data.have_linear) {
+  if (data.have_linear && !data.show_cues) {
     entries.push_back(
-        {"linear estimate s* = " + FormatValue(result.scale_initial),
+        {"linear estimate s* = " + FormatValue(result.scale_initial) +
+             " (the search's start)",
          kLinearColour,
          Glyph::kDashedLine});
   }
@@ -501,9 +509,7 @@ void DrawLossCurveLegend(cv::Mat& canvas,
 }
 
 // Status of the intensity stage, in words, under the plot.
-void DrawStatus(cv::Mat& canvas,
-                const DPScaleResult& result,
-                const LossCurveData& data) {
+std::string StatusText(const DPScaleResult& result, const LossCurveData& data) {
   std::string status = result.intensity_used
                            ? "Intensity stage (adopted): "
                            : "Intensity stage (not adopted): ";
@@ -519,16 +525,18 @@ void DrawStatus(cv::Mat& canvas,
     status += ". No intensity loss curve";
     if (!how.empty()) status += "; the answer: " + how;
   }
-  plot::PutWrapped(canvas,
-                   status,
-                   30,
-                   608,
-                   canvas.cols - 60,
-                   3,
-                   0.52,
-                   plot::kTextColour,
-                   1,
-                   24);
+  return status;
+}
+
+// Rows the header takes above the body's kHeaderRows (0 when it fits).
+int HeaderGrowth(const DPScaleResult& result, const LossCurveData& data) {
+  return plot::HeaderStrip(cv::Mat(1, 1000, CV_8UC3),
+                           kHeaderRows,
+                           plot::FailureAlert(result),
+                           TitleOf(result, data),
+                           SubtitleOf(result, data))
+             .rows -
+         kHeaderRows;
 }
 
 }  // namespace
@@ -536,11 +544,6 @@ void DrawStatus(cv::Mat& canvas,
 cv::Mat RenderLossCurvePlot(const DPScaleResult& result) {
   cv::Mat canvas(700, 1000, CV_8UC3, plot::kWhite);
   const LossCurveData data = PrepareLossCurve(result);
-  plot::DrawHeader(canvas,
-                   plot::FailureAlert(result),
-                   TitleOf(result, data),
-                   SubtitleOf(result, data),
-                   data.axes.area.y - 12);
   if (data.have_ci) DrawIntervalBand(canvas, result, data.axes);
   plot::DrawAxes(canvas,
                  data.axes,
@@ -559,8 +562,13 @@ cv::Mat RenderLossCurvePlot(const DPScaleResult& result) {
     DrawNoCurve(canvas, result, data);
   }
   DrawLossCurveLegend(canvas, result, data);
-  DrawStatus(canvas, result, data);
-  return canvas;
+  const cv::Mat with_status =
+      plot::WithFooter(canvas, kStatusTop, StatusText(result, data), 0.52, 24);
+  return plot::WithHeader(with_status,
+                          kHeaderRows,
+                          plot::FailureAlert(result),
+                          TitleOf(result, data),
+                          SubtitleOf(result, data));
 }
 
 bool WriteLossCurvePlot(const DPScaleResult& result,
@@ -571,7 +579,10 @@ bool WriteLossCurvePlot(const DPScaleResult& result,
 }
 
 plot::Axes LossCurveAxes(const DPScaleResult& result) {
-  return PrepareLossCurve(result).axes;
+  const LossCurveData data = PrepareLossCurve(result);
+  plot::Axes axes = data.axes;
+  axes.area.y += HeaderGrowth(result, data);
+  return axes;
 }
 
 std::string LossCurveTitle(const DPScaleResult& result) {

@@ -284,14 +284,13 @@ void DrawUsedPatches(cv::Mat& image_area,
   blended.copyTo(image_area, mask);
 }
 
-// Title (the view, whether it was used and why not), subtitle (focus,
-// counts, what the colours mean), and a note on an image without patches.
-void DrawOverlayHeader(cv::Mat& canvas,
-                       const DPScaleResult& result,
-                       const std::string& view_name,
-                       int view_index,
-                       const OverlayPatches& selection,
-                       const cv::Rect& image_rect) {
+// The title (the view, whether it was used and why not) and subtitle
+// (focus, counts, what the colours mean).
+std::pair<std::string, std::string> OverlayHeading(
+    const DPScaleResult& result,
+    const std::string& view_name,
+    int view_index,
+    const OverlayPatches& selection) {
   const std::string name =
       view_name.empty() ? plot::ViewName(result, view_index) : view_name;
   std::string title = "Patches of " + name;
@@ -310,17 +309,21 @@ void DrawOverlayHeader(cv::Mat& canvas,
               std::to_string(selection.num_used) +
               " used; colour = signed blur radius (blue: nearer than the "
               "focus, red: farther)";
-  plot::DrawHeader(
-      canvas, plot::FailureAlert(result), title, subtitle, kOverlayHeader - 6);
-  if (selection.patches.empty()) {
-    const cv::Rect box(image_rect.x + image_rect.width / 2 - 220,
-                       image_rect.y + image_rect.height / 2 - 30,
-                       440,
-                       60);
-    cv::rectangle(canvas, box, cv::Scalar(245, 245, 245), cv::FILLED);
-    cv::rectangle(canvas, box, cv::Scalar(180, 180, 180), 1);
-    plot::DrawNoData(canvas, box, "no selected patches in this view");
-  }
+  return {title, subtitle};
+}
+
+// A note on an image without patches.
+void DrawNoPatches(cv::Mat& canvas,
+                   const OverlayPatches& selection,
+                   const cv::Rect& image_rect) {
+  if (!selection.patches.empty()) return;
+  const cv::Rect box(image_rect.x + image_rect.width / 2 - 220,
+                     image_rect.y + image_rect.height / 2 - 30,
+                     440,
+                     60);
+  cv::rectangle(canvas, box, cv::Scalar(245, 245, 245), cv::FILLED);
+  cv::rectangle(canvas, box, cv::Scalar(180, 180, 180), 1);
+  plot::DrawNoData(canvas, box, "no selected patches in this view");
 }
 
 // Colour bar right of the image, +limit (far, red) at the top.
@@ -435,11 +438,15 @@ cv::Mat RenderPatchOverlay(const cv::Mat& image,
   cv::Mat image_area = canvas(layout.image_rect);
   DrawUnusedPatches(image_area, selection, squares);
   DrawUsedPatches(image_area, selection, squares);
-  DrawOverlayHeader(
-      canvas, result, view_name, view_index, selection, layout.image_rect);
+  DrawNoPatches(canvas, selection, layout.image_rect);
   DrawColourBar(canvas, layout.image_rect, selection.limit);
   DrawOverlayLegend(canvas, layout.legend_y, selection, patch_side);
-  return canvas;
+  const auto heading = OverlayHeading(result, view_name, view_index, selection);
+  return plot::WithHeader(canvas,
+                          kOverlayHeader - 6,
+                          plot::FailureAlert(result),
+                          heading.first,
+                          heading.second);
 }
 
 bool WritePatchOverlay(const cv::Mat& image,

@@ -68,13 +68,16 @@ std::string Ellipsize(const std::string& text,
                       double scale,
                       int thickness,
                       int max_width) {
-  std::string out = Printable(text);
+  const std::string out = Printable(text);
   if (TextSize(out, scale, thickness).width <= max_width) return out;
-  while (!out.empty() &&
-         TextSize(out + "...", scale, thickness).width > max_width) {
-    out.pop_back();
+  // Characters leave from the middle: a view's name keeps its start and its
+  // end (its number and extension).
+  for (size_t keep = out.size(); keep-- > 0;) {
+    const std::string shorter = out.substr(0, (keep + 1) / 2) + "..." +
+                                out.substr(out.size() - keep / 2);
+    if (TextSize(shorter, scale, thickness).width <= max_width) return shorter;
   }
-  return out + "...";
+  return "...";
 }
 
 std::vector<std::string> WrapText(const std::string& text,
@@ -168,57 +171,100 @@ void PutVerticalText(cv::Mat& canvas,
   cv::min(destination, source, destination);
 }
 
+namespace {
+
+// The rows of `strip` down to its last one with anything drawn, plus a
+// margin; at least `min_rows`.
+cv::Mat UsedRows(const cv::Mat& strip, int min_rows) {
+  cv::Mat ink;
+  cv::cvtColor(strip, ink, cv::COLOR_BGR2GRAY);
+  int last = -1;
+  for (int y = ink.rows - 1; y >= 0 && last < 0; --y) {
+    if (cv::countNonZero(ink.row(y) < 255) > 0) last = y;
+  }
+  return strip.rowRange(0, std::min(strip.rows, std::max(min_rows, last + 9)));
+}
+
+// A strip of the canvas's width and type, tall enough for any header.
+cv::Mat BlankStrip(const cv::Mat& like) {
+  return cv::Mat(1600, like.cols, like.type(), kWhite);
+}
+
+}  // namespace
+
 int DrawHeader(cv::Mat& canvas,
                const std::string& alert,
                const std::string& title,
-               const std::string& subtitle,
-               int bottom) {
+               const std::string& subtitle) {
   const int width = canvas.cols - 40;
   const int kBold = 26, kThin = 20;
+  // Every word is kept: a long reason takes more lines.
+  const int kAllLines = 60;
   int y = 30;
-  // Lines `line` px apart that fit from baseline y (descenders need ~6 px),
-  // keeping `reserve` px for later blocks; at least one.
-  auto fit = [&](int line, int reserve, int wanted) {
-    const int room = (bottom - reserve - 6 - y) / line + 1;
-    return std::max(1, std::min(wanted, room));
-  };
-  const int subtitle_room = subtitle.empty() ? 0 : kThin;
   if (!alert.empty()) {
-    y = PutWrapped(canvas,
-                   alert,
-                   20,
-                   y,
-                   width,
-                   fit(kBold, kBold + subtitle_room, 2),
-                   0.62,
-                   kFailureColour,
-                   2,
-                   kBold);
+    y = PutWrapped(
+        canvas, alert, 20, y, width, kAllLines, 0.62, kFailureColour, 2, kBold);
   }
-  y = PutWrapped(canvas,
-                 title,
-                 20,
-                 y,
-                 width,
-                 fit(kBold, subtitle_room, 2),
-                 0.62,
-                 kTextColour,
-                 2,
-                 kBold);
-  if (!subtitle.empty() && y - 4 + 6 <= bottom) {
-    y -= 4;
+  y = PutWrapped(
+      canvas, title, 20, y, width, kAllLines, 0.62, kTextColour, 2, kBold);
+  if (!subtitle.empty()) {
     y = PutWrapped(canvas,
                    subtitle,
                    20,
-                   y,
+                   y - 4,
                    width,
-                   fit(kThin, 0, 2),
+                   kAllLines,
                    0.48,
                    kMutedText,
                    1,
                    kThin);
   }
   return y;
+}
+
+cv::Mat HeaderStrip(const cv::Mat& like,
+                    int min_rows,
+                    const std::string& alert,
+                    const std::string& title,
+                    const std::string& subtitle) {
+  cv::Mat strip = BlankStrip(like);
+  DrawHeader(strip, alert, title, subtitle);
+  return UsedRows(strip, min_rows);
+}
+
+cv::Mat WithHeader(const cv::Mat& body,
+                   int body_top,
+                   const std::string& alert,
+                   const std::string& title,
+                   const std::string& subtitle) {
+  cv::Mat out;
+  cv::vconcat(HeaderStrip(body, body_top, alert, title, subtitle),
+              body.rowRange(body_top, body.rows),
+              out);
+  return out;
+}
+
+cv::Mat WithFooter(const cv::Mat& body,
+                   int body_bottom,
+                   const std::string& text,
+                   double scale,
+                   int line_height) {
+  cv::Mat strip = BlankStrip(body);
+  PutWrapped(strip,
+             text,
+             30,
+             line_height,
+             strip.cols - 60,
+             60,
+             scale,
+             kTextColour,
+             1,
+             line_height);
+  cv::Mat out;
+  cv::vconcat(body.rowRange(0, body_bottom),
+              UsedRows(strip, body.rows - body_bottom),
+              out);
+  return out;
 }
 
 }  // namespace plot

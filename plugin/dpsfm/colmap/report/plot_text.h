@@ -39,14 +39,14 @@ void PutText(cv::Mat& canvas,
              int thickness = 1,
              Align align = Align::kLeft);
 
-// Shortens `text` with "..." until it fits `max_width` px.
+// Shortens `text` to fit `max_width` px by replacing its middle with "...".
 std::string Ellipsize(const std::string& text,
                       double scale,
                       int thickness,
                       int max_width);
 
 // Greedy word wrap to `max_width` px; at most `max_lines` lines (the last one
-// ellipsized), because a long failure reason must not run off the picture.
+// ellipsized where there are more; a word wider than the width too).
 std::vector<std::string> WrapText(const std::string& text,
                                   double scale,
                                   int thickness,
@@ -77,14 +77,37 @@ void PutVerticalText(cv::Mat& canvas,
 
 // Title (bold) and optional subtitle lines at the top; a non-empty `alert`
 // (a failed estimate's reason) comes first, in red, because that is what a
-// reader must see first. Text stays above `bottom` (lines that would not fit
-// are dropped, the last kept line of each block ellipsized). Returns the
-// baseline after the last line.
+// reader must see first. Every word is drawn, on as many lines as it takes.
+// Returns the baseline after the last line.
 int DrawHeader(cv::Mat& canvas,
                const std::string& alert,
                const std::string& title,
-               const std::string& subtitle,
-               int bottom);
+               const std::string& subtitle);
+
+// The header (DrawHeader) on a strip of `like`'s width and type: its rows
+// down to the last line, at least min_rows.
+cv::Mat HeaderStrip(const cv::Mat& like,
+                    int min_rows,
+                    const std::string& alert,
+                    const std::string& title,
+                    const std::string& subtitle);
+
+// `body` from row `body_top` down under its header (HeaderStrip): the
+// picture grows when the header needs more than body_top rows.
+cv::Mat WithHeader(const cv::Mat& body,
+                   int body_top,
+                   const std::string& alert,
+                   const std::string& title,
+                   const std::string& subtitle);
+
+// `body` down to row `body_bottom` over `text` wrapped (every word, as
+// many lines of `line_height` as it takes): the picture grows when the text
+// needs more than the rows below body_bottom.
+cv::Mat WithFooter(const cv::Mat& body,
+                   int body_bottom,
+                   const std::string& text,
+                   double scale,
+                   int line_height);
 
 }  // namespace plot
 }  // namespace dpsfm
