@@ -48,6 +48,7 @@
 #include "synthetic_scene.h"
 
 namespace fs = std::filesystem;
+namespace po = boost::program_options;
 using dpsfm::examples::PinholeView;
 using dpsfm::examples::RenderedView;
 using dpsfm::examples::SyntheticScene;
@@ -367,11 +368,62 @@ void AddNoiseAndClamp(double sigma, cv::RNG* rng, cv::Mat* image) {
   cv::min(*image, 1.0, *image);
 }
 
+// A DP view binned down to the DP frames' size, then its sensor noise.
+void BinAndAddNoise(const GeneratorOptions& options,
+                    const cv::Size& dp_size,
+                    cv::RNG* noise_rng,
+                    cv::Mat* view) {
+  if (options.dp_factor > 1) {
+    cv::resize(cv::Mat(*view), *view, dp_size, 0, 0, cv::INTER_AREA);
+  }
+  AddNoiseAndClamp(options.noise, noise_rng, view);
+}
+
 // "2.8" -> "2.8", "11" -> "11": the f-number as written in image names.
 std::string FNumberTag(double f_number) {
   std::ostringstream tag;
   tag << f_number;
   return tag.str();
+}
+
+// The distance (metres) of a point whose blur radius is target_radius
+// (pixels of the lens's pitch) under the focus focus_m: bisection, the blur
+// being monotone in depth.
+double DistanceOfBlur(const dpsfm::DPLensData& lens,
+                      double focus_m,
+                      double target_radius) {
+  double lo = 0.2 * focus_m, hi = 20 * focus_m;
+  for (int it = 0; it < 100; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    const double r = dpsfm::PredictBlurRadiusPx(
+        lens, lens.PixelPitchMm(), 1.0, focus_m, mid);
+    (r < target_radius ? lo : hi) = mid;
+  }
+  return std::sqrt(lo * hi);
+}
+
+// The calibration target's texture: multi-scale value noise, like the
+// scenes' textures (one draw from rng per scale).
+cv::Mat CalibrationTexture(const cv::Size& size, std::mt19937* rng) {
+  cv::Mat texture = cv::Mat::zeros(size, CV_32FC3);
+  double amplitude = 1.0, total = 0;
+  for (int cell = 64; cell >= 2; cell /= 2) {
+    cv::Mat coarse(size.height / cell + 2, size.width / cell + 2, CV_32FC3);
+    cv::RNG noise((*rng)());
+    noise.fill(coarse, cv::RNG::UNIFORM, 0.0, 1.0);
+    cv::Mat up;
+    cv::resize(coarse,
+               up,
+               cv::Size(coarse.cols * cell, coarse.rows * cell),
+               0,
+               0,
+               cv::INTER_CUBIC);
+    texture += amplitude * up(cv::Rect(0, 0, size.width, size.height));
+    total += amplitude;
+    amplitude *= 0.75;
+  }
+  texture = 0.1 + 0.8 * texture / total;
+  return texture;
 }
 
 // colmap dp_psf_calibrator's input: DP captures of a planar, fronto-parallel
@@ -405,38 +457,12 @@ void WriteCalibrationCaptures(const GeneratorOptions& options,
         0.3 +
         0.55 * (k / 2) / std::max(1, (options.calibration_captures - 1) / 2);
     const double target_radius = (k % 2 ? 1 : -1) * fraction * bound;
-    // Distance with that blur (bisection; the blur is monotone in depth).
-    double lo = 0.2 * focus_m, hi = 20 * focus_m;
-    for (int it = 0; it < 100; ++it) {
-      const double mid = std::sqrt(lo * hi);
-      const double r = dpsfm::PredictBlurRadiusPx(
-          lens, lens.PixelPitchMm(), 1.0, focus_m, mid);
-      (r < target_radius ? lo : hi) = mid;
-    }
-    const double distance_m = std::sqrt(lo * hi);
+    const double distance_m = DistanceOfBlur(lens, focus_m, target_radius);
     const double radius_full =
         options.dp_factor *
         dpsfm::PredictBlurRadiusPx(
             lens, lens.PixelPitchMm(), 1.0, focus_m, distance_m);
-    // Multi-scale value noise, like the scenes' textures.
-    cv::Mat texture = cv::Mat::zeros(size, CV_32FC3);
-    double amplitude = 1.0, total = 0;
-    for (int cell = 64; cell >= 2; cell /= 2) {
-      cv::Mat coarse(size.height / cell + 2, size.width / cell + 2, CV_32FC3);
-      cv::RNG noise((*rng)());
-      noise.fill(coarse, cv::RNG::UNIFORM, 0.0, 1.0);
-      cv::Mat up;
-      cv::resize(coarse,
-                 up,
-                 cv::Size(coarse.cols * cell, coarse.rows * cell),
-                 0,
-                 0,
-                 cv::INTER_CUBIC);
-      texture += amplitude * up(cv::Rect(0, 0, size.width, size.height));
-      total += amplitude;
-      amplitude *= 0.75;
-    }
-    texture = 0.1 + 0.8 * texture / total;
+    const cv::Mat texture = CalibrationTexture(size, rng);
     const cv::Mat depth(size, CV_32FC1, cv::Scalar(distance_m));
     const cv::Mat radius(size, CV_32FC1, cv::Scalar(radius_full));
     cv::Mat left, right;
@@ -445,10 +471,7 @@ void WriteCalibrationCaptures(const GeneratorOptions& options,
     cv::RNG noise_rng((*rng)());
     const std::string name = "cal_" + std::to_string(k) + ".png";
     for (cv::Mat* view : {&left, &right}) {
-      if (options.dp_factor > 1) {
-        cv::resize(cv::Mat(*view), *view, dp_size, 0, 0, cv::INTER_AREA);
-      }
-      AddNoiseAndClamp(options.noise, &noise_rng, view);
+      BinAndAddNoise(options, dp_size, &noise_rng, view);
     }
     cv::imwrite((root / "dp/left" / name).string(), To16Bit(left));
     cv::imwrite((root / "dp/right" / name).string(), To16Bit(right));
@@ -465,6 +488,15 @@ void WriteCalibrationCaptures(const GeneratorOptions& options,
   }
 }
 
+// The camera-frame point of pixel (c, r) at depth z, in a centred pinhole
+// camera of width x height pixels.
+Eigen::Vector3d BackProject(
+    int c, int r, float z, int width, int height, double focal_px) {
+  return Eigen::Vector3d((c - (width - 1) / 2.0) / focal_px * z,
+                         (r - (height - 1) / 2.0) / focal_px * z,
+                         z);
+}
+
 // fused.ply: every 4th depth pixel of every pose, in model units.
 void WriteFusedPly(const std::vector<PinholeView>& views,
                    const std::vector<RenderedView>& renders,
@@ -478,10 +510,8 @@ void WriteFusedPly(const std::vector<PinholeView>& views,
       for (int c = 0; c < view.width; c += 4) {
         const float z = renders[i].depth.at<float>(r, c);
         if (z <= 0) continue;
-        const Eigen::Vector3d cam(
-            (c - (view.width - 1) / 2.0) / view.focal_px * z,
-            (r - (view.height - 1) / 2.0) / view.focal_px * z,
-            z);
+        const Eigen::Vector3d cam =
+            BackProject(c, r, z, view.width, view.height, view.focal_px);
         const Eigen::Vector3d xyz =
             world_from_cam * (cam - view.translation) / true_scale;
         const Eigen::Vector3d normal = -(world_from_cam * cam).normalized();
@@ -506,29 +536,84 @@ void WriteFusedPly(const std::vector<PinholeView>& views,
                                /*write_rgb=*/true);
 }
 
-int Run(const GeneratorOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  std::mt19937 rng(options.seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double true_scale =
-      options.scale > 0 ? options.scale
-                        : std::exp(std::log(0.3) + unit(rng) * std::log(10.0));
+// The numbers every step of a run shares: the true scale, the camera's
+// pitch and focal length, the apertures and the DP frames' size.
+struct RunSetup {
+  double true_scale = 0;
+  double pitch_mm = 0;
+  double focal_px = 0;
+  bool multi_aperture = false;
+  std::vector<double> f_numbers;
+  int num_apertures = 0;
+  int num_images = 0;
+  cv::Size dp_size;
+  fs::path out;
+};
 
-  SyntheticScene scene = dpsfm::examples::RandomScene(options.scene, &rng);
+// The scene's renders in the undistorted (dense) geometry (depth maps,
+// tracks, fused points) and the image names, per pose one per aperture.
+struct PoseRenders {
+  std::vector<RenderedView> renders;
+  std::vector<std::vector<std::string>> names;
+};
+
+// lens.csv and ground_truth.json, filled in as the images are written.
+struct Records {
+  std::ofstream lens_csv;
+  nlohmann::json truth;
+};
+
+// A sparse point and its observations: (image, point2D index).
+struct Track3D {
+  Eigen::Vector3d xyz;
+  std::vector<std::pair<int, int>> observations;
+};
+
+// The tracks and every image's observations, in the undistorted (dense)
+// geometry and in the original, distorted images (sparse/0).
+struct SparseTracks {
+  std::vector<std::vector<colmap::Point2D>> points2D;
+  std::vector<std::vector<Eigen::Vector2d>> distorted2D;
+  std::vector<Track3D> tracks;
+};
+
+// The true scale (metres per model unit): the option's, or a draw from rng.
+double DrawTrueScale(const GeneratorOptions& options, std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  return options.scale > 0
+             ? options.scale
+             : std::exp(std::log(0.3) + unit(*rng) * std::log(10.0));
+}
+
+// The scene drawn from rng, scaled to the camera and with the option's
+// texture contrast.
+SyntheticScene MakeScene(const GeneratorOptions& options, std::mt19937* rng) {
+  SyntheticScene scene = dpsfm::examples::RandomScene(options.scene, rng);
   scene.Scale(options.scene_scale);
   scene.texture_contrast = options.texture_contrast;
-  const double pitch_mm = options.sensor_width_mm / options.width;
-  const double focal_px = options.focal_length_mm / pitch_mm;
-  const bool multi_aperture = !options.f_numbers.empty();
-  const std::vector<double> f_numbers =
-      multi_aperture ? ParseFNumbers(options.f_numbers)
-                     : std::vector<double>{options.f_number};
-  const int num_apertures = static_cast<int>(f_numbers.size());
-  const int num_images = options.num_views * num_apertures;
-  const cv::Size dp_size(options.width / options.dp_factor,
-                         options.height / options.dp_factor);
+  return scene;
+}
 
-  const fs::path out(options.output_path);
+// The camera's numbers and the apertures, from the options.
+RunSetup MakeRunSetup(const GeneratorOptions& options, double true_scale) {
+  RunSetup setup;
+  setup.true_scale = true_scale;
+  setup.pitch_mm = options.sensor_width_mm / options.width;
+  setup.focal_px = options.focal_length_mm / setup.pitch_mm;
+  setup.multi_aperture = !options.f_numbers.empty();
+  setup.f_numbers = setup.multi_aperture
+                        ? ParseFNumbers(options.f_numbers)
+                        : std::vector<double>{options.f_number};
+  setup.num_apertures = static_cast<int>(setup.f_numbers.size());
+  setup.num_images = options.num_views * setup.num_apertures;
+  setup.dp_size = cv::Size(options.width / options.dp_factor,
+                           options.height / options.dp_factor);
+  setup.out = fs::path(options.output_path);
+  return setup;
+}
+
+// The workspace's folders.
+void CreateWorkspaceFolders(const fs::path& out) {
   for (const char* dir : {"images",
                           "sparse/0",
                           "dense/sparse",
@@ -539,362 +624,644 @@ int Run(const GeneratorOptions& options) {
                           "dp/right"}) {
     fs::create_directories(out / dir);
   }
+}
 
-  // Cameras on the scene's arc, looking at its middle.
+// Cameras on the scene's arc, looking at its middle, with the option's
+// radial distortion.
+std::vector<PinholeView> PlaceCameras(const GeneratorOptions& options,
+                                      const SyntheticScene& scene,
+                                      double focal_px,
+                                      std::mt19937* rng) {
   std::vector<PinholeView> views =
       dpsfm::examples::PlaceViews(scene.rig,
                                   options.num_views,
                                   options.width,
                                   options.height,
                                   focal_px,
-                                  &rng);
+                                  rng);
   for (PinholeView& view : views) view.k1 = options.radial_k1;
+  return views;
+}
 
-  const SensorPsf sensor = MakeSensorPsf(options);
+// The DP renderer's options: the compositing the options name.
+dpsfm::DPRenderOptions MakeRenderOptions(const GeneratorOptions& options) {
   dpsfm::DPRenderOptions render_options;
   render_options.compositing =
       options.compositing == "layers"
           ? dpsfm::DPRenderOptions::Compositing::kOcclusionLayers
           : dpsfm::DPRenderOptions::Compositing::kAdditive;
-  std::ofstream lens_csv((out / "lens.csv").string());
-  lens_csv << "name,focal_length_mm,f_number,pixel_pitch_um\n"
-           << std::setprecision(10);
-  nlohmann::json truth;
-  truth["scale"] = true_scale;
+  return render_options;
+}
+
+// Opens lens.csv with its header and starts the ground truth.
+void StartRecords(const GeneratorOptions& options,
+                  const RunSetup& setup,
+                  const SensorPsf& sensor,
+                  Records* records) {
+  records->lens_csv.open((setup.out / "lens.csv").string());
+  records->lens_csv << "name,focal_length_mm,f_number,pixel_pitch_um\n"
+                    << std::setprecision(10);
+  nlohmann::json& truth = records->truth;
+  truth["scale"] = setup.true_scale;
   truth["model_unit"] = "metres / scale";
   truth["scene"] = options.scene;
   truth["camera"] = options.camera;
   truth["dp_factor"] = options.dp_factor;
   truth["dp_psf"] = sensor.description;
+}
 
-  // Renders in the undistorted (dense) geometry: depth maps, tracks, fused.
-  std::vector<RenderedView> renders;
-  // Image names, per pose one per aperture.
-  std::vector<std::vector<std::string>> names(options.num_views);
-  for (int i = 0; i < options.num_views; ++i) {
-    char pose_name[32];
-    std::snprintf(pose_name, sizeof(pose_name), "DP_%04d", i + 1);
-    // The original (possibly distorted) image, and the undistorted one.
-    const RenderedView render = dpsfm::examples::RenderView(scene, views[i]);
-    PinholeView pinhole = views[i];
-    pinhole.k1 = 0;
-    renders.push_back(options.radial_k1 == 0
-                          ? render
-                          : dpsfm::examples::RenderView(scene, pinhole));
+// "DP_0001" for the first pose.
+std::string PoseName(int pose) {
+  char pose_name[32];
+  std::snprintf(pose_name, sizeof(pose_name), "DP_%04d", pose + 1);
+  return pose_name;
+}
 
-    // Focus somewhere inside the scene's depth range, as a photographer
-    // focusing on the subject would; the same for every aperture.
-    std::vector<float> depths;
-    for (int r = 0; r < render.depth.rows; r += 4) {
-      for (int c = 0; c < render.depth.cols; c += 4) {
-        if (render.depth.at<float>(r, c) > 0) {
-          depths.push_back(render.depth.at<float>(r, c));
-        }
-      }
-    }
-    if (depths.empty()) {
-      throw std::runtime_error(std::string("view ") + pose_name +
-                               " sees nothing of the scene");
-    }
-    std::sort(depths.begin(), depths.end());
-    const double focus_m =
-        depths[static_cast<size_t>((0.3 + 0.4 * unit(rng)) * depths.size())];
+// The undistorted render of a view whose original render is `render`.
+RenderedView UndistortedRender(const GeneratorOptions& options,
+                               const SyntheticScene& scene,
+                               const PinholeView& view,
+                               const RenderedView& render) {
+  PinholeView pinhole = view;
+  pinhole.k1 = 0;
+  return options.radial_k1 == 0 ? render
+                                : dpsfm::examples::RenderView(scene, pinhole);
+}
 
-    // The depth map PatchMatch would give, in model units.
-    cv::Mat depth_model = renders.back().depth / true_scale;
-    if (options.depth_map_factor > 1) {
-      cv::resize(cv::Mat(depth_model),
-                 depth_model,
-                 cv::Size(options.width / options.depth_map_factor,
-                          options.height / options.depth_map_factor),
-                 0,
-                 0,
-                 cv::INTER_NEAREST);
-    }
-    cv::RNG depth_rng(ImageSeed(options.seed, std::string(pose_name) + "/z"));
-    DegradeDepthMap(
-        options.depth_noise, options.depth_holes, &depth_rng, &depth_model);
-
-    for (const double f_number : f_numbers) {
-      const std::string name =
-          multi_aperture ? std::string(pose_name) + "_f" + FNumberTag(f_number)
-                         : std::string(pose_name);
-      names[i].push_back(name);
-      dpsfm::DPLensData lens;
-      lens.focal_length_mm = options.focal_length_mm;
-      lens.f_number = f_number;
-      lens.pixel_pitch_um = pitch_mm * 1e3;
-      cv::Mat radius(render.depth.size(), CV_32FC1);
-      for (int r = 0; r < radius.rows; ++r) {
-        for (int c = 0; c < radius.cols; ++c) {
-          const float z = render.depth.at<float>(r, c);
-          radius.at<float>(r, c) = static_cast<float>(
-              BlurRadiusPx(options, lens, focus_m, z, pitch_mm));
-        }
-      }
-      cv::Mat left, right;
-      RenderSensorViews(options,
-                        sensor,
-                        render.image,
-                        render.depth,
-                        radius,
-                        render_options,
-                        &left,
-                        &right);
-      ApplyColumnGain(1.0, -options.gain_ramp, &left);
-      ApplyColumnGain(options.right_gain, options.gain_ramp, &right);
-      cv::RNG noise_rng(ImageSeed(options.seed, name));
-      // The ordinary image sums both halves at full resolution; the DP
-      // frames are binned down to their own size.
-      cv::Mat combined = left + right;
-      AddNoiseAndClamp(options.noise * std::sqrt(2.0), &noise_rng, &combined);
-      for (cv::Mat* view : {&left, &right}) {
-        if (options.dp_factor > 1) {
-          cv::resize(cv::Mat(*view), *view, dp_size, 0, 0, cv::INTER_AREA);
-        }
-        AddNoiseAndClamp(options.noise, &noise_rng, view);
-      }
-      cv::imwrite((out / "dp/left" / (name + ".png")).string(), To16Bit(left));
-      cv::imwrite((out / "dp/right" / (name + ".png")).string(),
-                  To16Bit(right));
-      cv::Mat combined_8bit;
-      combined.convertTo(combined_8bit, CV_8U, 255.0);
-      const std::string image_name = name + ".jpg";
-      cv::imwrite((out / "images" / image_name).string(), combined_8bit);
-      if (options.radial_k1 == 0) {
-        cv::imwrite((out / "dense/images" / image_name).string(),
-                    combined_8bit);
-      } else {
-        cv::Mat undistorted;
-        renders.back().image.convertTo(undistorted, CV_8U, 255.0);
-        cv::imwrite((out / "dense/images" / image_name).string(), undistorted);
-      }
-      const fs::path depth_dir = out / "dense/stereo/depth_maps";
-      for (const char* type : {".geometric.bin", ".photometric.bin"}) {
-        WriteDepthMap(depth_model, (depth_dir / (image_name + type)).string());
-      }
-
-      lens_csv << image_name << "," << options.focal_length_mm << ","
-               << f_number << "," << lens.pixel_pitch_um << "\n";
-      nlohmann::json& entry = truth["views"][image_name];
-      entry["focus_distance_m"] = focus_m;
-      const Eigen::Vector3d center = views[i].Center();
-      entry["center_m"] = {center.x(), center.y(), center.z()};
-      entry["f_number"] = f_number;
-      entry["pose"] = i + 1;
+// Focus somewhere inside the view's depth range, as a photographer focusing
+// on the subject would (one draw from rng).
+double DrawFocusDistance(const cv::Mat& depth,
+                         const std::string& pose_name,
+                         std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<float> depths;
+  for (int r = 0; r < depth.rows; r += 4) {
+    for (int c = 0; c < depth.cols; c += 4) {
+      if (depth.at<float>(r, c) > 0) depths.push_back(depth.at<float>(r, c));
     }
   }
+  if (depths.empty()) {
+    throw std::runtime_error("view " + pose_name +
+                             " sees nothing of the scene");
+  }
+  std::sort(depths.begin(), depths.end());
+  return depths[static_cast<size_t>((0.3 + 0.4 * unit(*rng)) * depths.size())];
+}
 
-  // Tracks: grid samples of every pose, observed wherever they are visible,
-  // in every image (aperture) of the poses that see them.
-  std::vector<std::vector<colmap::Point2D>> points2D(num_images);
-  // The same observations in the original, distorted images (sparse/0).
-  std::vector<std::vector<Eigen::Vector2d>> distorted2D(num_images);
-  struct Track3D {
-    Eigen::Vector3d xyz;
-    std::vector<std::pair<int, int>> observations;  // (image, point2D idx)
-  };
-  std::vector<Track3D> tracks;
+// The depth map PatchMatch would give, in model units: downsized and
+// degraded with the pose's own random numbers.
+cv::Mat PatchMatchDepthMap(const GeneratorOptions& options,
+                           const RunSetup& setup,
+                           const cv::Mat& depth,
+                           const std::string& pose_name) {
+  cv::Mat depth_model = depth / setup.true_scale;
+  if (options.depth_map_factor > 1) {
+    cv::resize(cv::Mat(depth_model),
+               depth_model,
+               cv::Size(options.width / options.depth_map_factor,
+                        options.height / options.depth_map_factor),
+               0,
+               0,
+               cv::INTER_NEAREST);
+  }
+  cv::RNG depth_rng(ImageSeed(options.seed, pose_name + "/z"));
+  DegradeDepthMap(
+      options.depth_noise, options.depth_holes, &depth_rng, &depth_model);
+  return depth_model;
+}
+
+// The lens of the images made at `f_number`.
+dpsfm::DPLensData ApertureLens(const GeneratorOptions& options,
+                               const RunSetup& setup,
+                               double f_number) {
+  dpsfm::DPLensData lens;
+  lens.focal_length_mm = options.focal_length_mm;
+  lens.f_number = f_number;
+  lens.pixel_pitch_um = setup.pitch_mm * 1e3;
+  return lens;
+}
+
+// The signed blur radius of every pixel of `depth` (metres).
+cv::Mat BlurRadiusMap(const GeneratorOptions& options,
+                      const RunSetup& setup,
+                      const dpsfm::DPLensData& lens,
+                      double focus_m,
+                      const cv::Mat& depth) {
+  cv::Mat radius(depth.size(), CV_32FC1);
+  for (int r = 0; r < radius.rows; ++r) {
+    for (int c = 0; c < radius.cols; ++c) {
+      const float z = depth.at<float>(r, c);
+      radius.at<float>(r, c) = static_cast<float>(
+          BlurRadiusPx(options, lens, focus_m, z, setup.pitch_mm));
+    }
+  }
+  return radius;
+}
+
+// The image's DP views with their gains and noise, and the ordinary image
+// (both halves summed at full resolution) with its own noise.
+void RenderImage(const GeneratorOptions& options,
+                 const RunSetup& setup,
+                 const SensorPsf& sensor,
+                 const dpsfm::DPRenderOptions& render_options,
+                 const RenderedView& render,
+                 const cv::Mat& radius,
+                 const std::string& name,
+                 cv::Mat* left,
+                 cv::Mat* right,
+                 cv::Mat* combined) {
+  RenderSensorViews(options,
+                    sensor,
+                    render.image,
+                    render.depth,
+                    radius,
+                    render_options,
+                    left,
+                    right);
+  ApplyColumnGain(1.0, -options.gain_ramp, left);
+  ApplyColumnGain(options.right_gain, options.gain_ramp, right);
+  cv::RNG noise_rng(ImageSeed(options.seed, name));
+  *combined = *left + *right;
+  AddNoiseAndClamp(options.noise * std::sqrt(2.0), &noise_rng, combined);
+  for (cv::Mat* view : {left, right}) {
+    BinAndAddNoise(options, setup.dp_size, &noise_rng, view);
+  }
+}
+
+// The image's files: DP views, original and undistorted image, depth maps.
+void WriteImageFiles(const GeneratorOptions& options,
+                     const RunSetup& setup,
+                     const std::string& name,
+                     const cv::Mat& left,
+                     const cv::Mat& right,
+                     const cv::Mat& combined,
+                     const RenderedView& undistorted_render,
+                     const cv::Mat& depth_model) {
+  const fs::path& out = setup.out;
+  cv::imwrite((out / "dp/left" / (name + ".png")).string(), To16Bit(left));
+  cv::imwrite((out / "dp/right" / (name + ".png")).string(), To16Bit(right));
+  cv::Mat combined_8bit;
+  combined.convertTo(combined_8bit, CV_8U, 255.0);
+  const std::string image_name = name + ".jpg";
+  cv::imwrite((out / "images" / image_name).string(), combined_8bit);
+  if (options.radial_k1 == 0) {
+    cv::imwrite((out / "dense/images" / image_name).string(), combined_8bit);
+  } else {
+    cv::Mat undistorted;
+    undistorted_render.image.convertTo(undistorted, CV_8U, 255.0);
+    cv::imwrite((out / "dense/images" / image_name).string(), undistorted);
+  }
+  const fs::path depth_dir = out / "dense/stereo/depth_maps";
+  for (const char* type : {".geometric.bin", ".photometric.bin"}) {
+    WriteDepthMap(depth_model, (depth_dir / (image_name + type)).string());
+  }
+}
+
+// The image's line of lens.csv and its entry in the ground truth.
+void RecordImage(const GeneratorOptions& options,
+                 const dpsfm::DPLensData& lens,
+                 const PinholeView& view,
+                 int pose,
+                 const std::string& image_name,
+                 double focus_m,
+                 Records* records) {
+  records->lens_csv << image_name << "," << options.focal_length_mm << ","
+                    << lens.f_number << "," << lens.pixel_pitch_um << "\n";
+  nlohmann::json& entry = records->truth["views"][image_name];
+  entry["focus_distance_m"] = focus_m;
+  const Eigen::Vector3d center = view.Center();
+  entry["center_m"] = {center.x(), center.y(), center.z()};
+  entry["f_number"] = lens.f_number;
+  entry["pose"] = pose + 1;
+}
+
+// Renders every pose (original and undistorted geometry), focuses it (one
+// draw each from rng) and writes its images, one per aperture.
+PoseRenders RenderPoses(const GeneratorOptions& options,
+                        const RunSetup& setup,
+                        const SyntheticScene& scene,
+                        const std::vector<PinholeView>& views,
+                        const SensorPsf& sensor,
+                        const dpsfm::DPRenderOptions& render_options,
+                        std::mt19937* rng,
+                        Records* records) {
+  PoseRenders poses;
+  poses.names.resize(options.num_views);
+  for (int i = 0; i < options.num_views; ++i) {
+    const std::string pose_name = PoseName(i);
+    const RenderedView render = dpsfm::examples::RenderView(scene, views[i]);
+    poses.renders.push_back(
+        UndistortedRender(options, scene, views[i], render));
+    const double focus_m = DrawFocusDistance(render.depth, pose_name, rng);
+    const cv::Mat depth_model = PatchMatchDepthMap(
+        options, setup, poses.renders.back().depth, pose_name);
+    for (const double f_number : setup.f_numbers) {
+      const std::string name = setup.multi_aperture
+                                   ? pose_name + "_f" + FNumberTag(f_number)
+                                   : pose_name;
+      poses.names[i].push_back(name);
+      const dpsfm::DPLensData lens = ApertureLens(options, setup, f_number);
+      const cv::Mat radius =
+          BlurRadiusMap(options, setup, lens, focus_m, render.depth);
+      cv::Mat left, right, combined;
+      RenderImage(options,
+                  setup,
+                  sensor,
+                  render_options,
+                  render,
+                  radius,
+                  name,
+                  &left,
+                  &right,
+                  &combined);
+      WriteImageFiles(options,
+                      setup,
+                      name,
+                      left,
+                      right,
+                      combined,
+                      poses.renders.back(),
+                      depth_model);
+      RecordImage(options, lens, views[i], i, name + ".jpg", focus_m, records);
+    }
+  }
+  return poses;
+}
+
+// Adds the observations of `track` in view j (pose j, every aperture), if
+// the view sees it unoccluded.
+void ObserveInView(const GeneratorOptions& options,
+                   const RunSetup& setup,
+                   const PinholeView& view,
+                   const RenderedView& render,
+                   int j,
+                   Track3D* track,
+                   SparseTracks* sparse) {
+  const double focal_px = setup.focal_px;
+  const Eigen::Vector3d pc = view.rotation * track->xyz + view.translation;
+  if (pc.z() <= 0) return;
+  const double u = focal_px * pc.x() / pc.z() + (options.width - 1) / 2.0;
+  const double v = focal_px * pc.y() / pc.z() + (options.height - 1) / 2.0;
+  const int ui = static_cast<int>(std::lround(u));
+  const int vi = static_cast<int>(std::lround(v));
+  if (ui < 0 || vi < 0 || ui >= options.width || vi >= options.height) {
+    return;
+  }
+  const float zj = render.depth.at<float>(vi, ui);
+  if (std::abs(zj - pc.z()) > 0.01 * pc.z()) return;  // occluded
+  for (int a = 0; a < setup.num_apertures; ++a) {
+    const int image = j * setup.num_apertures + a;
+    // COLMAP puts the top-left pixel centre at (0.5, 0.5).
+    colmap::Point2D point;
+    point.xy = Eigen::Vector2d(u + 0.5, v + 0.5);
+    track->observations.emplace_back(image, sparse->points2D[image].size());
+    sparse->points2D[image].push_back(point);
+    sparse->distorted2D[image].push_back(view.Project(pc) +
+                                         Eigen::Vector2d(0.5, 0.5));
+  }
+}
+
+// Tracks: grid samples of every pose, observed wherever they are visible,
+// in every image (aperture) of the poses that see them.
+SparseTracks MakeTracks(const GeneratorOptions& options,
+                        const RunSetup& setup,
+                        const std::vector<PinholeView>& views,
+                        const std::vector<RenderedView>& renders) {
+  const double focal_px = setup.focal_px;
+  SparseTracks sparse;
+  sparse.points2D.resize(setup.num_images);
+  sparse.distorted2D.resize(setup.num_images);
   for (int i = 0; i < options.num_views; ++i) {
     const Eigen::Matrix3d world_from_cam = views[i].rotation.transpose();
     for (int r = 20; r < options.height - 20; r += options.height / 24) {
       for (int c = 20; c < options.width - 20; c += options.width / 36) {
         const float z = renders[i].depth.at<float>(r, c);
         if (z <= 0) continue;
-        const Eigen::Vector3d cam(
-            (c - (options.width - 1) / 2.0) / focal_px * z,
-            (r - (options.height - 1) / 2.0) / focal_px * z,
-            z);
+        const Eigen::Vector3d cam =
+            BackProject(c, r, z, options.width, options.height, focal_px);
         Track3D track;
         track.xyz = world_from_cam * (cam - views[i].translation);
         for (int j = 0; j < options.num_views; ++j) {
-          const Eigen::Vector3d pc =
-              views[j].rotation * track.xyz + views[j].translation;
-          if (pc.z() <= 0) continue;
-          const double u =
-              focal_px * pc.x() / pc.z() + (options.width - 1) / 2.0;
-          const double v =
-              focal_px * pc.y() / pc.z() + (options.height - 1) / 2.0;
-          const int ui = static_cast<int>(std::lround(u));
-          const int vi = static_cast<int>(std::lround(v));
-          if (ui < 0 || vi < 0 || ui >= options.width || vi >= options.height) {
-            continue;
-          }
-          const float zj = renders[j].depth.at<float>(vi, ui);
-          if (std::abs(zj - pc.z()) > 0.01 * pc.z()) continue;  // occluded
-          for (int a = 0; a < num_apertures; ++a) {
-            const int image = j * num_apertures + a;
-            // COLMAP puts the top-left pixel centre at (0.5, 0.5).
-            colmap::Point2D point;
-            point.xy = Eigen::Vector2d(u + 0.5, v + 0.5);
-            track.observations.emplace_back(image, points2D[image].size());
-            points2D[image].push_back(point);
-            distorted2D[image].push_back(views[j].Project(pc) +
-                                         Eigen::Vector2d(0.5, 0.5));
-          }
+          ObserveInView(
+              options, setup, views[j], renders[j], j, &track, &sparse);
         }
-        if (track.observations.size() >= 2) tracks.push_back(track);
+        if (track.observations.size() >= 2) sparse.tracks.push_back(track);
       }
     }
   }
+  return sparse;
+}
 
+// The model of the undistorted images (PINHOLE) in model units, as
+// image_undistorter leaves it.
+colmap::Reconstruction MakeDenseModel(const GeneratorOptions& options,
+                                      const RunSetup& setup,
+                                      const std::vector<PinholeView>& views,
+                                      const PoseRenders& poses,
+                                      const SparseTracks& sparse) {
   colmap::Reconstruction reconstruction;
-  dpsfm::AddCamera(&reconstruction,
-                   colmap::Camera::CreateFromModelName(
-                       1, "PINHOLE", focal_px, options.width, options.height));
+  dpsfm::AddCamera(
+      &reconstruction,
+      colmap::Camera::CreateFromModelName(
+          1, "PINHOLE", setup.focal_px, options.width, options.height));
   for (int i = 0; i < options.num_views; ++i) {
-    for (int a = 0; a < num_apertures; ++a) {
-      const int index = i * num_apertures + a;
+    for (int a = 0; a < setup.num_apertures; ++a) {
+      const int index = i * setup.num_apertures + a;
       colmap::Image image;
       image.SetImageId(index + 1);
-      image.SetName(names[i][a] + ".jpg");
+      image.SetName(poses.names[i][a] + ".jpg");
       image.SetCameraId(1);
-      image.SetPoints2D(points2D[index]);
+      image.SetPoints2D(sparse.points2D[index]);
       dpsfm::AddRegisteredImage(
           &reconstruction,
           image,
           colmap::Rigid3d(Eigen::Quaterniond(views[i].rotation),
-                          views[i].translation / true_scale));
+                          views[i].translation / setup.true_scale));
     }
   }
-  for (const Track3D& track : tracks) {
+  for (const Track3D& track : sparse.tracks) {
     colmap::Track colmap_track;
     for (const auto& obs : track.observations) {
       colmap_track.AddElement(obs.first + 1, obs.second);
     }
-    reconstruction.AddPoint3D(
-        track.xyz / true_scale, colmap_track, Eigen::Vector3ub(128, 128, 128));
+    reconstruction.AddPoint3D(track.xyz / setup.true_scale,
+                              colmap_track,
+                              Eigen::Vector3ub(128, 128, 128));
   }
-  reconstruction.WriteBinary((out / "dense/sparse").string());
-  // sparse/0: the model of the original images, as the mapper leaves it.
-  colmap::Camera original = colmap::Camera::CreateFromModelName(
-      1, "SIMPLE_RADIAL", focal_px, options.width, options.height);
-  original.params[3] = options.radial_k1;
-  reconstruction.Camera(1) = original;
-  for (int index = 0; index < num_images; ++index) {
-    colmap::Image& image = reconstruction.Image(index + 1);
-    for (size_t k = 0; k < distorted2D[index].size(); ++k) {
-      image.Point2D(k).xy = distorted2D[index][k];
-    }
-  }
-  reconstruction.WriteBinary((out / "sparse/0").string());
-  {
-    // The project database, as feature extraction leaves it (cameras and
-    // images; no features are needed here).
-    const std::shared_ptr<colmap::Database> database =
-        dpsfm::OpenDatabase((out / "database.db").string());
-    database->WriteCamera(original, /*use_camera_id=*/true);
-    for (int index = 0; index < num_images; ++index) {
-      colmap::Image image;
-      image.SetName(reconstruction.Image(index + 1).Name());
-      image.SetCameraId(1);
-      database->WriteImage(image);
-    }
-  }
-  WriteFusedPly(views, renders, true_scale, (out / "dense/fused.ply").string());
+  return reconstruction;
+}
 
-  if (options.calibration_captures > 0) {
-    WriteCalibrationCaptures(options, sensor, pitch_mm, dp_size, &rng, out);
+// Turns the dense model into the model of the original images
+// (SIMPLE_RADIAL, distorted observations), as the mapper leaves it; returns
+// its camera.
+colmap::Camera ToOriginalModel(const GeneratorOptions& options,
+                               const RunSetup& setup,
+                               const SparseTracks& sparse,
+                               colmap::Reconstruction* reconstruction) {
+  colmap::Camera original = colmap::Camera::CreateFromModelName(
+      1, "SIMPLE_RADIAL", setup.focal_px, options.width, options.height);
+  original.params[3] = options.radial_k1;
+  reconstruction->Camera(1) = original;
+  for (int index = 0; index < setup.num_images; ++index) {
+    colmap::Image& image = reconstruction->Image(index + 1);
+    for (size_t k = 0; k < sparse.distorted2D[index].size(); ++k) {
+      image.Point2D(k).xy = sparse.distorted2D[index][k];
+    }
   }
-  std::ofstream((out / "ground_truth.json").string()) << truth.dump(2) << "\n";
+  return original;
+}
+
+// The project database, as feature extraction leaves it (cameras and
+// images; no features are needed here).
+void WriteDatabase(const RunSetup& setup,
+                   const colmap::Camera& camera,
+                   const colmap::Reconstruction& reconstruction) {
+  const std::shared_ptr<colmap::Database> database =
+      dpsfm::OpenDatabase((setup.out / "database.db").string());
+  database->WriteCamera(camera, /*use_camera_id=*/true);
+  for (int index = 0; index < setup.num_images; ++index) {
+    colmap::Image image;
+    image.SetName(reconstruction.Image(index + 1).Name());
+    image.SetCameraId(1);
+    database->WriteImage(image);
+  }
+}
+
+// The models (dense/sparse, sparse/0) and the database.
+void WriteModels(const GeneratorOptions& options,
+                 const RunSetup& setup,
+                 const std::vector<PinholeView>& views,
+                 const PoseRenders& poses,
+                 const SparseTracks& sparse) {
+  colmap::Reconstruction reconstruction =
+      MakeDenseModel(options, setup, views, poses, sparse);
+  reconstruction.WriteBinary((setup.out / "dense/sparse").string());
+  const colmap::Camera original =
+      ToOriginalModel(options, setup, sparse, &reconstruction);
+  reconstruction.WriteBinary((setup.out / "sparse/0").string());
+  WriteDatabase(setup, original, reconstruction);
+}
+
+// The line that says what was generated, and how long it took.
+void PrintSummary(const GeneratorOptions& options,
+                  const RunSetup& setup,
+                  size_t num_tracks,
+                  std::chrono::steady_clock::time_point start) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   std::cout << "Generated " << options.scene << " scene, " << options.camera
-            << ": " << options.num_views << " poses x " << num_apertures
+            << ": " << options.num_views << " poses x " << setup.num_apertures
             << " aperture(s), " << options.width << "x" << options.height
-            << " (DP " << dp_size.width << "x" << dp_size.height << "), "
-            << tracks.size() << " tracks, true scale " << true_scale
+            << " (DP " << setup.dp_size.width << "x" << setup.dp_size.height
+            << "), " << num_tracks << " tracks, true scale " << setup.true_scale
             << " m per model unit, in " << options.output_path << " ("
             << std::fixed << std::setprecision(1) << seconds << " s)"
             << std::endl;
+}
+
+int Run(const GeneratorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::mt19937 rng(options.seed);
+  const double true_scale = DrawTrueScale(options, &rng);
+  const SyntheticScene scene = MakeScene(options, &rng);
+  const RunSetup setup = MakeRunSetup(options, true_scale);
+  CreateWorkspaceFolders(setup.out);
+  const std::vector<PinholeView> views =
+      PlaceCameras(options, scene, setup.focal_px, &rng);
+  const SensorPsf sensor = MakeSensorPsf(options);
+  const dpsfm::DPRenderOptions render_options = MakeRenderOptions(options);
+  Records records;
+  StartRecords(options, setup, sensor, &records);
+  const PoseRenders poses = RenderPoses(
+      options, setup, scene, views, sensor, render_options, &rng, &records);
+  const SparseTracks sparse = MakeTracks(options, setup, views, poses.renders);
+  WriteModels(options, setup, views, poses, sparse);
+  WriteFusedPly(views,
+                poses.renders,
+                true_scale,
+                (setup.out / "dense/fused.ply").string());
+  if (options.calibration_captures > 0) {
+    WriteCalibrationCaptures(
+        options, sensor, setup.pitch_mm, setup.dp_size, &rng, setup.out);
+  }
+  std::ofstream((setup.out / "ground_truth.json").string())
+      << records.truth.dump(2) << "\n";
+  PrintSummary(options, setup, sparse.tracks.size(), start);
   return EXIT_SUCCESS;
+}
+
+// Adds an option whose default is its current value.
+template <typename T>
+void AddOption(po::options_description* desc,
+               const char* name,
+               T* value,
+               const char* help) {
+  desc->add_options()(name, po::value(value)->default_value(*value), help);
+}
+
+// The output folder, the seed and what is drawn from it.
+void AddRunOptions(po::options_description* desc, GeneratorOptions* options) {
+  desc->add_options()("help,h", "this help")(
+      "output_path",
+      po::value(&options->output_path)->required(),
+      "output folder");
+  AddOption(
+      desc, "seed", &options->seed, "random seed: everything is drawn from it");
+  AddOption(desc, "num_views", &options->num_views, "tripod positions (poses)");
+  AddOption(desc, "scene", &options->scene, "tabletop | facade | planes");
+}
+
+// The camera and lens (0: the camera's default), the scene's size and the
+// true scale.
+void AddCameraOptions(po::options_description* desc,
+                      GeneratorOptions* options) {
+  AddOption(
+      desc,
+      "camera",
+      &options->camera,
+      "dslr (50 mm f/2.8, 36 mm sensor, 1200x800) | phone (4.38 mm f/1.73, 5.6 "
+      "mm sensor, 1600x1200, DP frames at half size)");
+  AddOption(desc, "width", &options->width, "image width");
+  AddOption(desc, "height", &options->height, "image height");
+  AddOption(
+      desc, "focal_length_mm", &options->focal_length_mm, "lens focal length");
+  AddOption(desc, "f_number", &options->f_number, "aperture");
+  AddOption(desc,
+            "f_numbers",
+            &options->f_numbers,
+            "several apertures per pose, e.g. 2.8,5.6,11 (images <pose>_f<N>)");
+  AddOption(desc,
+            "sensor_width_mm",
+            &options->sensor_width_mm,
+            "sensor width (pixel pitch = width_mm / width)");
+  AddOption(desc,
+            "dp_factor",
+            &options->dp_factor,
+            "DP frames are this many times smaller than the images");
+  AddOption(desc,
+            "scene_scale",
+            &options->scene_scale,
+            "multiplies the scene's and the rig's lengths (dslr 1, phone 0.3)");
+  AddOption(
+      desc, "scale", &options->scale, "metres per model unit (0: random)");
+}
+
+// The sensor's noise and gains, and the imperfections of the depth maps,
+// of the texture and of the lens.
+void AddImperfectionOptions(po::options_description* desc,
+                            GeneratorOptions* options) {
+  AddOption(
+      desc, "noise", &options->noise, "noise sigma on [0,1] of each DP view");
+  AddOption(desc,
+            "depth_map_factor",
+            &options->depth_map_factor,
+            "depth maps are this many times smaller than the images");
+  AddOption(desc,
+            "depth_noise",
+            &options->depth_noise,
+            "relative sigma of the depth maps' error");
+  AddOption(desc,
+            "depth_holes",
+            &options->depth_holes,
+            "fraction of depth-map pixels missing (0), in blobs");
+  AddOption(
+      desc, "right_gain", &options->right_gain, "gain of the right DP view");
+  AddOption(desc,
+            "gain_ramp",
+            &options->gain_ramp,
+            "opposite horizontal gain ramps of the DP views (edge to edge)");
+  AddOption(desc,
+            "texture_contrast",
+            &options->texture_contrast,
+            "1: full texture, 0: flat surfaces");
+  AddOption(desc,
+            "radial_k1",
+            &options->radial_k1,
+            "SIMPLE_RADIAL k1 of the original images");
+}
+
+// How the DP views are rendered (compositing, the DP profile, the renderer),
+// and the calibration captures made with them.
+void AddSensorOptions(po::options_description* desc,
+                      GeneratorOptions* options) {
+  AddOption(desc, "compositing", &options->compositing, "additive | layers");
+  AddOption(desc,
+            "psf_split_exponent",
+            &options->psf_split_exponent,
+            "DP split profile exponent (0: the translating disk)");
+  AddOption(desc,
+            "psf_crosstalk",
+            &options->psf_crosstalk,
+            "DP split profile crosstalk");
+  AddOption(desc,
+            "psf_rim_softness",
+            &options->psf_rim_softness,
+            "DP split profile rim softness (fraction of the radius)");
+  AddOption(
+      desc,
+      "psf_split_exponent_right",
+      &options->psf_split_exponent_right,
+      "split exponent at the right edge (profile changing across the frame)");
+  AddOption(
+      desc,
+      "renderer",
+      &options->renderer,
+      "kernels (the profile's kernels) | aperture (light through aperture "
+      "points; shares no code with the estimator's optics)");
+  AddOption(
+      desc,
+      "aperture_subsamples",
+      &options->aperture_subsamples,
+      "aperture points landing per pixel of blur, along each axis (renderer "
+      "aperture)");
+  AddOption(
+      desc,
+      "aperture_crosstalk",
+      &options->aperture_crosstalk,
+      "share of a half aperture's light in the other photodiode (renderer "
+      "aperture)");
+  AddOption(desc,
+            "calibration_captures",
+            &options->calibration_captures,
+            "planar-target captures for dp_psf_calibrator (calibration/)");
+}
+
+// Throws unless the options (camera defaults applied) make a scene.
+void CheckOptions(const GeneratorOptions& options) {
+  if (options.num_views < 1 || options.width < 64 || options.height < 64 ||
+      options.depth_map_factor < 1 || options.dp_factor < 1 ||
+      options.dp_factor > 8 || options.focal_length_mm <= 0 ||
+      options.f_number <= 0 || options.sensor_width_mm <= 0 ||
+      options.scene_scale <= 0 || options.noise < 0 ||
+      options.depth_noise < 0 || options.depth_holes < 0 ||
+      options.depth_holes >= 1 || options.right_gain <= 0 ||
+      std::abs(options.gain_ramp) >= 2 || options.texture_contrast < 0 ||
+      (options.compositing != "additive" && options.compositing != "layers") ||
+      (options.renderer != "kernels" && options.renderer != "aperture") ||
+      options.aperture_subsamples < 1 || !(options.aperture_crosstalk >= 0) ||
+      !(options.aperture_crosstalk < 0.5)) {
+    throw std::invalid_argument(
+        "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
+        "dp_factor in 1..8, positive lens and scene numbers, noise >= 0, "
+        "depth_holes in [0, 1), right_gain > 0, |gain_ramp| < 2, "
+        "texture_contrast >= 0, compositing additive or layers, renderer "
+        "kernels or aperture, aperture_subsamples >= 1, aperture_crosstalk "
+        "in "
+        "[0, 0.5)");
+  }
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   GeneratorOptions options;
-  namespace po = boost::program_options;
   po::options_description desc(
       "dpsfm_make_example options (0: the camera's default)");
-  auto add = [&desc](const char* name, auto* value, const char* help) {
-    desc.add_options()(name, po::value(value)->default_value(*value), help);
-  };
-  desc.add_options()("help,h", "this help")(
-      "output_path",
-      po::value(&options.output_path)->required(),
-      "output folder");
-  add("seed", &options.seed, "random seed: everything is drawn from it");
-  add("num_views", &options.num_views, "tripod positions (poses)");
-  add("scene", &options.scene, "tabletop | facade | planes");
-  add("camera",
-      &options.camera,
-      "dslr (50 mm f/2.8, 36 mm sensor, 1200x800) | phone (4.38 mm f/1.73, 5.6 "
-      "mm sensor, 1600x1200, DP frames at half size)");
-  add("width", &options.width, "image width");
-  add("height", &options.height, "image height");
-  add("focal_length_mm", &options.focal_length_mm, "lens focal length");
-  add("f_number", &options.f_number, "aperture");
-  add("f_numbers",
-      &options.f_numbers,
-      "several apertures per pose, e.g. 2.8,5.6,11 (images <pose>_f<N>)");
-  add("sensor_width_mm",
-      &options.sensor_width_mm,
-      "sensor width (pixel pitch = width_mm / width)");
-  add("dp_factor",
-      &options.dp_factor,
-      "DP frames are this many times smaller than the images");
-  add("scene_scale",
-      &options.scene_scale,
-      "multiplies the scene's and the rig's lengths (dslr 1, phone 0.3)");
-  add("scale", &options.scale, "metres per model unit (0: random)");
-  add("noise", &options.noise, "noise sigma on [0,1] of each DP view");
-  add("depth_map_factor",
-      &options.depth_map_factor,
-      "depth maps are this many times smaller than the images");
-  add("depth_noise",
-      &options.depth_noise,
-      "relative sigma of the depth maps' error");
-  add("depth_holes",
-      &options.depth_holes,
-      "fraction of depth-map pixels missing (0), in blobs");
-  add("right_gain", &options.right_gain, "gain of the right DP view");
-  add("gain_ramp",
-      &options.gain_ramp,
-      "opposite horizontal gain ramps of the DP views (edge to edge)");
-  add("texture_contrast",
-      &options.texture_contrast,
-      "1: full texture, 0: flat surfaces");
-  add("radial_k1",
-      &options.radial_k1,
-      "SIMPLE_RADIAL k1 of the original images");
-  add("compositing", &options.compositing, "additive | layers");
-  add("psf_split_exponent",
-      &options.psf_split_exponent,
-      "DP split profile exponent (0: the translating disk)");
-  add("psf_crosstalk", &options.psf_crosstalk, "DP split profile crosstalk");
-  add("psf_rim_softness",
-      &options.psf_rim_softness,
-      "DP split profile rim softness (fraction of the radius)");
-  add("psf_split_exponent_right",
-      &options.psf_split_exponent_right,
-      "split exponent at the right edge (profile changing across the frame)");
-  add("renderer",
-      &options.renderer,
-      "kernels (the profile's kernels) | aperture (light through aperture "
-      "points; shares no code with the estimator's optics)");
-  add("aperture_subsamples",
-      &options.aperture_subsamples,
-      "aperture points landing per pixel of blur, along each axis (renderer "
-      "aperture)");
-  add("aperture_crosstalk",
-      &options.aperture_crosstalk,
-      "share of a half aperture's light in the other photodiode (renderer "
-      "aperture)");
-  add("calibration_captures",
-      &options.calibration_captures,
-      "planar-target captures for dp_psf_calibrator (calibration/)");
+  AddRunOptions(&desc, &options);
+  AddCameraOptions(&desc, &options);
+  AddImperfectionOptions(&desc, &options);
+  AddSensorOptions(&desc, &options);
   try {
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -904,28 +1271,7 @@ int main(int argc, char** argv) {
     }
     po::notify(vm);
     ApplyCameraDefaults(&options);
-    if (options.num_views < 1 || options.width < 64 || options.height < 64 ||
-        options.depth_map_factor < 1 || options.dp_factor < 1 ||
-        options.dp_factor > 8 || options.focal_length_mm <= 0 ||
-        options.f_number <= 0 || options.sensor_width_mm <= 0 ||
-        options.scene_scale <= 0 || options.noise < 0 ||
-        options.depth_noise < 0 || options.depth_holes < 0 ||
-        options.depth_holes >= 1 || options.right_gain <= 0 ||
-        std::abs(options.gain_ramp) >= 2 || options.texture_contrast < 0 ||
-        (options.compositing != "additive" &&
-         options.compositing != "layers") ||
-        (options.renderer != "kernels" && options.renderer != "aperture") ||
-        options.aperture_subsamples < 1 || !(options.aperture_crosstalk >= 0) ||
-        !(options.aperture_crosstalk < 0.5)) {
-      throw std::invalid_argument(
-          "need num_views >= 1, width/height >= 64, depth_map_factor >= 1, "
-          "dp_factor in 1..8, positive lens and scene numbers, noise >= 0, "
-          "depth_holes in [0, 1), right_gain > 0, |gain_ramp| < 2, "
-          "texture_contrast >= 0, compositing additive or layers, renderer "
-          "kernels or aperture, aperture_subsamples >= 1, aperture_crosstalk "
-          "in "
-          "[0, 0.5)");
-    }
+    CheckOptions(options);
     return Run(options);
   } catch (const std::exception& error) {
     std::cerr << "ERROR: dpsfm_make_example: " << error.what() << std::endl;
