@@ -200,105 +200,148 @@ SyntheticScene RandomTabletopScene(std::mt19937* rng, int num_boxes) {
   return scene;
 }
 
-SyntheticScene RandomFacadeScene(std::mt19937* rng) {
-  SyntheticScene scene;
+namespace {
+
+// The facade's dimensions and tints, drawn from rng. The wall's face is
+// y = 0 (facing -y), 3 m high; openings recede to y = recess, where a dark
+// back plane (glass, door leaf) closes them. Bays lie between pilasters.
+struct FacadeLayout {
+  double height = 3.0;
+  double recess = 0;
+  double pilaster = 0;
+  std::vector<double> bays;
+  double width = 0;
+  double left = 0;
+  Eigen::Vector3d wall_tint, stone_tint;
+};
+
+// The stone steps up to the door: 3 of 15 cm.
+constexpr double kStepHeight = 0.15;
+constexpr int kNumSteps = 3;
+
+// Draws the facade's recess, pilaster and bay widths, then its tints.
+FacadeLayout DrawFacadeLayout(std::mt19937* rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  FacadeLayout facade;
+  facade.recess = 0.15 + 0.2 * unit(*rng);
+  facade.pilaster = 0.2 + 0.1 * unit(*rng);
+  for (int i = 0; i < 3; ++i) facade.bays.push_back(0.55 + 0.25 * unit(*rng));
+  facade.width = 4 * facade.pilaster;
+  for (const double bay : facade.bays) facade.width += bay;
+  facade.left = -facade.width / 2;
+  facade.wall_tint = RandomTint(rng, 0.75);
+  facade.stone_tint = RandomTint(rng, 0.8);
+  return facade;
+}
+
+// Paving in front of the facade, and the dark back plane of the openings.
+void AddFacadeGround(const FacadeLayout& facade, SyntheticScene* scene) {
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
   const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
-  // The wall's face is y = 0 (facing -y), 3 m high; openings recede to
-  // y = recess, where a dark back plane (glass, door leaf) closes them.
-  const double height = 3.0;
-  const double recess = 0.15 + 0.2 * unit(*rng);
-  const double pilaster = 0.2 + 0.1 * unit(*rng);
-  std::vector<double> bays;
-  for (int i = 0; i < 3; ++i) bays.push_back(0.55 + 0.25 * unit(*rng));
-  double width = 4 * pilaster;
-  for (const double bay : bays) width += bay;
-  const double left = -width / 2;
+  scene->quads.push_back(SceneQuad{Eigen::Vector3d(-50, -50, 0),
+                                   x,
+                                   y,
+                                   100,
+                                   50 + facade.recess,
+                                   Eigen::Vector3d(0.8, 0.8, 0.78),
+                                   1,
+                                   Material::kNoise});
+  scene->quads.push_back(
+      SceneQuad{Eigen::Vector3d(facade.left - 1, facade.recess, 0),
+                x,
+                z,
+                facade.width + 2,
+                facade.height,
+                Eigen::Vector3d(0.45, 0.5, 0.55),
+                2,
+                Material::kGrain});
+}
 
-  const Eigen::Vector3d wall_tint = RandomTint(rng, 0.75);
-  const Eigen::Vector3d stone_tint = RandomTint(rng, 0.8);
-  // Paving in front of the facade.
-  scene.quads.push_back(SceneQuad{Eigen::Vector3d(-50, -50, 0),
-                                  x,
-                                  y,
-                                  100,
-                                  50 + recess,
-                                  Eigen::Vector3d(0.8, 0.8, 0.78),
-                                  1,
-                                  Material::kNoise});
-  scene.quads.push_back(SceneQuad{Eigen::Vector3d(left - 1, recess, 0),
-                                  x,
-                                  z,
-                                  width + 2,
-                                  height,
-                                  Eigen::Vector3d(0.45, 0.5, 0.55),
-                                  2,
-                                  Material::kGrain});
-  // Bays between pilasters: the middle one holds the door above the steps,
-  // the outer ones a window each.
-  const double step_height = 0.15;
-  const int num_steps = 3;
-  double bay_left = left + pilaster;
-  int seed = 10;
-  for (int i = 0; i < 3; ++i) {
-    const double bay_right = bay_left + bays[i];
-    const bool door = i == 1;
-    const double margin = door ? 0.08 : 0.1 + 0.05 * unit(*rng);
-    const double bottom =
-        door ? num_steps * step_height : 0.8 + 0.2 * unit(*rng);
-    const double top = door ? 2.1 : 1.8 + 0.2 * unit(*rng);
-    auto wall = [&](double x0, double x1, double z0, double z1) {
-      scene.boxes.push_back(SceneBox{Eigen::Vector3d(x0, 0, z0),
-                                     Eigen::Vector3d(x1, recess, z1),
-                                     wall_tint,
-                                     seed++,
-                                     Material::kBricks});
-    };
-    if (bottom > 0) wall(bay_left, bay_right, 0, bottom);
-    wall(bay_left, bay_right, top, height);
-    wall(bay_left, bay_left + margin, bottom, top);
-    wall(bay_right - margin, bay_right, bottom, top);
-    if (!door) {
-      // A stone sill under the window.
-      scene.boxes.push_back(SceneBox{
-          Eigen::Vector3d(bay_left + margin - 0.04, -0.06, bottom - 0.05),
-          Eigen::Vector3d(bay_right - margin + 0.04, 0.0, bottom),
-          stone_tint,
-          seed++,
-          Material::kNoise});
-    } else {
-      // Steps up to the door, each 30 cm deep.
-      for (int k = 0; k < num_steps; ++k) {
-        scene.boxes.push_back(SceneBox{
-            Eigen::Vector3d(
-                bay_left - 0.2, -0.3 * (num_steps - k), k * step_height),
-            Eigen::Vector3d(bay_right + 0.2, 0.0, (k + 1) * step_height),
-            stone_tint,
-            seed++,
-            Material::kNoise});
-      }
-    }
-    bay_left = bay_right + pilaster;
+// Bay i between bay_left and bay_right: the middle one holds the door above
+// the steps, the outer ones a window each, with a stone sill (a window's
+// margin, bottom and top drawn from rng, in that order).
+void AddFacadeBay(const FacadeLayout& facade,
+                  int i,
+                  double bay_left,
+                  double bay_right,
+                  int* seed,
+                  std::mt19937* rng,
+                  SyntheticScene* scene) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const bool door = i == 1;
+  const double margin = door ? 0.08 : 0.1 + 0.05 * unit(*rng);
+  const double bottom = door ? kNumSteps * kStepHeight : 0.8 + 0.2 * unit(*rng);
+  const double top = door ? 2.1 : 1.8 + 0.2 * unit(*rng);
+  auto wall = [&](double x0, double x1, double z0, double z1) {
+    scene->boxes.push_back(SceneBox{Eigen::Vector3d(x0, 0, z0),
+                                    Eigen::Vector3d(x1, facade.recess, z1),
+                                    facade.wall_tint,
+                                    (*seed)++,
+                                    Material::kBricks});
+  };
+  if (bottom > 0) wall(bay_left, bay_right, 0, bottom);
+  wall(bay_left, bay_right, top, facade.height);
+  wall(bay_left, bay_left + margin, bottom, top);
+  wall(bay_right - margin, bay_right, bottom, top);
+  if (!door) {
+    // A stone sill under the window.
+    scene->boxes.push_back(SceneBox{
+        Eigen::Vector3d(bay_left + margin - 0.04, -0.06, bottom - 0.05),
+        Eigen::Vector3d(bay_right - margin + 0.04, 0.0, bottom),
+        facade.stone_tint,
+        (*seed)++,
+        Material::kNoise});
+    return;
   }
-  // Pilasters standing proud of the wall, and a cornice along the top.
-  for (int i = 0; i < 4; ++i) {
-    double x0 = left;
-    for (int k = 0; k < i; ++k) x0 += pilaster + bays[k];
-    scene.boxes.push_back(
-        SceneBox{Eigen::Vector3d(x0, -0.12, 0),
-                 Eigen::Vector3d(x0 + pilaster, recess, height),
-                 stone_tint,
-                 seed++,
+  // Steps up to the door, each 30 cm deep.
+  for (int k = 0; k < kNumSteps; ++k) {
+    scene->boxes.push_back(
+        SceneBox{Eigen::Vector3d(
+                     bay_left - 0.2, -0.3 * (kNumSteps - k), k * kStepHeight),
+                 Eigen::Vector3d(bay_right + 0.2, 0.0, (k + 1) * kStepHeight),
+                 facade.stone_tint,
+                 (*seed)++,
                  Material::kNoise});
   }
-  scene.boxes.push_back(
-      SceneBox{Eigen::Vector3d(left - 0.1, -0.2, height - 0.3),
-               Eigen::Vector3d(-left + 0.1, 0.0, height - 0.12),
-               stone_tint,
-               seed++,
+}
+
+// Pilasters standing proud of the wall, and a cornice along the top.
+void AddPilastersAndCornice(const FacadeLayout& facade,
+                            int* seed,
+                            SyntheticScene* scene) {
+  for (int i = 0; i < 4; ++i) {
+    double x0 = facade.left;
+    for (int k = 0; k < i; ++k) x0 += facade.pilaster + facade.bays[k];
+    scene->boxes.push_back(SceneBox{
+        Eigen::Vector3d(x0, -0.12, 0),
+        Eigen::Vector3d(x0 + facade.pilaster, facade.recess, facade.height),
+        facade.stone_tint,
+        (*seed)++,
+        Material::kNoise});
+  }
+  scene->boxes.push_back(
+      SceneBox{Eigen::Vector3d(facade.left - 0.1, -0.2, facade.height - 0.3),
+               Eigen::Vector3d(-facade.left + 0.1, 0.0, facade.height - 0.12),
+               facade.stone_tint,
+               (*seed)++,
                Material::kNoise});
+}
+
+}  // namespace
+
+SyntheticScene RandomFacadeScene(std::mt19937* rng) {
+  SyntheticScene scene;
+  const FacadeLayout facade = DrawFacadeLayout(rng);
+  AddFacadeGround(facade, &scene);
+  double bay_left = facade.left + facade.pilaster;
+  int seed = 10;
+  for (int i = 0; i < 3; ++i) {
+    const double bay_right = bay_left + facade.bays[i];
+    AddFacadeBay(facade, i, bay_left, bay_right, &seed, rng, &scene);
+    bay_left = bay_right + facade.pilaster;
+  }
+  AddPilastersAndCornice(facade, &seed, &scene);
   // At eye level, 2 m or so from the door.
   scene.rig =
       CameraRig{Eigen::Vector3d(0.0, -0.2, 0.9), 0.4, 1.9, 2.4, 0.2, 0.5};
