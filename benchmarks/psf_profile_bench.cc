@@ -11,6 +11,7 @@
 //
 //   psf_profile_bench [--scenes N] [--views V] [--noise SIGMA] [--only NAME]
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -137,100 +138,129 @@ struct Calibrated {
   std::string note;
 };
 
-Calibrated Calibrate(const Sensor& sensor, double noise) {
+// The calibration camera: 50 mm f/8 focused 1.0 m from the sensor.
+constexpr double kCalibrationFocusMm = 1000;
+
+// The signed blur radius (pixels) of the target d mm from the focal-plane
+// mark, through the calibration camera.
+double TargetBlurRadiusPx(const DPLensData& lens, double d) {
+  const double focus_mm = kCalibrationFocusMm;
+  const double u_g = FocusObjectDistanceMm(focus_mm, lens.focal_length_mm);
+  return BlurRadiusPxFromDiameterMm(
+      SignedBlurDiameterMm(
+          lens,
+          u_g,
+          ObjectDistanceFromSensorMm(d, focus_mm, lens.focal_length_mm)),
+      lens.PixelPitchMm());
+}
+
+// Capture k of the target d mm away: its profile patches for the family,
+// and for the shape its grey views and a stopped-down (f/32) capture of
+// the same target.
+void ShootTarget(const Sensor& sensor,
+                 const DPLensData& lens,
+                 double d,
+                 int k,
+                 double noise,
+                 std::vector<CalibrationCapture>* captures,
+                 std::vector<ShapeCapture>* shape_captures) {
   const DPScaleOptions options = Options();
   const int border = 11;  // KernelRadius(10) of the split family
-  DPLensData lens = Lens(50, 8);
-  const double focus_mm = 1000;
-  std::vector<CalibrationCapture> captures;
-  // For the shape: each capture's grey views and a stopped-down (f/32)
-  // capture of the same target.
-  std::vector<ShapeCapture> shape_captures;
-  int k = 0;
-  for (const double d : {700.0, 800.0, 880.0, 1250.0, 1600.0, 2400.0}) {
-    CalibrationCapture capture;
-    capture.name = std::to_string(static_cast<int>(d)) + " mm";
-    capture.lens = lens;
-    capture.working_pitch_mm = lens.PixelPitchMm();
-    capture.target_distance_mm = d;
-    const double u_g = FocusObjectDistanceMm(focus_mm, lens.focal_length_mm);
-    const double r = BlurRadiusPxFromDiameterMm(
-        SignedBlurDiameterMm(
-            lens,
-            u_g,
-            ObjectDistanceFromSensorMm(d, focus_mm, lens.focal_length_mm)),
-        lens.PixelPitchMm());
-    test::TextureOptions tex;
-    tex.channels = 3;
-    const cv::Mat sharp =
-        test::MakeTexture(cv::Size(kWidth, kHeight), 9000 + k, tex);
-    test::RenderOptions render;
-    render.noise_sigma = noise;
-    render.noise_seed = 9100 + k++;
-    const test::DPPair pair =
-        Render(sharp,
-               sensor,
-               cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r)),
-               render);
-    capture.patches = ExtractProfilePatches(test::ToGray(pair.left),
-                                            test::ToGray(pair.right),
-                                            options.patch_size,
-                                            30,
-                                            border,
-                                            std::nan(""),
-                                            1.5);
-    captures.push_back(std::move(capture));
-    test::RenderOptions sharp_render = render;
-    sharp_render.noise_seed += 50;
-    const test::DPPair stopped =
-        Render(sharp,
-               sensor,
-               cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r * 8 / 32)),
-               sharp_render);
-    ShapeCapture shape;
-    shape.name = captures.back().name;
-    shape.left = test::ToGray(pair.left);
-    shape.right = test::ToGray(pair.right);
-    shape.sharp = test::ToGray(stopped.left) + test::ToGray(stopped.right);
-    shape_captures.push_back(std::move(shape));
-  }
-  TargetCalibrationOptions fit;
-  fit.blur.max_radius_px = options.max_radius_px;
-  fit.grid_rows = 1;
-  fit.grid_cols = 3;
-  const TargetCalibration c = CalibrateFromTargets(captures, fit);
-  Calibrated out;
-  out.note = c.reason;
-  if (!c.determined) return out;
-  // As dp_psf_calibrator writes it into the profile file.
-  out.family_uncertainty = std::max(c.strength - c.strength_ci_low,
-                                    c.strength_ci_high - c.strength) /
-                           c.strength;
-  out.family.layout = c.layout;
+  CalibrationCapture capture;
+  capture.name = std::to_string(static_cast<int>(d)) + " mm";
+  capture.lens = lens;
+  capture.working_pitch_mm = lens.PixelPitchMm();
+  capture.target_distance_mm = d;
+  const double r = TargetBlurRadiusPx(lens, d);
+  test::TextureOptions tex;
+  tex.channels = 3;
+  const cv::Mat sharp =
+      test::MakeTexture(cv::Size(kWidth, kHeight), 9000 + k, tex);
+  test::RenderOptions render;
+  render.noise_sigma = noise;
+  render.noise_seed = 9100 + k;
+  const test::DPPair pair = Render(
+      sharp, sensor, cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r)), render);
+  capture.patches = ExtractProfilePatches(test::ToGray(pair.left),
+                                          test::ToGray(pair.right),
+                                          options.patch_size,
+                                          30,
+                                          border,
+                                          std::nan(""),
+                                          1.5);
+  captures->push_back(std::move(capture));
+  test::RenderOptions sharp_render = render;
+  sharp_render.noise_seed += 50;
+  const test::DPPair stopped =
+      Render(sharp,
+             sensor,
+             cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r * 8 / 32)),
+             sharp_render);
+  ShapeCapture shape;
+  shape.name = captures->back().name;
+  shape.left = test::ToGray(pair.left);
+  shape.right = test::ToGray(pair.right);
+  shape.sharp = test::ToGray(stopped.left) + test::ToGray(stopped.right);
+  shape_captures->push_back(std::move(shape));
+}
+
+// The family's profiles per cell and their uncertainty, as
+// dp_psf_calibrator writes them into the profile file.
+void SetFamily(const TargetCalibration& c, Calibrated* out) {
+  out->family_uncertainty = std::max(c.strength - c.strength_ci_low,
+                                     c.strength_ci_high - c.strength) /
+                            c.strength;
+  out->family.layout = c.layout;
   for (const double kappa : c.cell_centroid_offsets) {
-    out.family.cells.push_back(std::make_shared<const SplitProfilePsf>(
+    out->family.cells.push_back(std::make_shared<const SplitProfilePsf>(
         SplitProfileParams::ForCentroidOffset(kappa)));
   }
-  // The shape, at the radii the fitted focus gives.
+}
+
+// The shape, measured at the radii the fitted focus gives: its kernels per
+// cell and their uncertainty (none if it is not determined).
+void MeasureShape(const TargetCalibration& c,
+                  std::vector<ShapeCapture> shape_captures,
+                  Calibrated* out) {
   for (size_t i = 0; i < shape_captures.size(); ++i) {
     shape_captures[i].signed_radius_px = c.capture_radius_px[i];
   }
   ShapeCalibrationOptions shape_options;
   shape_options.layout = c.layout;
   const ShapeCalibration shape = CalibrateShapes(shape_captures, shape_options);
-  out.note += "; shape: " + shape.reason;
-  if (!shape.determined) return out;
-  out.shape.layout = c.layout;
+  out->note += "; shape: " + shape.reason;
+  if (!shape.determined) return;
+  out->shape.layout = c.layout;
   for (size_t cell = 0; cell < shape.cell_kernels.size(); ++cell) {
-    out.shape.cells.push_back(std::make_shared<const MeasuredKernelPsf>(
+    out->shape.cells.push_back(std::make_shared<const MeasuredKernelPsf>(
         shape.cell_kernels[cell].left,
         shape.cell_kernels[cell].right,
         shape.reference_radius_px,
         true));
   }
-  out.shape_uncertainty = std::max(
-      out.family_uncertainty,
+  out->shape_uncertainty = std::max(
+      out->family_uncertainty,
       std::abs(MeasuredStrength(shape, c.cell_patches) / c.strength - 1));
+}
+
+Calibrated Calibrate(const Sensor& sensor, double noise) {
+  const DPLensData lens = Lens(50, 8);
+  std::vector<CalibrationCapture> captures;
+  std::vector<ShapeCapture> shape_captures;
+  int k = 0;
+  for (const double d : {700.0, 800.0, 880.0, 1250.0, 1600.0, 2400.0}) {
+    ShootTarget(sensor, lens, d, k++, noise, &captures, &shape_captures);
+  }
+  TargetCalibrationOptions fit;
+  fit.blur.max_radius_px = Options().max_radius_px;
+  fit.grid_rows = 1;
+  fit.grid_cols = 3;
+  const TargetCalibration c = CalibrateFromTargets(captures, fit);
+  Calibrated out;
+  out.note = c.reason;
+  if (!c.determined) return out;
+  SetFamily(c, &out);
+  MeasureShape(c, std::move(shape_captures), &out);
   return out;
 }
 
@@ -270,182 +300,262 @@ Run Estimate(const std::vector<DPView>& views,
   return run;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// The command line.
+struct BenchArguments {
   int num_scenes = 2, num_views = 8;
   double noise = 0.005;
   std::string only;  // run only the sensors whose name contains this
+};
+
+// The modes: translating_disk, auto, calibrated, calibrated shape.
+constexpr int kModes = 4;
+
+// One sensor's row of the table: r_s per mode (scenes joined by ", "), and
+// the sums of |1 - r_s| over the answers.
+struct Row {
+  std::string cells[kModes];
+  double errors[kModes] = {0, 0, 0, 0};
+  int counts[kModes] = {0, 0, 0, 0};
+};
+
+// What the summary after the table reads, over all sensors.
+struct Totals {
+  double time_disk = 0, time_auto = 0;
+  std::vector<std::string> notes;
+  int held[kModes] = {0, 0, 0, 0}, answered[kModes] = {0, 0, 0, 0};
+  std::vector<std::string> calibration_notes;
+};
+
+// Reads the flags; false, with a message, on an unknown flag.
+bool ParseArguments(int argc, char** argv, BenchArguments* args) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--scenes") {
-      num_scenes = std::atoi(argv[i + 1]);
+      args->num_scenes = std::atoi(argv[i + 1]);
     } else if (flag == "--views") {
-      num_views = std::atoi(argv[i + 1]);
+      args->num_views = std::atoi(argv[i + 1]);
     } else if (flag == "--noise") {
-      noise = std::atof(argv[i + 1]);
+      args->noise = std::atof(argv[i + 1]);
     } else if (flag == "--only") {
-      only = argv[i + 1];
+      args->only = argv[i + 1];
     } else {
       std::fprintf(stderr, "unknown flag %s\n", argv[i]);
-      return 1;
+      return false;
     }
   }
-  auto split = [](double p, double c, double e) {
-    SplitProfileParams params;
-    params.split_exponent = p;
-    params.crosstalk = c;
-    params.rim_softness = e;
-    return std::make_shared<const SplitProfilePsf>(params);
-  };
-  // Outside every family the estimator fits: an elliptical aperture (0.7
-  // as tall as wide) with a soft sigmoid split along an axis rotated by 20
-  // degrees, and a cat-eye (a disk cut by a second, offset disk) with a
-  // bright rim and a strong split; as measured kernel pairs at 10 px.
-  auto measured = [](double aspect,
-                     double rotation_deg,
-                     double strength,
-                     double cut,
-                     double rim) {
-    const test::KernelPair k =
-        test::SoftSplitKernels(10, aspect, rotation_deg, strength, cut, rim);
-    return std::make_shared<const MeasuredKernelPsf>(k.left, k.right, 10, true);
-  };
-  const std::vector<Sensor> sensors = {
+  return true;
+}
+
+// A split profile: exponent p, crosstalk c, rim softness e.
+std::shared_ptr<const DPPsfModel> SplitProfile(double p, double c, double e) {
+  SplitProfileParams params;
+  params.split_exponent = p;
+  params.crosstalk = c;
+  params.rim_softness = e;
+  return std::make_shared<const SplitProfilePsf>(params);
+}
+
+// Measured kernel pairs at 10 px of an elliptical aperture with a soft
+// split along a rotated axis, or of a cat-eye with a rim (SoftSplitKernels).
+std::shared_ptr<const DPPsfModel> MeasuredKernels(double aspect,
+                                                  double rotation_deg,
+                                                  double strength,
+                                                  double cut,
+                                                  double rim) {
+  const test::KernelPair k =
+      test::SoftSplitKernels(10, aspect, rotation_deg, strength, cut, rim);
+  return std::make_shared<const MeasuredKernelPsf>(k.left, k.right, 10, true);
+}
+
+// The simulated sensors: the model, split profiles, and measured kernels
+// outside every family the estimator fits (an elliptical aperture 0.7 as
+// tall as wide with a soft sigmoid split along an axis rotated by 20
+// degrees, and a cat-eye, a disk cut by a second, offset disk, with a bright
+// rim and a strong split).
+std::vector<Sensor> MakeSensors() {
+  return {
       {"translating disk (the model)",
        std::make_shared<const TranslatingDiskPsf>(),
        nullptr},
-      {"sharp split (p 0.3)", split(0.3, 0, 0), nullptr},
-      {"soft split (p 2.5)", split(2.5, 0, 0), nullptr},
-      {"crosstalk 0.12", split(1, 0.12, 0), nullptr},
-      {"soft rim 0.2 + split p 0.6", split(0.6, 0, 0.2), nullptr},
+      {"sharp split (p 0.3)", SplitProfile(0.3, 0, 0), nullptr},
+      {"soft split (p 2.5)", SplitProfile(2.5, 0, 0), nullptr},
+      {"crosstalk 0.12", SplitProfile(1, 0.12, 0), nullptr},
+      {"soft rim 0.2 + split p 0.6", SplitProfile(0.6, 0, 0.2), nullptr},
       {"split varying across the frame (p 0.4 -> 1.5)",
-       split(0.4, 0, 0),
-       split(1.5, 0, 0)},
+       SplitProfile(0.4, 0, 0),
+       SplitProfile(1.5, 0, 0)},
       {"elliptical aperture, rotated soft split (kernels)",
-       measured(0.7, 20, 2.5, 0, 0),
+       MeasuredKernels(0.7, 20, 2.5, 0, 0),
        nullptr},
       {"cat-eye, bright rim, strong split (kernels)",
-       measured(1.0, 0, 8, 0.35, 2),
+       MeasuredKernels(1.0, 0, 8, 0.35, 2),
        nullptr},
       {"kernels changing across the frame (ellipse, weak -> cat-eye, strong)",
-       measured(0.7, 15, 1.2, 0, 0),
-       measured(1.0, 0, 6, 0.3, 1)},
+       MeasuredKernels(0.7, 15, 1.2, 0, 0),
+       MeasuredKernels(1.0, 0, 6, 0.3, 1)},
       // Apodized: light falling to a tenth towards the rim (1 - 0.9 rho^4),
       // the family's bright rim reversed, with a soft split.
       {"apodized, soft split (kernels)",
-       measured(1.0, 0, 1.5, 0, -0.9),
+       MeasuredKernels(1.0, 0, 1.5, 0, -0.9),
        nullptr},
   };
+}
+
+// The run's sizes and the table's header.
+void PrintHeader(const BenchArguments& args) {
   std::printf(
       "psf_profile_bench: %d scenes x %d views of %dx%d, noise %.3f\n"
       "r_s = s_est / s_true; e_s = mean |1 - r_s|\n\n",
-      num_scenes,
-      num_views,
+      args.num_scenes,
+      args.num_views,
       kWidth,
       kHeight,
-      noise);
+      args.noise);
   std::printf(
       "| true profile | translating_disk r_s | auto r_s | calibrated r_s | "
       "calibrated shape r_s | e_s translating_disk | e_s auto | e_s "
       "calibrated | e_s calibrated shape |\n|---|---|---|---|---|---|---|---|"
       "---|\n");
-  double time_disk = 0, time_auto = 0;
-  std::vector<std::string> notes;
-  constexpr int kModes = 4;
-  int held[kModes] = {0, 0, 0, 0}, answered[kModes] = {0, 0, 0, 0};
-  std::vector<std::string> calibration_notes;
-  for (const Sensor& sensor : sensors) {
-    if (!only.empty() && sensor.name.find(only) == std::string::npos) continue;
-    const Calibrated calibrated = Calibrate(sensor, noise);
-    calibration_notes.push_back(sensor.name + ": " + calibrated.note);
-    std::string cells[kModes];
-    double errors[kModes] = {0, 0, 0, 0};
-    int counts[kModes] = {0, 0, 0, 0};
-    for (int scene = 0; scene < num_scenes; ++scene) {
-      const double scale = 0.05 + 0.03 * scene;
-      std::vector<DPView> views;
-      for (int v = 0; v < num_views; ++v) {
-        views.push_back(Capture(sensor, scene, v, scale, noise));
-      }
-      const DPPsfField disk =
-          DPPsfField::Uniform(std::make_shared<const TranslatingDiskPsf>());
-      const Run runs[kModes] = {Estimate(views, disk, false, scale),
-                                Estimate(views, disk, true, scale),
-                                calibrated.family.cells.empty()
-                                    ? Run()
-                                    : Estimate(views,
-                                               calibrated.family,
-                                               false,
-                                               scale,
-                                               calibrated.family_uncertainty),
-                                calibrated.shape.cells.empty()
-                                    ? Run()
-                                    : Estimate(views,
-                                               calibrated.shape,
-                                               false,
-                                               scale,
-                                               calibrated.shape_uncertainty)};
-      time_disk += runs[0].seconds;
-      time_auto += runs[1].seconds;
-      for (int m = 0; m < kModes; ++m) {
-        char cell[32];
-        if (runs[m].success) {
-          std::snprintf(cell,
-                        sizeof(cell),
-                        "%.3f%s",
-                        runs[m].ratio,
-                        runs[m].holds ? "" : " (misses)");
-          errors[m] += std::abs(1 - runs[m].ratio);
-          ++counts[m];
-          ++answered[m];
-          held[m] += runs[m].holds ? 1 : 0;
-        } else {
-          std::snprintf(cell, sizeof(cell), "refused");
-        }
-        cells[m] += (scene ? ", " : "") + std::string(cell);
-      }
-      if (scene == 0) notes.push_back(sensor.name + ": " + runs[1].note);
+}
+
+// One scene's estimates in every mode, in the table's order (an empty Run
+// where the calibration gave no profile).
+std::array<Run, kModes> EstimateModes(const std::vector<DPView>& views,
+                                      const Calibrated& calibrated,
+                                      double scale) {
+  const DPPsfField disk =
+      DPPsfField::Uniform(std::make_shared<const TranslatingDiskPsf>());
+  return {
+      Estimate(views, disk, false, scale),
+      Estimate(views, disk, true, scale),
+      calibrated.family.cells.empty() ? Run()
+                                      : Estimate(views,
+                                                 calibrated.family,
+                                                 false,
+                                                 scale,
+                                                 calibrated.family_uncertainty),
+      calibrated.shape.cells.empty() ? Run()
+                                     : Estimate(views,
+                                                calibrated.shape,
+                                                false,
+                                                scale,
+                                                calibrated.shape_uncertainty)};
+}
+
+// Adds one scene's estimates to the row's cells and errors and to the
+// totals' runtimes and interval counts.
+void AddScene(const std::array<Run, kModes>& runs,
+              int scene,
+              Row* row,
+              Totals* totals) {
+  totals->time_disk += runs[0].seconds;
+  totals->time_auto += runs[1].seconds;
+  for (int m = 0; m < kModes; ++m) {
+    char cell[32];
+    if (runs[m].success) {
+      std::snprintf(cell,
+                    sizeof(cell),
+                    "%.3f%s",
+                    runs[m].ratio,
+                    runs[m].holds ? "" : " (misses)");
+      row->errors[m] += std::abs(1 - runs[m].ratio);
+      ++row->counts[m];
+      ++totals->answered[m];
+      totals->held[m] += runs[m].holds ? 1 : 0;
+    } else {
+      std::snprintf(cell, sizeof(cell), "refused");
     }
-    if (calibrated.family.cells.empty()) cells[2] = "calibration refused";
-    if (calibrated.shape.cells.empty()) cells[3] = "shape not measured";
-    std::printf("| %s | %s | %s | %s | %s |",
-                sensor.name.c_str(),
-                cells[0].c_str(),
-                cells[1].c_str(),
-                cells[2].c_str(),
-                cells[3].c_str());
-    for (int m = 0; m < kModes; ++m) {
-      if (counts[m] > 0) {
-        std::printf(" %.3f |", errors[m] / counts[m]);
-      } else {
-        std::printf(" - |");
-      }
-    }
-    std::printf("\n");
-    std::fflush(stdout);
+    row->cells[m] += (scene ? ", " : "") + std::string(cell);
   }
+}
+
+// The sensor's row: r_s per mode, then e_s per mode ("-" without answers).
+void PrintRow(const Sensor& sensor, const Row& row) {
+  std::printf("| %s | %s | %s | %s | %s |",
+              sensor.name.c_str(),
+              row.cells[0].c_str(),
+              row.cells[1].c_str(),
+              row.cells[2].c_str(),
+              row.cells[3].c_str());
+  for (int m = 0; m < kModes; ++m) {
+    if (row.counts[m] > 0) {
+      std::printf(" %.3f |", row.errors[m] / row.counts[m]);
+    } else {
+      std::printf(" - |");
+    }
+  }
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+// Calibrates for the sensor, estimates every scene in every mode and prints
+// the sensor's row.
+void BenchSensor(const Sensor& sensor,
+                 const BenchArguments& args,
+                 Totals* totals) {
+  const Calibrated calibrated = Calibrate(sensor, args.noise);
+  totals->calibration_notes.push_back(sensor.name + ": " + calibrated.note);
+  Row row;
+  for (int scene = 0; scene < args.num_scenes; ++scene) {
+    const double scale = 0.05 + 0.03 * scene;
+    std::vector<DPView> views;
+    for (int v = 0; v < args.num_views; ++v) {
+      views.push_back(Capture(sensor, scene, v, scale, args.noise));
+    }
+    const std::array<Run, kModes> runs =
+        EstimateModes(views, calibrated, scale);
+    AddScene(runs, scene, &row, totals);
+    if (scene == 0) totals->notes.push_back(sensor.name + ": " + runs[1].note);
+  }
+  if (calibrated.family.cells.empty()) row.cells[2] = "calibration refused";
+  if (calibrated.shape.cells.empty()) row.cells[3] = "shape not measured";
+  PrintRow(sensor, row);
+}
+
+// The runtimes, the intervals holding the truth, and the notes of `auto`
+// and of the calibrations.
+void PrintSummary(const Totals& totals) {
   std::printf(
       "\nruntime (all scenes): translating_disk %.1f s, auto %.1f s (x %.2f)\n",
-      time_disk,
-      time_auto,
-      time_auto / time_disk);
+      totals.time_disk,
+      totals.time_auto,
+      totals.time_auto / totals.time_disk);
   std::printf(
       "\nintervals holding the truth: translating_disk %d of %d, auto %d of "
       "%d, calibrated %d of %d, calibrated shape %d of %d answers\n",
-      held[0],
-      answered[0],
-      held[1],
-      answered[1],
-      held[2],
-      answered[2],
-      held[3],
-      answered[3]);
+      totals.held[0],
+      totals.answered[0],
+      totals.held[1],
+      totals.answered[1],
+      totals.held[2],
+      totals.answered[2],
+      totals.held[3],
+      totals.answered[3]);
   std::printf("\nauto, first scene of each profile:\n");
-  for (const std::string& note : notes) std::printf("- %s\n", note.c_str());
-  std::printf("\ncalibration (focus fitted):\n");
-  for (const std::string& note : calibration_notes) {
+  for (const std::string& note : totals.notes) {
     std::printf("- %s\n", note.c_str());
   }
+  std::printf("\ncalibration (focus fitted):\n");
+  for (const std::string& note : totals.calibration_notes) {
+    std::printf("- %s\n", note.c_str());
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  BenchArguments args;
+  if (!ParseArguments(argc, argv, &args)) return 1;
+  const std::vector<Sensor> sensors = MakeSensors();
+  PrintHeader(args);
+  Totals totals;
+  for (const Sensor& sensor : sensors) {
+    if (!args.only.empty() &&
+        sensor.name.find(args.only) == std::string::npos) {
+      continue;
+    }
+    BenchSensor(sensor, args, &totals);
+  }
+  PrintSummary(totals);
   return 0;
 }
