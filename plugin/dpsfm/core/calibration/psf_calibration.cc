@@ -9,13 +9,12 @@
 #include <random>
 #include <set>
 #include <sstream>
-#include <unordered_map>
 #include <utility>
 
 #include "dpsfm/core/util/check.h"
+#include "dpsfm/core/util/crop_records.h"
 #include "dpsfm/core/util/curve_math.h"
 #include "dpsfm/core/util/fields.h"
-#include "dpsfm/core/util/matrices.h"
 #include "dpsfm/core/util/statistics.h"
 #include "dpsfm/core/util/threads.h"
 
@@ -25,25 +24,26 @@ struct ProfileSearchCache::Impl {
   // A crop's searches: per profile key (ProfileSearches), the radius (NaN:
   // no estimate) and relative residual.
   struct Crop {
-    cv::Mat left, right;  // the pixels it is known by
     std::map<double, std::pair<double, double>> by_key;
     int reused = 0, run = 0;  // in the current calibration
   };
   bool has_options = false;
   BlurEstimationOptions blur;  // the options every held search used
-  std::unordered_multimap<uint64_t, Crop> crops;  // by HashBytes
+  CropRecords<Crop> crops;     // known by the patch's pixels
 
   // Starts a calibration with `blur`: searches under other options (any
   // field: SameFields) are dropped.
   void Begin(const BlurEstimationOptions& options) {
-    if (!has_options || !SameFields(blur, options)) crops.clear();
+    if (!has_options || !SameFields(blur, options)) crops.Clear();
     blur = options;
     has_options = true;
   }
   // The record of the patch's crop (created empty).
-  Crop* Find(const ProfilePatch& patch);
-  // Drops the crops the current calibration does not use.
-  void KeepOnly(const std::vector<Crop*>& used);
+  Crop* Find(const ProfilePatch& patch) {
+    bool added = false;
+    return crops.Find(
+        patch.left, patch.right, [](const Crop&) { return true; }, &added);
+  }
 };
 
 namespace {
@@ -86,7 +86,7 @@ class ProfileSearches {
       records_[i] = impl.Find(patches[i]);
       records_[i]->reused = records_[i]->run = 0;
     }
-    impl.KeepOnly(records_);
+    impl.crops.KeepOnly(records_);
   }
 
   const std::vector<ProfilePatch>& Patches() const { return patches_; }
@@ -704,35 +704,10 @@ SplitProfileFit FitProfile(ProfileSearches* searches,
 
 }  // namespace
 
-ProfileSearchCache::Impl::Crop* ProfileSearchCache::Impl::Find(
-    const ProfilePatch& patch) {
-  const uint64_t hash = HashBytes(patch.right, HashBytes(patch.left));
-  const auto range = crops.equal_range(hash);
-  for (auto it = range.first; it != range.second; ++it) {
-    if (SameBytes(it->second.left, patch.left) &&
-        SameBytes(it->second.right, patch.right)) {
-      return &it->second;
-    }
-  }
-  Crop& crop = crops.emplace(hash, Crop())->second;
-  crop.left = patch.left;
-  crop.right = patch.right;
-  return &crop;
-}
-
-void ProfileSearchCache::Impl::KeepOnly(const std::vector<Crop*>& used) {
-  const std::set<const Crop*> keep(used.begin(), used.end());
-  for (auto it = crops.begin(); it != crops.end();) {
-    it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
-  }
-}
-
 ProfileSearchCache::ProfileSearchCache() : impl_(new Impl) {}
 ProfileSearchCache::~ProfileSearchCache() = default;
 
-int ProfileSearchCache::NumCrops() const {
-  return static_cast<int>(impl_->crops.size());
-}
+int ProfileSearchCache::NumCrops() const { return impl_->crops.Size(); }
 
 SplitProfileFit FitSplitProfile(const std::vector<ProfilePatch>& patches,
                                 const SplitProfileFitOptions& options) {

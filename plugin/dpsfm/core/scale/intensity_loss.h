@@ -5,10 +5,8 @@
 // entry points are in intensity_search.h.
 #pragma once
 
-#include <cstdint>
 #include <map>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -16,6 +14,7 @@
 #include "dpsfm/core/optics/dp_psf.h"
 #include "dpsfm/core/optics/kernel_grid.h"
 #include "dpsfm/core/scale/intensity_search.h"
+#include "dpsfm/core/util/crop_records.h"
 
 namespace dpsfm {
 namespace intensity {
@@ -69,9 +68,8 @@ struct Prepared {
 
 // A crop's statistics on one grid, kept across searches.
 struct CachedCrop {
-  // What it is known by: the crop's pixels, border and grid (held by the
-  // cache, one per distinct set of kernels).
-  cv::Mat left, right;
+  // What it is known by besides the crop's pixels (CropRecords): its border
+  // and grid (held by the cache, one per distinct set of kernels).
   int border = 0;
   const DPKernelGrid* grid = nullptr;
   std::vector<double> noise_sigma;  // EstimatePairNoiseSigma (empty: not yet)
@@ -83,8 +81,7 @@ struct CachedCrop {
 
 struct IntensityStatsCache::Impl {
   std::vector<std::unique_ptr<DPKernelGrid>> grids;
-  // By HashBytes of both crops; the record's own fields decide.
-  std::unordered_multimap<uint64_t, intensity::CachedCrop> crops;
+  CropRecords<intensity::CachedCrop> crops;
 
   // The cached grid whose kernels equal *grid's (then *grid is dropped),
   // else *grid, now held here.

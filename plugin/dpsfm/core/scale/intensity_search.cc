@@ -96,32 +96,25 @@ intensity::CachedCrop* IntensityStatsCache::Impl::Crop(
     const cv::Mat& right,
     int border,
     const DPKernelGrid* grid) {
-  const uint64_t hash = HashBytes(right, HashBytes(left));
-  const auto range = crops.equal_range(hash);
-  for (auto it = range.first; it != range.second; ++it) {
-    const intensity::CachedCrop& held = it->second;
-    if (held.border == border && held.grid == grid &&
-        SameBytes(held.left, left) && SameBytes(held.right, right)) {
-      return &it->second;
-    }
+  bool added = false;
+  intensity::CachedCrop* record = crops.Find(
+      left,
+      right,
+      [&](const intensity::CachedCrop& held) {
+        return held.border == border && held.grid == grid;
+      },
+      &added);
+  if (added) {
+    record->border = border;
+    record->grid = grid;
   }
-  intensity::CachedCrop& record =
-      crops.emplace(hash, intensity::CachedCrop())->second;
-  record.left = left;
-  record.right = right;
-  record.border = border;
-  record.grid = grid;
-  return &record;
+  return record;
 }
 
 void IntensityStatsCache::Impl::KeepOnlyUsed(
     const std::vector<const DPKernelGrid*>& used_grids,
     const std::vector<intensity::CachedCrop*>& used_crops) {
-  const std::set<const intensity::CachedCrop*> keep(used_crops.begin(),
-                                                    used_crops.end());
-  for (auto it = crops.begin(); it != crops.end();) {
-    it = keep.count(&it->second) > 0 ? std::next(it) : crops.erase(it);
-  }
+  crops.KeepOnly(used_crops);
   grids.erase(std::remove_if(grids.begin(),
                              grids.end(),
                              [&](const std::unique_ptr<DPKernelGrid>& g) {
@@ -135,9 +128,7 @@ void IntensityStatsCache::Impl::KeepOnlyUsed(
 IntensityStatsCache::IntensityStatsCache() : impl_(new Impl) {}
 IntensityStatsCache::~IntensityStatsCache() = default;
 
-int IntensityStatsCache::NumCrops() const {
-  return static_cast<int>(impl_->crops.size());
-}
+int IntensityStatsCache::NumCrops() const { return impl_->crops.Size(); }
 
 namespace {
 
