@@ -406,15 +406,18 @@ OpenScale DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
   return open;
 }
 
+bool DPScaleEstimator::RecordedFocusJoins(const DPScaleResult& result) const {
+  return options_.pin_to_recorded_focus && result.focus_cue.valid;
+}
+
 bool DPScaleEstimator::JoinRecordedFocus(const LinearEstimate& linear,
-                                         bool use_focus,
                                          DPScaleResult* result) const {
   // The DP data answered on their own; the recorded focus joins them.
   result->dp_cue.valid = true;
   result->dp_cue.scale = result->scale;
   result->dp_cue.ci_low = result->scale_ci_low;
   result->dp_cue.ci_high = result->scale_ci_high;
-  if (use_focus) {
+  if (RecordedFocusJoins(*result)) {
     if (!AdoptCombinedCues(linear, result, &result->refusal.cues)) {
       result->refusal.code = ScaleRefusal::kCuesNotCombined;
       return false;
@@ -519,8 +522,6 @@ bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
   // pin_to_recorded_focus allows it, reported as evidence either way.
   result->focus_cue =
       RecordedFocusCue(linear, result->lens_geometry_uncertainty);
-  const bool use_focus =
-      options_.pin_to_recorded_focus && result->focus_cue.valid;
   result->dp_cue = DPCue(linear);
   // What the linear stage found, kept in the result (and the report) even
   // when the interval check below refuses it.
@@ -536,7 +537,8 @@ bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
   if (open.cause != OpenScaleCause::kNone) {
     // The DP data alone give no answer; with the recorded focus they may.
     CueRefusal cues;
-    if (!(use_focus && AdoptCombinedCues(linear, result, &cues))) {
+    if (!(RecordedFocusJoins(*result) &&
+          AdoptCombinedCues(linear, result, &cues))) {
       result->refusal.code = ScaleRefusal::kScaleOpen;
       result->refusal.open = open;
       result->refusal.cues = cues;
@@ -599,10 +601,7 @@ DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
                  caches != nullptr ? &caches->intensity : nullptr,
                  &result);
   result.seconds_intensity = SecondsSince(start_intensity);
-  const bool use_focus =
-      options_.pin_to_recorded_focus && result.focus_cue.valid;
-  if (!result.scale_from_cues &&
-      !JoinRecordedFocus(linear, use_focus, &result)) {
+  if (!result.scale_from_cues && !JoinRecordedFocus(linear, &result)) {
     return result;
   }
   // Focus distances and predicted blur under the final scale.

@@ -581,11 +581,13 @@ class DPScaleEstimator {
                           double statistical_ci_low,
                           double statistical_ci_high,
                           const DPScaleResult& result) const;
+  // Whether the recorded-focus cue joins the answer: pin_to_recorded_focus
+  // and a valid cue in `result`.
+  bool RecordedFocusJoins(const DPScaleResult& result) const;
   // After the DP data answered on their own: their cue, and the recorded
-  // focus's joining it when use_focus; false (the refusal set) when the
-  // two disagree beyond what may be printed.
+  // focus's joining it (RecordedFocusJoins); false (the refusal set) when
+  // the two disagree beyond what may be printed.
   bool JoinRecordedFocus(const LinearEstimate& linear,
-                         bool use_focus,
                          DPScaleResult* result) const;
   // Focus distances and predicted blur radii under the final scale.
   void PredictUnderFinalScale(DPScaleResult* result) const;
