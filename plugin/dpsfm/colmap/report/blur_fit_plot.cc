@@ -51,6 +51,7 @@ const cv::Scalar kOtherViewsColour(200, 200, 200);
 // needs more room (plot::WithHeader).
 constexpr int kPanelTop = 108;
 constexpr int kHeaderRows = kPanelTop - 28;
+constexpr int kWidth = 1000;  // the picture's
 
 // One patch as the picture shows it (radii in DP-frame pixels).
 struct BlurPoint {
@@ -513,7 +514,7 @@ void DrawBlurFitLegend(cv::Mat& canvas,
 }  // namespace
 
 cv::Mat RenderBlurFitPlot(const DPScaleResult& result) {
-  cv::Mat canvas(700, 1000, CV_8UC3, plot::kWhite);
+  cv::Mat canvas(700, kWidth, CV_8UC3, plot::kWhite);
   const BlurFitData data = PrepareBlurFit(result);
   DrawPanelAxes(canvas, data);
   DrawReferenceLines(canvas, data);
@@ -542,12 +543,11 @@ std::string BlurFitTitle(const DPScaleResult& result) {
 BlurFitPanels BlurFitAxes(const DPScaleResult& result) {
   BlurFitData data = PrepareBlurFit(result);
   // Where the panels are in the picture: below a header that may have grown.
-  const int growth = plot::HeaderStrip(cv::Mat(1, 1000, CV_8UC3),
-                                       kHeaderRows,
-                                       plot::FailureAlert(result),
-                                       TitleOf(data),
-                                       BlurFitSubtitle(data))
-                         .rows -
+  const int growth = plot::HeaderRows(kWidth,
+                                      kHeaderRows,
+                                      plot::FailureAlert(result),
+                                      TitleOf(data),
+                                      BlurFitSubtitle(data)) -
                      kHeaderRows;
   data.left.area.y += growth;
   data.right.area.y += growth;

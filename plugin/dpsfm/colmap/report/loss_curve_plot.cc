@@ -37,6 +37,7 @@ const cv::Scalar kMinimumColour(50, 40, 215);
 // where the status under it starts.
 constexpr int kAxesTop = 100;
 constexpr int kHeaderRows = kAxesTop - 12;
+constexpr int kWidth = 1000;  // the picture's
 constexpr int kStatusTop = 588;
 
 // The cues' bars (no curve: the cues decided).
@@ -530,19 +531,18 @@ std::string StatusText(const DPScaleResult& result, const LossCurveData& data) {
 
 // Rows the header takes above the body's kHeaderRows (0 when it fits).
 int HeaderGrowth(const DPScaleResult& result, const LossCurveData& data) {
-  return plot::HeaderStrip(cv::Mat(1, 1000, CV_8UC3),
-                           kHeaderRows,
-                           plot::FailureAlert(result),
-                           TitleOf(result, data),
-                           SubtitleOf(result, data))
-             .rows -
+  return plot::HeaderRows(kWidth,
+                          kHeaderRows,
+                          plot::FailureAlert(result),
+                          TitleOf(result, data),
+                          SubtitleOf(result, data)) -
          kHeaderRows;
 }
 
 }  // namespace
 
 cv::Mat RenderLossCurvePlot(const DPScaleResult& result) {
-  cv::Mat canvas(700, 1000, CV_8UC3, plot::kWhite);
+  cv::Mat canvas(700, kWidth, CV_8UC3, plot::kWhite);
   const LossCurveData data = PrepareLossCurve(result);
   if (data.have_ci) DrawIntervalBand(canvas, result, data.axes);
   plot::DrawAxes(canvas,

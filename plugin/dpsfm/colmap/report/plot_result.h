@@ -29,7 +29,7 @@ std::map<int, double> FramePerWorkingPixel(const DPScaleResult& result);
 std::string ScaleText(double scale);
 
 // "Estimate failed: <reason>" for a failed estimate, empty for a successful
-// one (DrawHeader's alert).
+// one (the header's alert, plot_text.h).
 std::string FailureAlert(const DPScaleResult& result);
 
 // DefaultPatchGeometry of a DP frame of `frame_size`; nothing for an empty

@@ -173,53 +173,110 @@ void PutVerticalText(cv::Mat& canvas,
 
 namespace {
 
-// The rows of `strip` down to its last one with anything drawn, plus a
-// margin; at least `min_rows`.
-cv::Mat UsedRows(const cv::Mat& strip, int min_rows) {
-  cv::Mat ink;
-  cv::cvtColor(strip, ink, cv::COLOR_BGR2GRAY);
-  int last = -1;
-  for (int y = ink.rows - 1; y >= 0 && last < 0; --y) {
-    if (cv::countNonZero(ink.row(y) < 255) > 0) last = y;
+// Every word is kept: a long reason takes as many lines as it needs.
+constexpr int kAllLines = 1000;
+
+// Text wrapped to a width, with how it is drawn: `shift` px added to the
+// baseline before its first line.
+struct TextBlock {
+  std::vector<std::string> lines;
+  double scale;
+  cv::Scalar colour;
+  int thickness;
+  int line_height;
+  int shift;
+};
+
+TextBlock Wrapped(const std::string& text,
+                  int width,
+                  double scale,
+                  const cv::Scalar& colour,
+                  int thickness,
+                  int line_height,
+                  int shift = 0) {
+  TextBlock block{{}, scale, colour, thickness, line_height, shift};
+  if (!text.empty()) {
+    block.lines = WrapText(text, scale, thickness, width, kAllLines);
   }
-  return strip.rowRange(0, std::min(strip.rows, std::max(min_rows, last + 9)));
+  return block;
 }
 
-// A strip of the canvas's width and type, tall enough for any header.
-cv::Mat BlankStrip(const cv::Mat& like) {
-  return cv::Mat(1600, like.cols, like.type(), kWhite);
+// The alert (bold, red), the title (bold) and the subtitle of a picture of
+// `width` px, each wrapped whole.
+std::vector<TextBlock> HeaderBlocks(int width,
+                                    const std::string& alert,
+                                    const std::string& title,
+                                    const std::string& subtitle) {
+  const int text_width = width - 40;
+  return {Wrapped(alert, text_width, 0.62, kFailureColour, 2, 26),
+          Wrapped(title, text_width, 0.62, kTextColour, 2, 26),
+          Wrapped(subtitle, text_width, 0.48, kMutedText, 1, 20, -4)};
 }
+
+// The first baseline of each block's lines, from `first_baseline` on; the
+// rows the blocks need (their last baseline plus room for descenders), at
+// least min_rows.
+std::vector<int> Baselines(const std::vector<TextBlock>& blocks,
+                           int first_baseline,
+                           int min_rows,
+                           int* rows) {
+  std::vector<int> starts;
+  int y = first_baseline;
+  int last = 0;
+  for (const TextBlock& block : blocks) {
+    if (block.lines.empty()) {
+      starts.push_back(y);
+      continue;
+    }
+    y += block.shift;
+    starts.push_back(y);
+    last = y + (static_cast<int>(block.lines.size()) - 1) * block.line_height;
+    y = last + block.line_height;
+  }
+  *rows = std::max(min_rows, last + 12);
+  return starts;
+}
+
+// A white strip of `like`'s width and type with the blocks drawn from x.
+cv::Mat DrawBlocks(const cv::Mat& like,
+                   const std::vector<TextBlock>& blocks,
+                   int x,
+                   int first_baseline,
+                   int min_rows) {
+  int rows = 0;
+  const std::vector<int> starts =
+      Baselines(blocks, first_baseline, min_rows, &rows);
+  cv::Mat strip(rows, like.cols, like.type(), kWhite);
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    int y = starts[b];
+    for (const std::string& line : blocks[b].lines) {
+      PutText(strip,
+              line,
+              {x, y},
+              blocks[b].scale,
+              blocks[b].colour,
+              blocks[b].thickness);
+      y += blocks[b].line_height;
+    }
+  }
+  return strip;
+}
+
+constexpr int kHeaderX = 20, kHeaderBaseline = 30;
 
 }  // namespace
 
-int DrawHeader(cv::Mat& canvas,
+int HeaderRows(int width,
+               int min_rows,
                const std::string& alert,
                const std::string& title,
                const std::string& subtitle) {
-  const int width = canvas.cols - 40;
-  const int kBold = 26, kThin = 20;
-  // Every word is kept: a long reason takes more lines.
-  const int kAllLines = 60;
-  int y = 30;
-  if (!alert.empty()) {
-    y = PutWrapped(
-        canvas, alert, 20, y, width, kAllLines, 0.62, kFailureColour, 2, kBold);
-  }
-  y = PutWrapped(
-      canvas, title, 20, y, width, kAllLines, 0.62, kTextColour, 2, kBold);
-  if (!subtitle.empty()) {
-    y = PutWrapped(canvas,
-                   subtitle,
-                   20,
-                   y - 4,
-                   width,
-                   kAllLines,
-                   0.48,
-                   kMutedText,
-                   1,
-                   kThin);
-  }
-  return y;
+  int rows = 0;
+  Baselines(HeaderBlocks(width, alert, title, subtitle),
+            kHeaderBaseline,
+            min_rows,
+            &rows);
+  return rows;
 }
 
 cv::Mat HeaderStrip(const cv::Mat& like,
@@ -227,9 +284,11 @@ cv::Mat HeaderStrip(const cv::Mat& like,
                     const std::string& alert,
                     const std::string& title,
                     const std::string& subtitle) {
-  cv::Mat strip = BlankStrip(like);
-  DrawHeader(strip, alert, title, subtitle);
-  return UsedRows(strip, min_rows);
+  return DrawBlocks(like,
+                    HeaderBlocks(like.cols, alert, title, subtitle),
+                    kHeaderX,
+                    kHeaderBaseline,
+                    min_rows);
 }
 
 cv::Mat WithHeader(const cv::Mat& body,
@@ -249,21 +308,13 @@ cv::Mat WithFooter(const cv::Mat& body,
                    const std::string& text,
                    double scale,
                    int line_height) {
-  cv::Mat strip = BlankStrip(body);
-  PutWrapped(strip,
-             text,
-             30,
-             line_height,
-             strip.cols - 60,
-             60,
-             scale,
-             kTextColour,
-             1,
-             line_height);
+  const TextBlock block =
+      Wrapped(text, body.cols - 60, scale, kTextColour, 1, line_height);
   cv::Mat out;
-  cv::vconcat(body.rowRange(0, body_bottom),
-              UsedRows(strip, body.rows - body_bottom),
-              out);
+  cv::vconcat(
+      body.rowRange(0, body_bottom),
+      DrawBlocks(body, {block}, 30, line_height, body.rows - body_bottom),
+      out);
   return out;
 }
 

@@ -75,17 +75,20 @@ void PutVerticalText(cv::Mat& canvas,
                      const cv::Scalar& colour,
                      int thickness = 1);
 
-// Title (bold) and optional subtitle lines at the top; a non-empty `alert`
-// (a failed estimate's reason) comes first, in red, because that is what a
-// reader must see first. Every word is drawn, on as many lines as it takes.
-// Returns the baseline after the last line.
-int DrawHeader(cv::Mat& canvas,
+// A picture's header: a non-empty `alert` (a failed estimate's reason)
+// first, in red, because that is what a reader must see first; then the
+// title (bold) and an optional subtitle. Every word is drawn, on as many
+// lines as it takes.
+//
+// The rows the header of a picture `width` px wide takes, at least
+// min_rows.
+int HeaderRows(int width,
+               int min_rows,
                const std::string& alert,
                const std::string& title,
                const std::string& subtitle);
 
-// The header (DrawHeader) on a strip of `like`'s width and type: its rows
-// down to the last line, at least min_rows.
+// The header on a strip of `like`'s width and type, HeaderRows tall.
 cv::Mat HeaderStrip(const cv::Mat& like,
                     int min_rows,
                     const std::string& alert,
