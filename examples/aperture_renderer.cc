@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "dpsfm/core/util/threads.h"
@@ -29,6 +30,20 @@ void Deposit(double x,
   }
 }
 
+// The points of a square lattice of `across` x `across` over [-1, 1]^2
+// (cell centres) that lie in the unit disk.
+std::vector<std::pair<double, double>> DiskLattice(int across) {
+  std::vector<std::pair<double, double>> points;
+  for (int i = 0; i < across; ++i) {
+    for (int j = 0; j < across; ++j) {
+      const double ux = -1 + (i + 0.5) * 2 / across;
+      const double uy = -1 + (j + 0.5) * 2 / across;
+      if (ux * ux + uy * uy <= 1) points.emplace_back(ux, uy);
+    }
+  }
+  return points;
+}
+
 // The rows [row_begin, row_end) of `sharp` sent through the aperture, into
 // *left and *right. The aperture points of a pixel: a square lattice over
 // the unit disk, so fine that their landing points lie at most
@@ -45,6 +60,7 @@ void RenderRows(const cv::Mat& sharp,
   constexpr int kMinPointsAcross = 32;
   const int channels = sharp.channels();
   std::vector<std::pair<double, double>> points;
+  int points_across = 0;  // the lattice `points` holds
   for (int y = row_begin; y < row_end; ++y) {
     for (int x = 0; x < sharp.cols; ++x) {
       const float* value = sharp.ptr<float>(y) + x * channels;
@@ -53,13 +69,9 @@ void RenderRows(const cv::Mat& sharp,
           std::max(kMinPointsAcross,
                    static_cast<int>(std::ceil(2 * std::abs(r) *
                                               options.subsamples_per_pixel)));
-      points.clear();
-      for (int i = 0; i < across; ++i) {
-        for (int j = 0; j < across; ++j) {
-          const double ux = -1 + (i + 0.5) * 2 / across;
-          const double uy = -1 + (j + 0.5) * 2 / across;
-          if (ux * ux + uy * uy <= 1) points.emplace_back(ux, uy);
-        }
+      if (across != points_across) {
+        points = DiskLattice(across);
+        points_across = across;
       }
       const double share = 1.0 / points.size();
       for (const auto& [ux, uy] : points) {
