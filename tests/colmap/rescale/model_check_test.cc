@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "colmap/scene/reconstruction.h"
 #include "colmap/scene/synthetic.h"
 #include "colmap/sensor/models.h"
+#include "dpsfm/colmap/rescale/rescale.h"
 #include "dpsfm/colmap/util/colmap_compat.h"
 #include "dpsfm/colmap/util/input_error.h"
 #include "tests/test_utils.h"
@@ -453,9 +455,8 @@ TEST_F(ModelCheckTest, ImagePointThatItsPointsTrackDoesNotList) {
 }
 
 TEST_F(ModelCheckTest, TrackNamingAMissingImage) {
-  const std::string dir = Mutated(Consistent(), [](TinyModel* m) {
-    m->points[0].track.push_back({7, 0});
-  });
+  const std::string dir = Mutated(
+      Consistent(), [](TinyModel* m) { m->points[0].track.push_back({7, 0}); });
   ExpectRefused(dir,
                 "points3D.bin",
                 {"point 1 of 2 (id 10) lists image 7 in its track, which "
@@ -515,9 +516,7 @@ TEST_F(ModelCheckTest, DuplicateIds) {
                 "rigs.bin",
                 {"rig 2 of 2 (id 1) has the id of rig 1 of 2"});
   ExpectRefused(Mutated(ConsistentWithRig(),
-                        [](TinyModel* m) {
-                          m->frames.push_back({1, 1, {}});
-                        }),
+                        [](TinyModel* m) { m->frames.push_back({1, 1, {}}); }),
                 "frames.bin",
                 {"frame 2 of 2 (id 1) has the id of frame 1 of 2"});
 }
@@ -626,6 +625,55 @@ TEST_F(ModelCheckTest, TrailingBytes) {
       {"point 2 of 2 is followed by 3 bytes that belong to no record"});
 }
 
+// A translation or a point that is not a number would pass COLMAP's reader
+// and reach the estimate (and a rescale would keep it): refused, naming
+// the record and the field.
+TEST_F(ModelCheckTest, NonFiniteTranslationsAndPoints) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  // Image 1's tz (after count, id and qw qx qy qz tx ty).
+  ExpectRefused(Edited(Consistent(),
+                       "images.bin",
+                       [&](std::string* b) {
+                         std::memcpy(&(*b)[8 + 4 + 6 * 8], &nan, 8);
+                       }),
+                "images.bin",
+                {"image 1 of 2 (id 1) has a non-finite number in its "
+                 "cam_from_world pose"});
+  // Point 2's x (after count, point 1 with its track of 2, and the id).
+  ExpectRefused(Edited(Consistent(),
+                       "points3D.bin",
+                       [&](std::string* b) {
+                         const size_t point2 = 8 + 8 + 24 + 3 + 8 + 8 + 2 * 8;
+                         std::memcpy(&(*b)[point2 + 8], &inf, 8);
+                       }),
+                "points3D.bin",
+                {"point 2 of 2 (id 11) has a non-finite number in its "
+                 "position"});
+}
+
+// CheckModel names the files it parsed: those of the format COLMAP's reader
+// reads, and of those the ones that exist.
+TEST_F(ModelCheckTest, SaysWhichFilesItParsed) {
+  for (const bool binary : {true, false}) {
+    const std::string ext = binary ? ".bin" : ".txt";
+    const std::string dir = Write(Consistent(), binary);
+    std::vector<std::string> expected;
+    for (const char* name : {"cameras", "images", "points3D"}) {
+      expected.push_back((fs::path(dir) / (name + ext)).string());
+    }
+    EXPECT_EQ(CheckModel(dir), expected);
+    TinyModel with_rig = ConsistentWithRig();
+    const std::string rig_dir = Write(with_rig, binary);
+    expected.clear();
+    for (const char* name :
+         {"cameras", "rigs", "frames", "images", "points3D"}) {
+      expected.push_back((fs::path(rig_dir) / (name + ext)).string());
+    }
+    EXPECT_EQ(CheckModel(rig_dir), expected);
+  }
+}
+
 TEST_F(ModelCheckTest, CountsTheFileCannotHold) {
   ExpectRefused(Edited(Consistent(),
                        "images.bin",
@@ -663,9 +711,7 @@ TEST_F(ModelCheckTest, TextModels) {
   ExpectRefused(
       Mutated(
           Consistent(),
-          [](TinyModel* m) {
-            m->points[1].track.push_back({7, 0});
-          },
+          [](TinyModel* m) { m->points[1].track.push_back({7, 0}); },
           false),
       "points3D.txt",
       {"line 3 (point 11) lists image 7 in its track, which images.txt does "
@@ -761,9 +807,7 @@ TEST_F(ModelCheckTest, RigsAndFramesThatDisagreeWithTheRest) {
                  "cameras.bin does not hold"});
   ExpectRefused(
       Mutated(ConsistentWithRig(),
-              [](TinyModel* m) {
-                m->rigs[0].sensors[1] = {7, 2, false};
-              }),
+              [](TinyModel* m) { m->rigs[0].sensors[1] = {7, 2, false}; }),
       "rigs.bin",
       {"rig 1 of 1 (id 1) has sensor 2 of 2 of sensor type 7, not a camera "
        "or an IMU"});
@@ -783,18 +827,16 @@ TEST_F(ModelCheckTest, RigsAndFramesThatDisagreeWithTheRest) {
       {"frame 1 of 1 (id 1) lists image 2 of camera 2, which is no sensor "
        "of its rig 1"});
   ExpectRefused(
-      Mutated(ConsistentWithRig(),
-              [](TinyModel* m) {
-                m->frames.push_back({2, 1, {{kCamera, 1, 1}}});
-              }),
+      Mutated(
+          ConsistentWithRig(),
+          [](TinyModel* m) { m->frames.push_back({2, 1, {{kCamera, 1, 1}}}); }),
       "frames.bin",
       {"frame 2 of 2 (id 2) lists image 1, which frame 1 of 2 (id 1) lists "
        "too"});
   ExpectRefused(
-      Mutated(ConsistentWithRig(),
-              [](TinyModel* m) {
-                m->frames.push_back({2, 1, {{kCamera, 1, 9}}});
-              }),
+      Mutated(
+          ConsistentWithRig(),
+          [](TinyModel* m) { m->frames.push_back({2, 1, {{kCamera, 1, 9}}}); }),
       "frames.bin",
       {"frame 2 of 2 (id 2) lists image 9, which images.bin does not hold"});
   ExpectRefused(
@@ -987,7 +1029,10 @@ TEST_F(ModelCheckTest, ChangedPointIdsOfAColmapModelAreRefusedInWords) {
 // every single-byte change and every truncation of each binary file, and
 // every field of each text file replaced: each is either refused in words,
 // or accepted and then read by COLMAP's reader without an error. So no
-// check of COLMAP's reader is left for it to make.
+// check of COLMAP's reader is left for it to make. The rescale reads each
+// model file with the same parser: a file it refuses, the check refuses in
+// the same words (the check also refuses what only the other files show),
+// and a model the check takes, the rescale takes.
 class ChangedColmapModel : public ModelCheckTest {
  protected:
   void SetUp() override {
@@ -1006,11 +1051,16 @@ class ChangedColmapModel : public ModelCheckTest {
            const std::string& bytes,
            const std::string& what) {
     WriteTextFile(path, bytes);
+    const std::string rescale_refusal = RescaleRefusal(path, bytes);
     try {
       CheckModel(dir);
     } catch (const InputError& error) {
       ++refused_;
       const std::string message = error.what();
+      if (!rescale_refusal.empty() && rescale_refusal != message) {
+        Problem(what + ": the check says \"" + message + "\", the rescale \"" +
+                rescale_refusal + "\"");
+      }
       const std::string prefix =
           "cannot read the model in " + dir + ": " + dir + "/";
       if (message.compare(0, prefix.size(), prefix) != 0 ||
@@ -1024,6 +1074,9 @@ class ChangedColmapModel : public ModelCheckTest {
       return;
     }
     ++accepted_;
+    if (!rescale_refusal.empty()) {
+      Problem(what + ": accepted, but the rescale says: " + rescale_refusal);
+    }
     try {
       colmap::Reconstruction reconstruction;
       reconstruction.Read(dir);
@@ -1032,12 +1085,38 @@ class ChangedColmapModel : public ModelCheckTest {
     }
   }
 
+  // What the rescale of `path` (a model file it rescales) says of `bytes`;
+  // "" if it takes them or is no such file.
+  std::string RescaleRefusal(const std::string& path,
+                             const std::string& bytes) {
+    const std::string dir = fs::path(path).parent_path().string();
+    if (!types_.count(dir)) {
+      // The rescale's type of each model file, as the rescale lists them.
+      for (const Artefact& artefact : ListArtefactsToRescale(dir)) {
+        types_[dir][artefact.path] = artefact.type;
+      }
+    }
+    const auto type = types_[dir].find(path);
+    if (type == types_[dir].end()) return "";
+    std::string contents = bytes;
+    try {
+      RescaleContents(type->second, 2.0, path, &contents);
+    } catch (const InputError& error) {
+      ++rescale_refused_;
+      return error.what();
+    }
+    return "";
+  }
+
   void Problem(const std::string& what) {
     if (++problems_ <= 10) ADD_FAILURE() << what;
   }
 
   colmap::Reconstruction reconstruction_;
+  // Per model folder: its model files and their types.
+  std::map<std::string, std::map<std::string, ArtefactType>> types_;
   int refused_ = 0;
+  int rescale_refused_ = 0;  // of those, by the rescale too
   int accepted_ = 0;
   int problems_ = 0;
 };
@@ -1076,11 +1155,15 @@ TEST_F(ChangedColmapModel, EveryByteOfTheBinaryFiles) {
     Try(dir, path, original + '\0', name + " with a byte more");
     WriteTextFile(path, original);
   }
-  std::printf("%d changed files refused, %d accepted and read by COLMAP\n",
-              refused_,
-              accepted_);
+  std::printf(
+      "%d changed files refused (%d by the rescale too), %d accepted and "
+      "read by COLMAP\n",
+      refused_,
+      rescale_refused_,
+      accepted_);
   EXPECT_EQ(problems_, 0);
   EXPECT_GT(refused_, 1000);
+  EXPECT_GT(rescale_refused_, 1000);
   // Poses, coordinates, colours, parameters: changes COLMAP reads.
   EXPECT_GT(accepted_, 1000);
 }
@@ -1125,11 +1208,15 @@ TEST_F(ChangedColmapModel, EveryFieldOfTheTextFiles) {
     }
     WriteTextFile(path, original);
   }
-  std::printf("%d changed files refused, %d accepted and read by COLMAP\n",
-              refused_,
-              accepted_);
+  std::printf(
+      "%d changed files refused (%d by the rescale too), %d accepted and "
+      "read by COLMAP\n",
+      refused_,
+      rescale_refused_,
+      accepted_);
   EXPECT_EQ(problems_, 0);
   EXPECT_GT(refused_, 100);
+  EXPECT_GT(rescale_refused_, 100);
   EXPECT_GT(accepted_, 10);
 }
 

@@ -148,52 +148,5 @@ void ScaleTriples(const std::vector<size_t>& offsets,
   }
 }
 
-std::string RecordName::Text() const {
-  const std::string name = std::string(kind) + " " + std::to_string(index + 1) +
-                           " of " + std::to_string(count);
-  return part == nullptr ? name : std::string(part) + " of " + name;
-}
-
-uint64_t BinaryCursor::ReadCount(const char* what) {
-  Need(bytes_, pos_, 8, path_, what);
-  pos_ += 8;
-  return Load<uint64_t>(bytes_, pos_ - 8);
-}
-
-void BinaryCursor::Skip(uint64_t size, const RecordName& record) {
-  if (pos_ > bytes_.size() || size > bytes_.size() - pos_) Truncated(record);
-  pos_ += size;
-}
-
-void BinaryCursor::SkipArray(uint64_t count,
-                             uint64_t size,
-                             const RecordName& record) {
-  if (pos_ > bytes_.size() || count > (bytes_.size() - pos_) / size) {
-    Truncated(record);
-  }
-  pos_ += count * size;
-}
-
-void BinaryCursor::SkipString(const RecordName& record) {
-  const void* nul =
-      pos_ < bytes_.size()
-          ? std::memchr(bytes_.data() + pos_, '\0', bytes_.size() - pos_)
-          : nullptr;
-  if (nul == nullptr) Truncated(record);
-  pos_ = static_cast<const char*>(nul) - bytes_.data() + 1;
-}
-
-void BinaryCursor::ExpectEnd(const char* record) const {
-  if (pos_ != bytes_.size()) {
-    Corrupt(path_,
-            std::to_string(bytes_.size() - pos_) +
-                " unexpected bytes after the last " + record);
-  }
-}
-
-void BinaryCursor::Truncated(const RecordName& record) const {
-  Corrupt(path_, "file is truncated (" + record.Text() + ")");
-}
-
 }  // namespace rescale
 }  // namespace dpsfm

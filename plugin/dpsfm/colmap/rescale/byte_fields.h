@@ -1,7 +1,7 @@
 // What the rescalers share: finding the numeric fields of a file in its own
-// bytes (a bounds-checked cursor for COLMAP's binary formats, tokens and
-// lines for the text formats), scaling them with checks, and writing them
-// back with round-trip precision. Every problem is an InputError naming the
+// bytes (tokens and lines for the text formats, bounds checks for the
+// binary ones), scaling them with checks, and writing them back with
+// round-trip precision. Every problem is an InputError naming the
 // file ("cannot rescale <path>: ...").
 #pragma once
 
@@ -65,51 +65,6 @@ void ScaleTriples(const std::vector<size_t>& offsets,
                   const std::string& path,
                   const char* what,
                   std::string* bytes);
-
-// ---- binary records ------------------------------------------------------
-
-// "image 3 of 10", or "2D points of image 3 of 10" with a part: a record's
-// name for messages, built only when one is needed.
-struct RecordName {
-  const char* kind;
-  uint64_t index;  // 0-based
-  uint64_t count;
-  const char* part = nullptr;
-  std::string Text() const;
-};
-
-// Walks a binary file from its start; each step checks that the bytes it
-// needs exist and otherwise throws "file is truncated (<record>)".
-class BinaryCursor {
- public:
-  BinaryCursor(const std::string& bytes, const std::string& path)
-      : bytes_(bytes), path_(path) {}
-
-  size_t Position() const { return pos_; }
-
-  template <typename T>
-  T Read(const RecordName& record) {
-    Skip(sizeof(T), record);
-    return Load<T>(bytes_, pos_ - sizeof(T));
-  }
-  // The file's leading record count ("file is truncated (<what>)").
-  uint64_t ReadCount(const char* what);
-  void Skip(uint64_t size, const RecordName& record);
-  // `count` items of `size` bytes each, without forming a product that
-  // could overflow.
-  void SkipArray(uint64_t count, uint64_t size, const RecordName& record);
-  // A NUL-terminated string.
-  void SkipString(const RecordName& record);
-  // The records must end exactly at the end of the file.
-  void ExpectEnd(const char* record) const;
-
- private:
-  [[noreturn]] void Truncated(const RecordName& record) const;
-
-  const std::string& bytes_;
-  const std::string& path_;
-  size_t pos_ = 0;
-};
 
 // ---- text ----------------------------------------------------------------
 

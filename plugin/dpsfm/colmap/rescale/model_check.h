@@ -5,32 +5,13 @@
 // ("Check failed: point2D.point3D_id == point3D_id (0 vs. 3845)") or a
 // library exception ("vector::_M_range_check").
 //
-// The layouts are COLMAP's (scene/reconstruction_io_binary.cc and
-// reconstruction_io_text.cc of COLMAP 4.1.1; 3.10 reads the same cameras,
-// images and points3D files and has no rigs or frames):
-//   cameras.bin   u64 count; per camera u32 id, i32 model id, u64 width,
-//                 u64 height, f64 params[number of the model's parameters]
-//   rigs.bin      u64 count; per rig u32 id, u32 number of sensors, then if
-//                 any the reference sensor (i32 type, u32 id), and per other
-//                 sensor i32 type, u32 id, u8 has_pose, [f64 qw qx qy qz
-//                 tx ty tz]
-//   frames.bin    u64 count; per frame u32 id, u32 rig id, f64 qw qx qy qz
-//                 tx ty tz, u32 number of data ids, per data id i32 sensor
-//                 type, u32 sensor id, u64 data id (an image id for cameras)
-//   images.bin    u64 count; per image u32 id, f64 qw qx qy qz tx ty tz,
-//                 u32 camera id, NUL-terminated name, u64 number of 2D
-//                 points, per 2D point f64 x, f64 y, u64 3D point id
-//                 (2^64 - 1: none)
-//   points3D.bin  u64 count; per point u64 id, f64 x y z, u8 r g b, f64
-//                 error, u64 track length, per element u32 image id, u32 2D
-//                 point index
-// and the text forms of the same records, one line each (an image's 2D
-// points on the line after it, "X Y POINT3D_ID" with -1 for none; sensor
-// types as words, CAMERA or IMU).
+// The files are parsed by the one parser of model files (model_files.h),
+// which the rescale uses too.
 #pragma once
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace dpsfm {
 
@@ -69,7 +50,11 @@ using ReadPathFn = std::function<std::string(const std::string& path)>;
 // 17 of 2000 (id 3845) lists 2D point 12 of image 3 (DP_0003.jpg), which
 // refers to 3D point 0". Records of binary files are "<kind> <n> of
 // <count> (id <id>)", of text files "line <n> (<kind> <id>)".
-void CheckModel(const std::string& model_dir,
-                const ReadPathFn& read_path = nullptr);
+//
+// Returns the paths of the files it parsed. The rescale parses model files
+// with the same parser (model_files.h) and asks no more of them, so these
+// need no validation of their own before a rescale.
+std::vector<std::string> CheckModel(const std::string& model_dir,
+                                    const ReadPathFn& read_path = nullptr);
 
 }  // namespace dpsfm

@@ -11,9 +11,10 @@
 // Nothing here writes an original: results go to a path the caller names
 // (the transaction in transaction.h stages them and commits all at once).
 //
-// One file per format: binary_model.cc, text_model.cc, depth_map.cc,
-// ply.cc; the listing and dispatch in artefacts.cc; what they share
-// (a bounds-checked cursor, tokens, checked scaling) in byte_fields.h.
+// One file per format: model_rescale.cc (COLMAP's model files, read by the
+// one parser of model files, model_files.h), depth_map.cc, ply.cc; the
+// listing and dispatch in artefacts.cc; what they share (tokens, checked
+// scaling) in byte_fields.h.
 #pragma once
 
 #include <cstddef>
@@ -139,6 +140,17 @@ void RescaleDepthMap(double scale,
 // values are written with round-trip precision of their type (%.9g float,
 // %.17g double).
 void RescalePly(double scale, const std::string& path, std::string* contents);
+
+// Whether `type` is one of COLMAP's model files (images, points3D, rigs,
+// frames; binary or text).
+bool IsModelFile(ArtefactType type);
+
+// A model file's structure as its rescale reads it, checked without a
+// scale: throws the InputError its rescale would (model_files.h's words,
+// "cannot read the model in <dir>: <path>: <record> <what>").
+void CheckModelFileContents(ArtefactType type,
+                            const std::string& path,
+                            const std::string& contents);
 
 // Dispatches on type.
 void RescaleContents(ArtefactType type,

@@ -127,18 +127,29 @@ void CheckDepthMapStructure(const std::string& path, const std::string& read) {
   }
 }
 
+// One spelling per file, to know a file the model check parsed among the
+// artefacts whatever path each was reached by.
+std::string FileKey(const std::string& path) {
+  return fs::weakly_canonical(fs::absolute(path)).string();
+}
+
 // Step 3: every artefact validated once, without the scale: a depth map's
-// header against its size, every other file's whole structure (the
-// rescaler's own parse; model files and PLY are small next to the depths).
-void ValidateArtefacts(const RescalePlan& plan) {
+// header against its size, a model file's structure with the one parser of
+// model files unless the model check (`checked`, FileKey) parsed it
+// already, a PLY's whole structure (its rescaler's own parse; model files
+// and PLY are small next to the depths).
+void ValidateArtefacts(const RescalePlan& plan,
+                       const std::set<std::string>& checked) {
   for (const Artefact& artefact : plan.artefacts) {
     const std::string read = plan.ReadPath(artefact.path);
     if (artefact.type == ArtefactType::kDepthMap) {
       CheckDepthMapStructure(artefact.path, read);
-      continue;
+    } else if (!IsModelFile(artefact.type)) {
+      std::string bytes = ReadFileBytes(read);
+      RescaleContents(artefact.type, 1.0, artefact.path, &bytes);
+    } else if (checked.count(FileKey(artefact.path)) == 0) {
+      CheckModelFileContents(artefact.type, artefact.path, ReadFileBytes(read));
     }
-    std::string bytes = ReadFileBytes(read);
-    RescaleContents(artefact.type, 1.0, artefact.path, &bytes);
   }
 }
 
@@ -217,13 +228,15 @@ void CheckCopyTarget(const RescalePlanOptions& options, RescalePlan* plan) {
 // What a rescale would write and whether it could: the listing (which
 // refuses files of unknown treatment), each artefact's structure, the
 // folders' permissions.
-void PlanArtefacts(const RescalePlanOptions& options, RescalePlan* plan) {
+void PlanArtefacts(const RescalePlanOptions& options,
+                   const std::set<std::string>& checked,
+                   RescalePlan* plan) {
   if (options.mode == RescaleMode::kCopy) CheckCopyTarget(options, plan);
   const std::string root = options.mode == RescaleMode::kCopy
                                ? fs::canonical(options.workspace_root).string()
                                : options.workspace_root;
   plan->artefacts = ListArtefactsToRescale(root, plan->extra_model_dirs);
-  ValidateArtefacts(*plan);
+  ValidateArtefacts(*plan, checked);
   CheckWritable(*plan);
 }
 
@@ -431,13 +444,18 @@ RescalePlan PlanRescale(const RescalePlanOptions& options) {
         "--dry_run and --output_path) to finish that rescale");
   }
   PlanRecord(options, &plan);
+  // The files the model check parsed are not parsed again below.
+  std::set<std::string> checked;
   if (!options.estimate_model_dir.empty()) {
-    CheckModel(options.estimate_model_dir, [&plan](const std::string& path) {
-      return plan.ReadPath(path);
-    });
+    for (const std::string& path : CheckModel(options.estimate_model_dir,
+                                              [&plan](const std::string& path) {
+                                                return plan.ReadPath(path);
+                                              })) {
+      checked.insert(FileKey(path));
+    }
   }
   if (options.mode != RescaleMode::kDryRun) {
-    PlanArtefacts(options, &plan);
+    PlanArtefacts(options, checked, &plan);
     StampPlannedFiles(&plan);
     return plan;
   }
@@ -446,7 +464,7 @@ RescalePlan PlanRescale(const RescalePlanOptions& options) {
   RescalePlanOptions in_place = options;
   in_place.mode = RescaleMode::kInPlace;
   try {
-    PlanArtefacts(in_place, &plan);
+    PlanArtefacts(in_place, checked, &plan);
   } catch (const InputError& error) {
     plan.refusal = error.what();
   }
