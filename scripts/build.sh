@@ -8,13 +8,14 @@
 #    once would race);
 #  - the tree reaches the clone through a symlink (BUILD_DIR/.source), so
 #    whichever clone builds, CMake sees one source path and only what
-#    changed is recompiled (ccache, set up by the Makefile, does the rest);
+#    changed is recompiled (ccache, set up by the Makefile, does the rest;
+#    point_source in common.sh says what happens when the clone changes);
 #  - CMake's own output goes to BUILD_DIR/configure.log, shown on failure.
 set -euo pipefail
 [ $# -ge 1 ] || { echo "usage: build.sh BUILD_DIR [CMAKE_ARGS...]" >&2; exit 2; }
 build_dir="$1"; shift
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
-log() { printf '[dp-sfm] %s\n' "$*" >&2; }
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+root="$DPSFM_ROOT"
 
 mkdir -p "$build_dir"
 exec 9>"$build_dir.lock"
@@ -22,7 +23,7 @@ if ! flock -n 9; then
   log "waiting for another build in $build_dir"
   flock 9
 fi
-ln -sfn "$root" "$build_dir/.source"
+point_source "$build_dir"
 # A link in the clone to its build, for convenience (ignored by git).
 ln -sfn "$build_dir" "$root/build"
 

@@ -12,7 +12,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 # dp-sfm; nothing is built through Ninja.
 build_dir="$DPSFM_CACHE_DIR/build/colmap-main-check"
 mkdir -p "$build_dir"
-ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
+point_source "$build_dir"
 configure() {
   cmake -S "$build_dir/.source" -B "$build_dir" -G Ninja \
     -DDPSFM_COLMAP_RELEASE=main -DCMAKE_BUILD_TYPE="${DPSFM_BUILD_TYPE:-Release}" \

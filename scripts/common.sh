@@ -1,4 +1,4 @@
-# Helpers for the scripts make runs after building (examples, benchmarks,
+# Helpers for the scripts make runs (the build, examples, benchmarks,
 # the installed route). Source it; do not run it. The build itself is
 # make -> scripts/build.sh -> CMake; its settings (the COLMAP release, the
 # cache, ccache) come from the Makefile's exported variables.
@@ -18,6 +18,26 @@ build_tree() {
   [ -n "$dir" ] || die "DPSFM_BUILD_DIR is not set: run this through make (make example, make bench, ...)"
   [ -f "$dir/CMakeCache.txt" ] || die "$dir is not a build directory: run make build first"
   printf '%s\n' "$dir"
+}
+
+# point_source BUILD_DIR: points BUILD_DIR/.source, the path through which
+# a cached build tree reaches its sources, at this clone. When another clone
+# built there last, the tree's own objects (plugin, tests, examples,
+# benchmarks; COLMAP's come from its fetched sources) are removed first:
+# ninja compares file times, and a file this clone changed before the other
+# clone's build would look older than its object and not be compiled again.
+# ccache brings back, by content, every object that did not change.
+point_source() {
+  local build_dir="$1" previous dir
+  previous="$(readlink "$build_dir/.source" 2>/dev/null || true)"
+  if [ -n "$previous" ] && [ "$previous" != "$DPSFM_ROOT" ]; then
+    for dir in plugin tests examples benchmarks; do
+      if [ -d "$build_dir/$dir" ]; then
+        find "$build_dir/$dir" -name '*.o' -delete
+      fi
+    done
+  fi
+  ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
 }
 
 # COLMAP 4 renamed options and added commands; 3.10 is the other build.

@@ -55,7 +55,7 @@ build_dir="$DPSFM_CACHE_DIR/build/installed-clang-$(basename "$checkout_build")"
 mkdir -p "$build_dir"
 exec 9>"$build_dir.lock"
 flock 9
-ln -sfn "$DPSFM_ROOT" "$build_dir/.source"
+point_source "$build_dir"
 
 # The fetched sources and COLMAP's build tree out of reach: empty folders mounted over
 # them for the configure and the build, in a private mount namespace (root,
