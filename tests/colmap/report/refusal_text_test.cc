@@ -273,7 +273,8 @@ int CountOptions(const std::string& text) {
 void ExpectShortLine(const std::string& line, const std::string& cause) {
   EXPECT_LE(line.size(), kRefusalLineMaxChars) << line;
   EXPECT_LE(ErrorLine(line).size(), 300u) << line;
-  EXPECT_EQ(line.rfind(cause, 0), 0u) << "'" << cause << "' does not lead: " << line;
+  EXPECT_EQ(line.rfind(cause, 0), 0u)
+      << "'" << cause << "' does not lead: " << line;
   EXPECT_LE(CountOptions(line), 2) << line;
   for (const char* buried : {"Typical causes", "patches over all views"}) {
     EXPECT_EQ(line.find(buried), std::string::npos) << line;
@@ -315,11 +316,13 @@ TEST(RefusalLine, TheDisagreementLeadsWithBothCuesAndTwoFixes) {
             "0.42] vs 0.357 [0.33, 0.385] (53.5 % wide, limit 30 %). Check "
             "the f-number and focus in lens.csv/EXIF; a measured focus: "
             "--DPScaleEstimator.recorded_focus_tolerance ACCURACY");
-  ExpectShortLine(line, "the DP data and the recorded focus disagree: 0.318 "
-                        "[0.25, 0.42] vs 0.357 [0.33, 0.385]");
+  ExpectShortLine(line,
+                  "the DP data and the recorded focus disagree: 0.318 "
+                  "[0.25, 0.42] vs 0.357 [0.33, 0.385]");
   // What did not decide stays out of the line: the profile's width, the
   // search bound, the remedies for other causes.
-  for (const char* other : {"uncertainty", "max_radius_px",
+  for (const char* other : {"uncertainty",
+                            "max_radius_px",
                             "max_scale_ci_relative_width",
                             "pin_to_recorded_focus"}) {
     EXPECT_EQ(line.find(other), std::string::npos) << other;
@@ -327,8 +330,7 @@ TEST(RefusalLine, TheDisagreementLeadsWithBothCuesAndTwoFixes) {
 }
 
 TEST(RefusalAccount, TheDisagreementInFullWithTheOtherCauses) {
-  const std::vector<std::string> account =
-      RefusalAccount(IssueDisagreement());
+  const std::vector<std::string> account = RefusalAccount(IssueDisagreement());
   ASSERT_EQ(account.size(), 5u);
   // The cause first, with both intervals and the advice on which to trust
   // (not the DP data: alone they leave the scale open).

@@ -261,9 +261,10 @@ TEST(MakeReport, SearchBoundSection) {
   EXPECT_DOUBLE_EQ(v["initial_px"].get<double>(), 4.93);
 
   result.search_bound.profile_covered_radius_px = 0;  // a model profile
-  EXPECT_TRUE(MakeReport(result, {}, {}, RunTimings())["search_bound"]
-                                                      ["profile_covered_px"]
-                                                          .is_null());
+  EXPECT_TRUE(
+      MakeReport(
+          result, {}, {}, RunTimings())["search_bound"]["profile_covered_px"]
+          .is_null());
 }
 
 }  // namespace

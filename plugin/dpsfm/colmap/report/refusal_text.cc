@@ -324,16 +324,17 @@ std::string DisagreementAdviceText(const CueRefusal& cues,
 
 std::string DisagreementCauseText(const CueRefusal& cues) {
   return "the DP data and the recorded focus disagree: " + Num(cues.dp.scale) +
-         " [" + Num(cues.dp.ci_low) + ", " + Num(cues.dp.ci_high) +
-         "] vs " + Num(cues.focus.scale) + " [" + Num(cues.focus.ci_low) +
-         ", " + Num(cues.focus.ci_high) + "] (" + Percent(cues.width) +
+         " [" + Num(cues.dp.ci_low) + ", " + Num(cues.dp.ci_high) + "] vs " +
+         Num(cues.focus.scale) + " [" + Num(cues.focus.ci_low) + ", " +
+         Num(cues.focus.ci_high) + "] (" + Percent(cues.width) +
          " wide, limit " + Percent(cues.limit) + ")";
 }
 
 namespace {
 
 // The fixes a refusal's line may name, each for one cause.
-const char kCheckLensDataFix[] = "check the f-number and focus in lens.csv/EXIF";
+const char kCheckLensDataFix[] =
+    "check the f-number and focus in lens.csv/EXIF";
 const char kMeasuredFocusFix[] =
     "a measured focus: --DPScaleEstimator.recorded_focus_tolerance "
     "ACCURACY";
@@ -373,8 +374,9 @@ std::string TextureLead(const PatchAccount& patches) {
          " patches have texture too weak for the noise; ";
 }
 
-const char kTextureFix[] = "views of more textured surfaces, or 16-bit DP "
-                           "frames";
+const char kTextureFix[] =
+    "views of more textured surfaces, or 16-bit DP "
+    "frames";
 
 // LinearFailureText in short: at most two kinds of rejected views.
 std::string LinearFailureCause(const LinearFailure& failure) {
@@ -420,16 +422,15 @@ std::string OpenScaleCauseText(const OpenScale& open) {
       s << "the DP profile's uncertainty (+-"
         << Percent(open.profile_relative_uncertainty)
         << ") leaves the scale in [" << Num(open.ci_low) << ", "
-        << Num(open.ci_high) << "], " << Percent(open.width)
-        << " wide (limit " << Percent(open.limit) << ")";
+        << Num(open.ci_high) << "], " << Percent(open.width) << " wide (limit "
+        << Percent(open.limit) << ")";
       return s.str();
     }
     case OpenScaleCause::kUnknownProfile:
       return "the DP profile is unknown: with the profiles the data allow, "
              "the interval is [" +
              Num(open.ci_low) + ", " + Num(open.ci_high) + "] (" +
-             Percent(open.width) + " wide, limit " + Percent(open.limit) +
-             ")";
+             Percent(open.width) + " wide, limit " + Percent(open.limit) + ")";
     case OpenScaleCause::kWideInterval:
       return "the data do not determine the scale: its interval [" +
              Num(open.ci_low) + ", " + Num(open.ci_high) + "] spans " +
@@ -477,8 +478,7 @@ std::string ScaleOpenLine(const DPScaleRefusal& refusal) {
       fixes = {SearchBoundFix(patches),
                texture_fix,
                refusal.recorded_focus_missing ? kRecordFocusFix : "",
-               cues.cause == CueRefusalCause::kTooWide ? kMeasuredFocusFix
-                                                       : "",
+               cues.cause == CueRefusalCause::kTooWide ? kMeasuredFocusFix : "",
                "add views with more depth range and texture"};
       break;
   }
@@ -529,7 +529,8 @@ std::string CuesNotCombinedLine(const CueRefusal& cues) {
     return Line(DisagreementCauseText(cues),
                 {kMeasuredFocusFix, kTrustDPDataFix});
   }
-  return Line("with the recorded focus of " + std::to_string(cues.focus.num_views) +
+  return Line("with the recorded focus of " +
+                  std::to_string(cues.focus.num_views) +
                   " view(s) the interval is " + Percent(cues.width) +
                   " wide, over the limit of " + Percent(cues.limit),
               {kMeasuredFocusFix,
@@ -589,8 +590,8 @@ std::string RefusalLine(const DPScaleRefusal& refusal) {
                  Num(disk.factor_low) + " to " + Num(disk.factor_high) +
                  " times the disk's";
       } else {
-        cause += " (self-calibration fits " + Shorten(disk.fit_summary, 80) +
-                 ")";
+        cause +=
+            " (self-calibration fits " + Shorten(disk.fit_summary, 80) + ")";
       }
       return Line(cause,
                   {"run with --DPScaleEstimator.psf_model auto or calibrated "
@@ -646,11 +647,12 @@ std::vector<std::string> RefusalAccount(const DPScaleRefusal& refusal) {
             "a recorded focus distance (lens.csv's focus_distance_m, or the "
             "camera's EXIF) would give the scale without the DP profile");
       }
-      AddPatchLines(patches,
-                    !disagree && (open.cause == OpenScaleCause::kTooFewPatches ||
-                                  open.cause == OpenScaleCause::kNoInterval ||
-                                  open.cause == OpenScaleCause::kWideInterval),
-                    &lines);
+      AddPatchLines(
+          patches,
+          !disagree && (open.cause == OpenScaleCause::kTooFewPatches ||
+                        open.cause == OpenScaleCause::kNoInterval ||
+                        open.cause == OpenScaleCause::kWideInterval),
+          &lines);
       break;
     }
     case ScaleRefusal::kCuesNotCombined:
