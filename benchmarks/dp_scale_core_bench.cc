@@ -14,8 +14,8 @@
 // under the command's default view budget (core/scale/view_budget.h:
 // checkpoints from 14 views every 7, stop when the scale settles, at most 60),
 // so a large --views shows the peak memory of a large project: views are
-// rendered only when visited. --resize F sets DPScaleOptions::resize_factor
-// (0 = the automatic working resolution).
+// rendered only when visited. --resize F sets
+// PatchGeometryOptions::resize_factor (0 = the automatic working resolution).
 #include <sys/resource.h>
 
 #include <cmath>
@@ -327,18 +327,18 @@ void PrintStageFigures(const ViewLoop& loop, const DPScaleResult& r) {
       loop.patches_tried,
       loop.patches_valid);
   std::printf("linear stage:    %.4f s per view (%.3f s total)\n",
-              r.seconds_linear / num_views,
-              r.seconds_linear);
+              r.seconds.linear / num_views,
+              r.seconds.linear);
   std::printf(
       "intensity stage: %.3f s per view (%.2f s total, %d patches x "
       "%zu candidates)\n",
-      r.seconds_intensity / num_views,
-      r.seconds_intensity,
+      r.seconds.intensity / num_views,
+      r.seconds.intensity,
       r.num_patches,
-      r.candidate_scales.size());
+      r.intensity.candidate_scales.size());
   std::printf("peak memory:     %.0f MB (ru_maxrss)\n", PeakMemoryMb());
   const double core_per_view =
-      (loop.blur_seconds + r.seconds_linear + r.seconds_intensity) / num_views;
+      (loop.blur_seconds + r.seconds.linear + r.seconds.intensity) / num_views;
   std::printf(
       "decoding:        %.3f s per view (two 16-bit PNG frames, 1 thread); "
       "core %.3f s per view = %.1f x decoding\n",
@@ -355,7 +355,7 @@ void PrintScaleError(const DPScaleResult& r) {
         "95%% interval [%+.4f, %+.4f], %d views used\n",
         r.scale_initial / kScale - 1,
         r.scale / kScale - 1,
-        r.intensity_status.c_str(),
+        r.intensity.status.c_str(),
         r.scale_ci_low / kScale - 1,
         r.scale_ci_high / kScale - 1,
         r.num_views_used);
@@ -381,7 +381,7 @@ int main(int argc, char** argv) {
   auto psf = std::make_shared<TranslatingDiskPsf>();
   DPScaleOptions options;  // automatic geometry for the frame size
   options.num_threads = args.threads;
-  options.resize_factor = args.resize;
+  options.geometry.resize_factor = args.resize;
   DPScaleEstimator estimator(options, psf);
   const DPLensData lens = BenchLens(args.width);
   ViewBudgetOptions budget_options;

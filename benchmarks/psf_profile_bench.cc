@@ -120,10 +120,10 @@ DPView Capture(
 
 DPScaleOptions Options() {
   DPScaleOptions options;
-  options.patch_size = 51;
-  options.stride = 20;
-  options.max_radius_px = 10;
-  options.resize_factor = 1;
+  options.geometry.patch_size = 51;
+  options.geometry.stride = 20;
+  options.geometry.max_radius_px = 10;
+  options.geometry.resize_factor = 1;
   return options;
 }
 
@@ -183,7 +183,7 @@ void ShootTarget(const Sensor& sensor,
       sharp, sensor, cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(r)), render);
   capture.patches = ExtractProfilePatches(test::ToGray(pair.left),
                                           test::ToGray(pair.right),
-                                          options.patch_size,
+                                          options.geometry.patch_size,
                                           30,
                                           border,
                                           std::nan(""),
@@ -252,7 +252,7 @@ Calibrated Calibrate(const Sensor& sensor, double noise) {
     ShootTarget(sensor, lens, d, k++, noise, &captures, &shape_captures);
   }
   TargetCalibrationOptions fit;
-  fit.blur.max_radius_px = Options().max_radius_px;
+  fit.blur.max_radius_px = Options().geometry.max_radius_px;
   fit.grid_rows = 1;
   fit.grid_cols = 3;
   const TargetCalibration c = CalibrateFromTargets(captures, fit);
@@ -277,12 +277,12 @@ Run Estimate(const std::vector<DPView>& views,
              double scale,
              double profile_uncertainty = 0) {
   DPScaleOptions options = Options();
-  options.psf_self_calibration = self_calibration
-                                     ? DPScaleOptions::SelfCalibration::kFit
-                                     : DPScaleOptions::SelfCalibration::kOff;
-  options.profile_relative_uncertainty = profile_uncertainty;
+  options.self_calibration.mode = self_calibration
+                                      ? SelfCalibrationOptions::Mode::kFit
+                                      : SelfCalibrationOptions::Mode::kOff;
+  options.interval.profile_relative_uncertainty = profile_uncertainty;
   // Renders of a thin lens: no lens-geometry term.
-  options.lens_geometry_uncertainty = 0;
+  options.interval.lens_geometry_uncertainty = 0;
   const double t0 = Now();
   DPScaleEstimator estimator(options, field);
   for (const DPView& view : views) estimator.AddView(view);
@@ -295,7 +295,7 @@ Run Estimate(const std::vector<DPView>& views,
               scale <= result.scale_ci_high;
   // The refusal's code only: its sentence is the COLMAP layer's
   // (colmap/report/refusal_text), which benchmarks do not link.
-  run.note = result.success ? result.psf_status
+  run.note = result.success ? result.psf.status
                             : ScaleRefusalName(result.refusal.code);
   return run;
 }

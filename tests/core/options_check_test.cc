@@ -65,8 +65,8 @@ TEST(OptionsCheck, DPScaleOptionsWithNestedStructs) {
   ExpectCheck<DPScaleOptions>(
       "DPScaleOptions",
       {},
-      [](auto* o) { o->top_patch_fraction = 2; },
-      "top_patch_fraction");
+      [](auto* o) { o->patches.top_patch_fraction = 2; },
+      "patches.top_patch_fraction");
   ExpectCheck<DPScaleOptions>(
       "DPScaleOptions",
       {},
@@ -80,8 +80,69 @@ TEST(OptionsCheck, DPScaleOptionsWithNestedStructs) {
   ExpectCheck<DPScaleOptions>(
       "DPScaleOptions",
       {},
-      [](auto* o) { o->intensity.num_candidates = 2; },
-      "intensity.num_candidates >= 3 (got 2)");
+      [](auto* o) { o->intensity.search.num_candidates = 2; },
+      "intensity.search.num_candidates >= 3 (got 2)");
+  ExpectCheck<DPScaleOptions>(
+      "DPScaleOptions",
+      {},
+      [](auto* o) { o->self_calibration.radius_factor = 5; },
+      "self_calibration.radius_factor >= 1 && radius_factor <= 4 (got 5)");
+}
+
+TEST(OptionsCheck, PatchGeometryOptions) {
+  ExpectCheck<PatchGeometryOptions>(
+      "PatchGeometryOptions",
+      {},
+      [](auto* o) { o->search_bound_share = 0; },
+      "search_bound_share > 0 && search_bound_share <= 1 (got 0)");
+}
+
+TEST(OptionsCheck, PatchSelectionOptions) {
+  ExpectCheck<PatchSelectionOptions>(
+      "PatchSelectionOptions",
+      {},
+      [](auto* o) { o->depth_strata = 0; },
+      "depth_strata >= 1 (got 0)");
+}
+
+TEST(OptionsCheck, IntensityStageOptions) {
+  ExpectCheck<IntensityStageOptions>(
+      "IntensityStageOptions",
+      {},
+      [](auto* o) { o->min_bootstrap_support = 2; },
+      "min_bootstrap_support <= 1 (got 2)");
+  ExpectCheck<IntensityStageOptions>(
+      "IntensityStageOptions",
+      {},
+      [](auto* o) { o->search.relative_range = 1; },
+      "search.relative_range");
+}
+
+TEST(OptionsCheck, ScaleIntervalOptions) {
+  ExpectCheck<ScaleIntervalOptions>(
+      "ScaleIntervalOptions",
+      {},
+      [](auto* o) { o->min_total_patches = -1; },
+      "min_total_patches >= 0 (got -1)");
+}
+
+// The profile fit's options are checked only when self-calibration runs.
+TEST(OptionsCheck, SelfCalibrationOptions) {
+  SelfCalibrationOptions off;
+  off.fit.min_patches = -1;
+  EXPECT_TRUE(off.Check()) << OptionCheckFailure(off);
+  SelfCalibrationOptions fit;
+  fit.mode = SelfCalibrationOptions::Mode::kFit;
+  ExpectCheck<SelfCalibrationOptions>(
+      "SelfCalibrationOptions",
+      fit,
+      [](auto* o) { o->shape_uncertainty = 1; },
+      "shape_uncertainty >= 0 && shape_uncertainty < 1 (got 1)");
+  ExpectCheck<SelfCalibrationOptions>(
+      "SelfCalibrationOptions",
+      fit,
+      [](auto* o) { o->fit.min_patches = -1; },
+      "fit.min_patches >= 3 (got -1)");
 }
 
 TEST(OptionsCheck, IntensitySearchOptions) {

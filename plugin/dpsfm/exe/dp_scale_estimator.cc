@@ -151,22 +151,22 @@ void AddDPProfileOptions(CommandOptions* manager, ScaleRunOptions* options) {
 void AddRefusalOptions(CommandOptions* manager, DPScaleOptions* core) {
   manager->Group("When a run refuses (the refusal names the one to change)");
   manager->AddDefault("DPScaleEstimator.max_radius_px",
-                      &core->max_radius_px,
+                      &core->geometry.max_radius_px,
                       "largest blur radius searched, in pixels of the "
                       "working frame (0: about 10 px, from the frame size)");
   manager->AddDefault(
       "DPScaleEstimator.max_scale_ci_relative_width",
-      &core->max_scale_ci_relative_width,
+      &core->interval.max_scale_ci_relative_width,
       "refuse when the scale's 95 % interval (data and DP profile) is "
       "wider than this fraction of the scale");
   manager->AddDefault(
       "DPScaleEstimator.pin_to_recorded_focus",
-      &core->pin_to_recorded_focus,
+      &core->interval.pin_to_recorded_focus,
       "when the DP profile leaves the scale open, take it from the recorded "
       "focus distances (lens.csv focus_distance_m, EXIF) instead of refusing");
   manager->AddDefault(
       "DPScaleEstimator.recorded_focus_tolerance",
-      &core->recorded_focus_tolerance,
+      &core->interval.recorded_focus_tolerance,
       "relative accuracy of the recorded focus distances (0.1: within 10 %)");
 }
 
@@ -200,22 +200,22 @@ void AddMethodOptions(CommandOptions* manager, DPScaleOptions* core) {
   manager->Group("Method parameters (rarely changed; docs/user-guide.md)");
   manager->AddDefault(
       "DPScaleEstimator.resize_factor",
-      &core->resize_factor,
+      &core->geometry.resize_factor,
       "working resolution as a fraction of the DP frame (0: automatic, "
       "about 10 px of blur search)");
   manager->AddDefault("DPScaleEstimator.patch_size",
-                      &core->patch_size,
+                      &core->geometry.patch_size,
                       "patch side in pixels of the working frame (0: auto)");
   manager->AddDefault("DPScaleEstimator.stride",
-                      &core->stride,
+                      &core->geometry.stride,
                       "step between patches in pixels of the working frame "
                       "(0: auto)");
   manager->AddDefault("DPScaleEstimator.top_patch_fraction",
-                      &core->top_patch_fraction,
+                      &core->patches.top_patch_fraction,
                       "fraction of each view's patches kept, the most "
                       "confident first");
   manager->AddDefault("DPScaleEstimator.blur_search_factor",
-                      &core->blur_search_factor,
+                      &core->patches.blur_search_factor,
                       "run the blur search on the most textured patches, "
                       "this many times the kept fraction (0: on all)");
   manager->AddDefault("DPScaleEstimator.min_blur_range_px",
@@ -227,14 +227,14 @@ void AddMethodOptions(CommandOptions* manager, DPScaleOptions* core) {
                       "views kept for the joint solve: those whose own "
                       "scale is nearest the median");
   manager->AddDefault("DPScaleEstimator.num_candidates",
-                      &core->intensity.num_candidates,
+                      &core->intensity.search.num_candidates,
                       "candidate scales tried by the intensity search");
   manager->AddDefault("DPScaleEstimator.candidate_range",
-                      &core->intensity.relative_range,
+                      &core->intensity.search.relative_range,
                       "the candidates span the linear estimate times 1 +- "
                       "this fraction");
   manager->AddDefault("DPScaleEstimator.intensity_refinement",
-                      &core->intensity_refinement,
+                      &core->intensity.enabled,
                       "refine the linear estimate by matching the DP views' "
                       "intensities");
 }

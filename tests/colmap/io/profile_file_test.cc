@@ -172,15 +172,15 @@ TEST(PsfProfileFile, TranslatingDiskStatedForACamera) {
   EXPECT_NEAR(CentroidOffsetPerRadius(*field.cells[0], 8), 0.2945, 0.005);
 
   DPScaleOptions core;
-  using SelfCalibration = DPScaleOptions::SelfCalibration;
-  core.psf_self_calibration = SelfCalibration::kFit;
+  using Mode = SelfCalibrationOptions::Mode;
+  core.self_calibration.mode = Mode::kFit;
   MakePsfField("calibrated", dir / "5d4.dpsf").ApplyTo(&core);
-  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kOff);
-  EXPECT_DOUBLE_EQ(core.profile_relative_uncertainty, 0.05);
+  EXPECT_EQ(core.self_calibration.mode, Mode::kOff);
+  EXPECT_DOUBLE_EQ(core.interval.profile_relative_uncertainty, 0.05);
   MakePsfField("translating_disk", "").ApplyTo(&core);
-  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kCheck);
+  EXPECT_EQ(core.self_calibration.mode, Mode::kCheck);
   MakePsfField("auto", "").ApplyTo(&core);
-  EXPECT_EQ(core.psf_self_calibration, SelfCalibration::kFit);
+  EXPECT_EQ(core.self_calibration.mode, Mode::kFit);
 }
 
 // The conditions a profile was measured under survive the writer and the

@@ -618,10 +618,10 @@ TEST(RefusalLine, LongNumbersStayWithinTheLimit) {
 
 TEST(PsfStatusText, ARejectedDiskReadsAsItsRefusal) {
   DPScaleResult result;
-  result.psf_status = "self-calibration kept the translating disk (fits)";
-  EXPECT_EQ(PsfStatusText(result), result.psf_status);
-  result.psf_status.clear();
-  result.psf_rejected = true;
+  result.psf.status = "self-calibration kept the translating disk (fits)";
+  EXPECT_EQ(PsfStatusText(result), result.psf.status);
+  result.psf.status.clear();
+  result.psf.rejected = true;
   result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
   result.refusal.disk = {"p 2.2 determined", 2, 1};
   EXPECT_EQ(PsfStatusText(result), RefusalAccount(result.refusal).front());
@@ -633,12 +633,12 @@ TEST(PsfStatusText, ARejectedDiskReadsAsItsRefusal) {
 TEST(CombinationText, TheCuesOrWhyTheDPDataAnsweredAlone) {
   DPScaleResult result;
   EXPECT_EQ(CombinationText(result), "");
-  result.combination = "the cues agree (...): their mean";
+  result.cues.combination = "the cues agree (...): their mean";
   EXPECT_EQ(CombinationText(result), "the cues agree (...): their mean");
-  result.combination.clear();
-  result.dp_data_alone = true;
+  result.cues.combination.clear();
+  result.cues.dp_data_alone = true;
   EXPECT_EQ(CombinationText(result), "the DP data alone (no recorded focus)");
-  result.focus_cue.valid = true;
+  result.cues.focus.valid = true;
   EXPECT_EQ(CombinationText(result),
             "the DP data alone (the recorded focus is evidence only: "
             "pin_to_recorded_focus 0)");
@@ -646,20 +646,20 @@ TEST(CombinationText, TheCuesOrWhyTheDPDataAnsweredAlone) {
 
 TEST(FocusCheckText, TheComparisonThenTheAnswer) {
   DPScaleResult result;
-  result.dp_data_alone = true;
+  result.cues.dp_data_alone = true;
   // No recorded focus: no check, whatever the answer.
   EXPECT_EQ(FocusCheckText(result), "");
-  result.focus_check =
+  result.cues.focus_check =
       "the recorded focus distances of 2 used view(s) give a "
       "scale of 0.5";
-  result.focus_cue.valid = true;
+  result.cues.focus.valid = true;
   EXPECT_EQ(FocusCheckText(result),
             "the recorded focus distances of 2 used view(s) give a scale of "
             "0.5. The answer: the DP data alone (the recorded focus is "
             "evidence only: pin_to_recorded_focus 0)");
   // A refused run has no answer to name.
-  result.dp_data_alone = false;
-  EXPECT_EQ(FocusCheckText(result), result.focus_check);
+  result.cues.dp_data_alone = false;
+  EXPECT_EQ(FocusCheckText(result), result.cues.focus_check);
 }
 
 }  // namespace

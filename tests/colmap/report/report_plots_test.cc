@@ -45,13 +45,13 @@ DPScaleResult RealisticResult(int num_views, double resize_factor = 1.0) {
   result.scale_ci_high = 0.44;
   result.scale_initial_ci_low = 0.39;
   result.scale_initial_ci_high = 0.43;
-  result.intensity_used = true;
-  result.intensity_status = "adopted (95 % interval 9.5 % of the scale)";
-  result.scale_intensity = 0.42;
-  result.intensity_ci_low = 0.40;
-  result.intensity_ci_high = 0.44;
-  result.intensity_bootstrap_support = 0.87;
-  result.intensity_loss = "noise-corrected L2";
+  result.intensity.used = true;
+  result.intensity.status = "adopted (95 % interval 9.5 % of the scale)";
+  result.intensity.scale = 0.42;
+  result.intensity.ci_low = 0.40;
+  result.intensity.ci_high = 0.44;
+  result.intensity.bootstrap_support = 0.87;
+  result.intensity.loss = "noise-corrected L2";
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0, 0.15);
   std::uniform_real_distribution<double> uniform(0, 1);
@@ -89,8 +89,9 @@ DPScaleResult RealisticResult(int num_views, double resize_factor = 1.0) {
   }
   for (int i = 0; i <= 100; ++i) {
     const double s = 0.08 + 0.68 * i / 100.0;
-    result.candidate_scales.push_back(s);
-    result.candidate_losses.push_back(10 + 200 * (s - 0.42) * (s - 0.42));
+    result.intensity.candidate_scales.push_back(s);
+    result.intensity.candidate_losses.push_back(10 +
+                                                200 * (s - 0.42) * (s - 0.42));
   }
   return result;
 }
@@ -440,12 +441,12 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
   odd.scale = kNaN;
   odd.scale_ci_low = kNaN;
   odd.scale_ci_high = kNaN;
-  odd.scale_intensity = kNaN;
-  odd.intensity_ci_low = -kNaN;
-  odd.intensity_bootstrap_support = kNaN;
-  odd.candidate_scales.push_back(kNaN);  // longer than the losses
-  odd.candidate_losses[3] = kNaN;
-  odd.candidate_losses[4] = std::numeric_limits<double>::infinity();
+  odd.intensity.scale = kNaN;
+  odd.intensity.ci_low = -kNaN;
+  odd.intensity.bootstrap_support = kNaN;
+  odd.intensity.candidate_scales.push_back(kNaN);  // longer than the losses
+  odd.intensity.candidate_losses[3] = kNaN;
+  odd.intensity.candidate_losses[4] = std::numeric_limits<double>::infinity();
   for (PatchSample& s : odd.patches) s.used = false;
   odd.patches[0].x = kNaN;
   odd.patches[1].depth = 0;
@@ -476,10 +477,10 @@ TEST(ReportPlots, EmptyAndNaNResultsDoNotThrow) {
 
   // No curve at all (intensity stage skipped).
   DPScaleResult skipped = RealisticResult(2);
-  skipped.candidate_scales.clear();
-  skipped.candidate_losses.clear();
-  skipped.intensity_used = false;
-  skipped.intensity_status = "skipped (--intensity_refinement 0)";
+  skipped.intensity.candidate_scales.clear();
+  skipped.intensity.candidate_losses.clear();
+  skipped.intensity.used = false;
+  skipped.intensity.status = "skipped (--intensity_refinement 0)";
   cv::Mat loss;
   EXPECT_NO_THROW(loss = RenderLossCurvePlot(skipped));
   EXPECT_GT(PixelStdDev(loss), 5);
@@ -532,7 +533,7 @@ TEST(ReportPlots, LossCurveMarksLandAtTheirScales) {
 
   // The minimiser's diamond on the curve at s = 0.42, where the loss is 10.
   const cv::Vec3d minimum_colour(50, 40, 215);
-  const cv::Point2d minimum = axes.ToPixel(result.scale_intensity, 10);
+  const cv::Point2d minimum = axes.ToPixel(result.intensity.scale, 10);
   for (const cv::Point2d& offset :
        {cv::Point2d(0, 0), cv::Point2d(0, -4), cv::Point2d(0, 4)}) {
     EXPECT_LT(ColourDistance(PixelAt(image, minimum + offset), minimum_colour),
@@ -547,28 +548,28 @@ TEST(ReportPlots, LossCurveMarksLandAtTheirScales) {
 // cues that agree, neither of which it equals.
 DPScaleResult AnswerFromTwoCues() {
   DPScaleResult result = RealisticResult(2);
-  result.candidate_scales.clear();
-  result.candidate_losses.clear();
-  result.intensity_used = false;
-  result.intensity_status = "skipped (the DP profile is calibrated)";
-  result.scale_intensity = 0;
-  result.intensity_ci_low = result.intensity_ci_high = 0;
+  result.intensity.candidate_scales.clear();
+  result.intensity.candidate_losses.clear();
+  result.intensity.used = false;
+  result.intensity.status = "skipped (the DP profile is calibrated)";
+  result.intensity.scale = 0;
+  result.intensity.ci_low = result.intensity.ci_high = 0;
   result.scale_initial = 0.318;
   result.scale_initial_ci_low = 0.287;
   result.scale_initial_ci_high = 0.351;
-  result.dp_cue.valid = true;
-  result.dp_cue.scale = 0.318;
-  result.dp_cue.ci_low = 0.287;
-  result.dp_cue.ci_high = 0.351;
-  result.focus_cue.valid = true;
-  result.focus_cue.scale = 0.357;
-  result.focus_cue.ci_low = 0.331;
-  result.focus_cue.ci_high = 0.385;
-  result.focus_cue.num_views = 2;
-  result.cue_agreement = CueAgreement::kAgree;
-  result.scale_from_cues = true;
-  result.scale_source = "DP data and recorded focus";
-  result.combination = "the inverse-variance mean of the two cues";
+  result.cues.dp.valid = true;
+  result.cues.dp.scale = 0.318;
+  result.cues.dp.ci_low = 0.287;
+  result.cues.dp.ci_high = 0.351;
+  result.cues.focus.valid = true;
+  result.cues.focus.scale = 0.357;
+  result.cues.focus.ci_low = 0.331;
+  result.cues.focus.ci_high = 0.385;
+  result.cues.focus.num_views = 2;
+  result.cues.agreement = CueAgreement::kAgree;
+  result.cues.combined = true;
+  result.cues.source = "DP data and recorded focus";
+  result.cues.combination = "the inverse-variance mean of the two cues";
   result.scale = 0.348;
   result.scale_ci_low = 0.329;
   result.scale_ci_high = 0.368;
@@ -610,15 +611,15 @@ TEST(ReportPlots, LossPlotWithoutCurveNamesTheCuesAndTheAnswerAsTheReport) {
   // With a curve too, an answer from the cues is not "the linear estimate
   // kept"; a linear estimate that is the answer still says so.
   DPScaleResult with_curve = RealisticResult(2);
-  with_curve.intensity_used = false;
-  with_curve.scale_from_cues = true;
-  with_curve.cue_agreement = CueAgreement::kAgree;
-  with_curve.dp_cue = result.dp_cue;
-  with_curve.focus_cue = result.focus_cue;
+  with_curve.intensity.used = false;
+  with_curve.cues.combined = true;
+  with_curve.cues.agreement = CueAgreement::kAgree;
+  with_curve.cues.dp = result.cues.dp;
+  with_curve.cues.focus = result.cues.focus;
   EXPECT_EQ(LossCurveSubtitle(with_curve).find("linear estimate kept"),
             std::string::npos);
   DPScaleResult linear = RealisticResult(2);
-  linear.intensity_used = false;
+  linear.intensity.used = false;
   linear.scale = linear.scale_initial;
   EXPECT_NE(LossCurveSubtitle(linear).find("linear estimate kept"),
             std::string::npos);
@@ -627,8 +628,8 @@ TEST(ReportPlots, LossPlotWithoutCurveNamesTheCuesAndTheAnswerAsTheReport) {
 TEST(ReportPlots, LossPlotWithoutCurveDrawsTheCuesAsBars) {
   const DPScaleResult result = AnswerFromTwoCues();
   DPScaleResult no_cues = result;  // the empty frame of before
-  no_cues.dp_cue.valid = false;
-  no_cues.focus_cue.valid = false;
+  no_cues.cues.dp.valid = false;
+  no_cues.cues.focus.valid = false;
   const cv::Mat image = RenderLossCurvePlot(result);
   const cv::Mat empty = RenderLossCurvePlot(no_cues);
   MaybeDump(image, "cues_loss.png");
@@ -647,8 +648,8 @@ TEST(ReportPlots, LossPlotWithoutCurveDrawsTheCuesAsBars) {
   // of the recorded focus (green) runs from ci_low to ci_high on the axis.
   const cv::Vec3d focus_colour(44, 160, 44), dp_colour(189, 103, 148);
   for (const auto& [colour, cue] :
-       {std::make_pair(focus_colour, &result.focus_cue),
-        std::make_pair(dp_colour, &result.dp_cue)}) {
+       {std::make_pair(focus_colour, &result.cues.focus),
+        std::make_pair(dp_colour, &result.cues.dp)}) {
     int count = 0, x_min = 1 << 30, x_max = -1;
     for (int y = axes.area.y; y < axes.area.br().y; ++y) {
       for (int x = axes.area.x; x < axes.area.br().x; ++x) {

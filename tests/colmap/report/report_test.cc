@@ -24,20 +24,20 @@ DPScaleResult HandMadeResult() {
   result.scale_initial = 0.51;
   result.scale_initial_ci_low = 0.44;
   result.scale_initial_ci_high = 0.58;
-  result.intensity_used = true;
-  result.intensity_status = "used";
-  result.scale_intensity = 0.5;
-  result.intensity_ci_low = kNaN;  // JSON has no NaN: null
-  result.intensity_ci_high = 0.52;
-  result.intensity_failed_evaluations = 3;
-  result.candidate_scales = {0.4, 0.5, 0.6};
-  result.candidate_losses = {2.0, 1.0};  // one short: two points only
-  result.dp_cue.valid = true;
-  result.dp_cue.scale = 0.5;
-  result.dp_cue.ci_low = 0.45;
-  result.dp_cue.ci_high = 0.56;
-  result.scale_source = "DP data";
-  result.dp_data_alone = true;  // worded by refusal_text's CombinationText
+  result.intensity.used = true;
+  result.intensity.status = "used";
+  result.intensity.scale = 0.5;
+  result.intensity.ci_low = kNaN;  // JSON has no NaN: null
+  result.intensity.ci_high = 0.52;
+  result.intensity.failed_evaluations = 3;
+  result.intensity.candidate_scales = {0.4, 0.5, 0.6};
+  result.intensity.candidate_losses = {2.0, 1.0};  // one short: two points only
+  result.cues.dp.valid = true;
+  result.cues.dp.scale = 0.5;
+  result.cues.dp.ci_low = 0.45;
+  result.cues.dp.ci_high = 0.56;
+  result.cues.source = "DP data";
+  result.cues.dp_data_alone = true;  // worded by refusal_text's CombinationText
   result.views.resize(2);
   result.views[0].name = "a.jpg";
   result.views[0].used = true;
@@ -154,8 +154,8 @@ TEST(MakeReport, ARefusedRunClaimsNoScale) {
 TEST(MakeReport, ARejectedTranslatingDiskIsTheReasonAndThePsfStatus) {
   DPScaleResult result = HandMadeResult();
   result.success = false;
-  result.psf_rejected = true;
-  result.psf_status.clear();
+  result.psf.rejected = true;
+  result.psf.status.clear();
   result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
   result.refusal.disk = {"p 2.2 determined", 0.5, 0.75};
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
@@ -176,16 +176,16 @@ TEST(MakeReport, ARejectedTranslatingDiskIsTheReasonAndThePsfStatus) {
 
 TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
   DPScaleResult result = HandMadeResult();
-  result.scale_from_cues = true;
-  result.cue_agreement = CueAgreement::kAgree;
-  result.focus_cue.valid = true;
-  result.focus_cue.scale = 0.49;
-  result.focus_cue.ci_low = 0.42;
-  result.focus_cue.ci_high = 0.57;
-  result.focus_cue.num_views = 2;
-  result.pinned_profile_strength = 1.1;
-  result.dp_data_alone = false;
-  result.combination = "the cues agree: their inverse-variance mean";
+  result.cues.combined = true;
+  result.cues.agreement = CueAgreement::kAgree;
+  result.cues.focus.valid = true;
+  result.cues.focus.scale = 0.49;
+  result.cues.focus.ci_low = 0.42;
+  result.cues.focus.ci_high = 0.57;
+  result.cues.focus.num_views = 2;
+  result.cues.pinned_profile_strength = 1.1;
+  result.cues.dp_data_alone = false;
+  result.cues.combination = "the cues agree: their inverse-variance mean";
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(r["scale_source"], "dual_pixel+recorded_focus");
   EXPECT_EQ(r["cues"]["how"], "the cues agree: their inverse-variance mean");
@@ -200,26 +200,26 @@ TEST(MakeReport, BothCuesNamedWhenTheyFormedTheAnswer) {
 // may read as a stage that found 0.
 TEST(MakeReport, StagesThatDidNotRunAreNullWithTheirStatus) {
   DPScaleResult result = HandMadeResult();
-  result.intensity_used = false;
-  result.intensity_status =
+  result.intensity.used = false;
+  result.intensity.status =
       "skipped: the DP data alone leave the scale open; it comes from the "
       "recorded focus";
-  result.scale_intensity = 0;
-  result.intensity_ci_low = 0;
-  result.intensity_ci_high = 0;
-  result.candidate_scales.clear();
-  result.candidate_losses.clear();
-  result.psf_status = "calibrated profile r6.dpsf";
+  result.intensity.scale = 0;
+  result.intensity.ci_low = 0;
+  result.intensity.ci_high = 0;
+  result.intensity.candidate_scales.clear();
+  result.intensity.candidate_losses.clear();
+  result.psf.status = "calibrated profile r6.dpsf";
   const nlohmann::json r = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(r["intensity"]["ran"], false);
   EXPECT_TRUE(r["intensity"]["scale"].is_null()) << r["intensity"];
   EXPECT_TRUE(r["intensity"]["ci"].is_null()) << r["intensity"];
-  EXPECT_EQ(r["intensity"]["status"], result.intensity_status);
+  EXPECT_EQ(r["intensity"]["status"], result.intensity.status);
   EXPECT_TRUE(r["psf"]["fit"].is_null()) << r["psf"];
   EXPECT_EQ(r["psf"]["fit_status"].get<std::string>().find("not run"), 0u);
 
-  result.psf_fit_ran = true;
-  result.psf_fit.centroid_offset = 0.2;
+  result.psf.fit_ran = true;
+  result.psf.fit.centroid_offset = 0.2;
   const nlohmann::json fitted = MakeReport(result, {}, {}, RunTimings());
   EXPECT_EQ(fitted["psf"]["fit_status"], "ran");
   EXPECT_DOUBLE_EQ(

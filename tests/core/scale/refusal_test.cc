@@ -148,7 +148,7 @@ TEST(SearchBoundReached, OnlyAnAutomaticBoundTheBlurReachesWhileGrowthsLast) {
   EXPECT_FALSE(SearchBoundReached(0, 0, 0, options));     // nothing searched
   EXPECT_FALSE(SearchBoundReached(100, 50, 1, options));  // growth spent
   DPScaleOptions explicit_bound = options;
-  explicit_bound.max_radius_px = 5;  // the user's bound stands
+  explicit_bound.geometry.max_radius_px = 5;  // the user's bound stands
   EXPECT_FALSE(SearchBoundReached(100, 50, 0, explicit_bound));
 }
 
@@ -200,7 +200,7 @@ TEST(EarlyGrownSearchBound, OnlyWhenTheShareSettlesIt) {
   EXPECT_EQ(early(100, 10, 1), 0);  // growth spent
   EXPECT_EQ(early(0, 0, 0), 0);     // nothing searched
   DPScaleOptions explicit_bound = options;
-  explicit_bound.max_radius_px = 5;
+  explicit_bound.geometry.max_radius_px = 5;
   EXPECT_EQ(
       EarlyGrownSearchBound(100, 50, 0, g, frame, field, blur, explicit_bound),
       0);

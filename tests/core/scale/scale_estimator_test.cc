@@ -98,12 +98,12 @@ DPScaleOptions SmallFrameOptions() {
   DPScaleOptions options;
   // Phone-like geometry: the automatic one scales the radius bound down with
   // the frame, which would be too small for 400x300 test frames.
-  options.patch_size = 51;
-  options.stride = 20;
-  options.max_radius_px = 10;
-  options.resize_factor = 1;
+  options.geometry.patch_size = 51;
+  options.geometry.stride = 20;
+  options.geometry.max_radius_px = 10;
+  options.geometry.resize_factor = 1;
   options.linear.num_bootstrap = 100;
-  options.intensity.num_bootstrap = 200;
+  options.intensity.search.num_bootstrap = 200;
   return options;
 }
 
@@ -169,13 +169,13 @@ void Print(const char* label, const DPScaleResult& r, double scale) {
       r.scale / scale - 1,
       r.scale_ci_low / scale - 1,
       r.scale_ci_high / scale - 1,
-      r.scale_intensity / scale - 1,
-      r.intensity_status.c_str(),
+      r.intensity.scale / scale - 1,
+      r.intensity.status.c_str(),
       r.num_views_used,
       r.num_patches,
-      r.seconds_blur,
-      r.seconds_linear,
-      r.seconds_intensity);
+      r.seconds.blur,
+      r.seconds.linear,
+      r.seconds.intensity);
 }
 
 // The whole core on 8 views (two lenses), known s and g_i.
@@ -202,7 +202,7 @@ TEST(DPScaleEstimator, WholeCoreOnSyntheticMultiViewSet) {
   const double linear_error = std::abs(r.scale_initial / scale - 1);
   const double final_error = std::abs(r.scale / scale - 1);
   EXPECT_LT(final_error, 0.02);
-  EXPECT_TRUE(r.intensity_used) << r.intensity_status;
+  EXPECT_TRUE(r.intensity.used) << r.intensity.status;
   // The intensity stage is no worse than the linear one.
   EXPECT_LE(final_error, linear_error + 0.002);
   EXPECT_LE(r.scale_ci_low, r.scale);
@@ -244,8 +244,9 @@ TEST(DPScaleEstimator, WholeCoreOnSyntheticMultiViewSet) {
         specs[i].focus_m,
         r.views[i].used ? "" : (" - " + r.views[i].reason).c_str());
   }
-  EXPECT_FALSE(r.candidate_scales.empty());
-  EXPECT_EQ(r.candidate_scales.size(), r.candidate_losses.size());
+  EXPECT_FALSE(r.intensity.candidate_scales.empty());
+  EXPECT_EQ(r.intensity.candidate_scales.size(),
+            r.intensity.candidate_losses.size());
   for (const DPViewSummary& s : out.summaries) {
     EXPECT_GT(s.patches_valid, 0) << s.name;
     EXPECT_GT(s.patches_kept, 0) << s.name;
@@ -261,9 +262,9 @@ TEST(DPScaleEstimator, BlurSearchShareKeepsTheScale) {
       SixPositions(Lens(50, 4), Lens(35, 2.8), 30);
   const std::vector<DPView> views = RenderAll(specs, scale);
   DPScaleOptions all = SmallFrameOptions();
-  all.blur_search_factor = 0;
+  all.patches.blur_search_factor = 0;
   DPScaleOptions share = SmallFrameOptions();
-  ASSERT_EQ(share.blur_search_factor, 3);
+  ASSERT_EQ(share.patches.blur_search_factor, 3);
   const RunOutput every = RunPipeline(views, all);
   const RunOutput best = RunPipeline(views, share);
   ASSERT_TRUE(every.result.success) << Why(every.result);
@@ -301,7 +302,7 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
       RenderAll(specs, scale, SplitProfilePsf(sharp));
   DPScaleOptions plain = SmallFrameOptions();
   DPScaleOptions self = plain;
-  self.psf_self_calibration = DPScaleOptions::SelfCalibration::kFit;
+  self.self_calibration.mode = SelfCalibrationOptions::Mode::kFit;
   const RunOutput disk = RunPipeline(views, plain);
   // With the defaults a fitted profile carries +-20 % for shapes outside
   // the family: a single answer from it would be over 40 % wide, so the run
@@ -313,22 +314,22 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   EXPECT_EQ(owned.result.refusal.open.cause, OpenScaleCause::kUnknownProfile);
   EXPECT_TRUE(owned.result.refusal.open.self_calibrated);
   EXPECT_DOUBLE_EQ(owned.result.refusal.open.shape_uncertainty, 0.2);
-  EXPECT_TRUE(owned.result.psf_self_calibrated);
-  EXPECT_NEAR(owned.result.profile_scale_factor_high /
-                  owned.result.profile_scale_factor_low,
-              1.2 / 0.8,
-              0.1);
+  EXPECT_TRUE(owned.result.psf.self_calibrated);
+  EXPECT_NEAR(
+      owned.result.psf.scale_factor_high / owned.result.psf.scale_factor_low,
+      1.2 / 0.8,
+      0.1);
   // Trusting the family (this sensor is a member), the fit recovers it.
-  self.self_calibration_shape_uncertainty = 0;
+  self.self_calibration.shape_uncertainty = 0;
   const RunOutput fitted = RunPipeline(views, self);
   ASSERT_TRUE(fitted.result.success) << Why(fitted.result);
   Print("sharper split, translating disk", disk.result, scale);
   Print("sharper split, self-calibrated", fitted.result, scale);
   std::printf("  %s (%.1f s)\n",
-              fitted.result.psf_status.c_str(),
-              fitted.result.seconds_psf_fit);
-  EXPECT_TRUE(fitted.result.psf_self_calibrated) << fitted.result.psf_status;
-  EXPECT_NE(fitted.result.psf_model.find("split_profile"), std::string::npos);
+              fitted.result.psf.status.c_str(),
+              fitted.result.seconds.psf_fit);
+  EXPECT_TRUE(fitted.result.psf.self_calibrated) << fitted.result.psf.status;
+  EXPECT_NE(fitted.result.psf.model.find("split_profile"), std::string::npos);
   if (disk.result.success) {
     EXPECT_GT(std::abs(disk.result.scale / scale - 1), 0.08);
   }
@@ -347,27 +348,27 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   }
   const RunOutput checked = RunPipeline(recorded, plain);
   if (checked.result.success) {
-    std::printf("  focus check: %s\n", checked.result.focus_check.c_str());
-    EXPECT_NEAR(checked.result.focus_scale / scale, 1.0, 0.03);
-    EXPECT_NEAR(checked.result.focus_scale_ratio,
-                checked.result.dp_cue.scale / checked.result.focus_scale,
+    std::printf("  focus check: %s\n", checked.result.cues.focus_check.c_str());
+    EXPECT_NEAR(checked.result.cues.focus_scale / scale, 1.0, 0.03);
+    EXPECT_NEAR(checked.result.cues.focus_scale_ratio,
+                checked.result.cues.dp.scale / checked.result.cues.focus_scale,
                 1e-12);
-    EXPECT_FALSE(checked.result.focus_agrees);
-    EXPECT_EQ(checked.result.cue_agreement, CueAgreement::kDisagree);
+    EXPECT_FALSE(checked.result.cues.focus_agrees);
+    EXPECT_EQ(checked.result.cues.agreement, CueAgreement::kDisagree);
     EXPECT_LE(checked.result.scale_ci_low, scale);
     EXPECT_GE(checked.result.scale_ci_high, scale);
   } else {
     std::printf("  refused: %s\n", Why(checked.result).c_str());
     EXPECT_EQ(checked.result.refusal.cues.cause, CueRefusalCause::kDisagree);
   }
-  // With the recorded focus as evidence only, the DP answer stands and the
-  // check flags it.
+  // The recorded focus as evidence only: the DP answer stands, flagged.
   DPScaleOptions evidence_only = plain;
-  evidence_only.pin_to_recorded_focus = false;
+  evidence_only.interval.pin_to_recorded_focus = false;
   const RunOutput flagged = RunPipeline(recorded, evidence_only);
   ASSERT_TRUE(flagged.result.success) << Why(flagged.result);
-  EXPECT_EQ(flagged.result.scale, flagged.result.dp_cue.scale);
-  EXPECT_FALSE(flagged.result.focus_agrees) << flagged.result.focus_check;
+  EXPECT_EQ(flagged.result.scale, flagged.result.cues.dp.scale);
+  EXPECT_FALSE(flagged.result.cues.focus_agrees)
+      << flagged.result.cues.focus_check;
 
   // A profile too uncertain for an answer (+-40 %): refused without a
   // recorded focus; with one, the scale is pinned to it (the focal planes
@@ -375,7 +376,7 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   // strength that reconciles the DP data is reported; the pin can be
   // turned off.
   DPScaleOptions open = plain;
-  open.profile_relative_uncertainty = 0.4;
+  open.interval.profile_relative_uncertainty = 0.4;
   const RunOutput refused = RunPipeline(views, open);
   EXPECT_FALSE(refused.result.success);
   EXPECT_EQ(refused.result.refusal.code, ScaleRefusal::kScaleOpen)
@@ -390,33 +391,33 @@ TEST(DPScaleEstimator, SelfCalibratedProfileRecoversTheScale) {
   Print("sharper split, profile +-40 %, pinned to the focus",
         pinned.result,
         scale);
-  std::printf("  %s\n", pinned.result.psf_status.c_str());
+  std::printf("  %s\n", pinned.result.psf.status.c_str());
   // The wide DP cue holds the focus's interval: they agree, and the answer
   // is nearly the recorded focus's, a little narrower.
-  EXPECT_TRUE(pinned.result.scale_from_cues);
-  EXPECT_EQ(pinned.result.cue_agreement, CueAgreement::kAgree);
+  EXPECT_TRUE(pinned.result.cues.combined);
+  EXPECT_EQ(pinned.result.cues.agreement, CueAgreement::kAgree);
   EXPECT_LE(pinned.result.scale_ci_high / pinned.result.scale_ci_low,
-            pinned.result.focus_cue.ci_high / pinned.result.focus_cue.ci_low);
+            pinned.result.cues.focus.ci_high / pinned.result.cues.focus.ci_low);
   EXPECT_NEAR(pinned.result.scale / scale, 1.0, 0.03);
   EXPECT_LE(pinned.result.scale_ci_low, scale);
   EXPECT_GE(pinned.result.scale_ci_high, scale);
   // The interval carries the recorded focus's 15 %, not more than ~1.3 x.
   EXPECT_GT(pinned.result.scale_ci_high / pinned.result.scale, 1.09);
   EXPECT_LT(pinned.result.scale_ci_high / pinned.result.scale, 1.2);
-  EXPECT_FALSE(pinned.result.intensity_used);
-  EXPECT_NEAR(pinned.result.pinned_profile_strength,
-              pinned.result.focus_cue.scale / pinned.result.scale_initial,
+  EXPECT_FALSE(pinned.result.intensity.used);
+  EXPECT_NEAR(pinned.result.cues.pinned_profile_strength,
+              pinned.result.cues.focus.scale / pinned.result.scale_initial,
               1e-12);
   DPScaleOptions no_pin = open;
-  no_pin.pin_to_recorded_focus = false;
+  no_pin.interval.pin_to_recorded_focus = false;
   EXPECT_FALSE(RunPipeline(recorded, no_pin).result.success);
 
   const std::vector<DPView> model_views = RenderAll(specs, scale);
   const RunOutput model = RunPipeline(model_views, self);
   ASSERT_TRUE(model.result.success) << Why(model.result);
   Print("translating disk data, self-calibration on", model.result, scale);
-  std::printf("  %s\n", model.result.psf_status.c_str());
-  EXPECT_FALSE(model.result.psf_self_calibrated) << model.result.psf_status;
+  std::printf("  %s\n", model.result.psf.status.c_str());
+  EXPECT_FALSE(model.result.psf.self_calibrated) << model.result.psf.status;
   EXPECT_LT(std::abs(model.result.scale / scale - 1), 0.02);
 }
 
@@ -440,8 +441,8 @@ TEST(DPScaleEstimator, AnEarlierEstimateLeavesTheAnswerAsItIs) {
                 SplitProfilePsf(sharp));
   DPScaleOptions disk = SmallFrameOptions();
   DPScaleOptions self = disk;
-  self.psf_self_calibration = DPScaleOptions::SelfCalibration::kFit;
-  self.self_calibration_shape_uncertainty = 0;
+  self.self_calibration.mode = SelfCalibrationOptions::Mode::kFit;
+  self.self_calibration.shape_uncertainty = 0;
   for (const bool fit : {false, true}) {
     const DPScaleOptions& options = fit ? self : disk;
     DPScaleEstimator checked(options, std::make_shared<TranslatingDiskPsf>());
@@ -449,32 +450,33 @@ TEST(DPScaleEstimator, AnEarlierEstimateLeavesTheAnswerAsItIs) {
     EstimateCaches caches;
     const DPScaleResult early = checked.Estimate(&caches);
     ASSERT_TRUE(early.success) << Why(early);
-    EXPECT_EQ(early.intensity_nodes_reused, 0);
-    EXPECT_EQ(early.psf_fit_searches_reused, 0);
+    EXPECT_EQ(early.intensity.nodes_reused, 0);
+    EXPECT_EQ(early.psf.fit_searches_reused, 0);
     for (int k = 4; k < 6; ++k) checked.AddView(views[k]);
     // Without the run's caches, nothing is read.
     const DPScaleResult uncached = checked.Estimate();
-    EXPECT_EQ(uncached.intensity_nodes_reused, 0);
-    EXPECT_EQ(uncached.psf_fit_searches_reused, 0);
+    EXPECT_EQ(uncached.intensity.nodes_reused, 0);
+    EXPECT_EQ(uncached.psf.fit_searches_reused, 0);
     const DPScaleResult later = checked.Estimate(&caches);
     const DPScaleResult alone = RunPipeline(views, options).result;
     ASSERT_TRUE(later.success && alone.success) << Why(later) << Why(alone);
-    EXPECT_TRUE(later.intensity_used) << later.intensity_status;
-    EXPECT_GT(later.intensity_nodes_computed, 0);
+    EXPECT_TRUE(later.intensity.used) << later.intensity.status;
+    EXPECT_GT(later.intensity.nodes_computed, 0);
     if (fit) {
-      EXPECT_TRUE(later.psf_self_calibrated) << later.psf_status;
-      EXPECT_GT(later.psf_fit_searches_reused, 0);
-      EXPECT_GT(later.psf_fit_searches_run, 0);
+      EXPECT_TRUE(later.psf.self_calibrated) << later.psf.status;
+      EXPECT_GT(later.psf.fit_searches_reused, 0);
+      EXPECT_GT(later.psf.fit_searches_run, 0);
     } else {
-      EXPECT_GT(later.intensity_nodes_reused, 0);
+      EXPECT_GT(later.intensity.nodes_reused, 0);
     }
-    EXPECT_EQ(later.psf_status, alone.psf_status);
-    EXPECT_EQ(later.psf_fit.centroid_offset, alone.psf_fit.centroid_offset);
+    EXPECT_EQ(later.psf.status, alone.psf.status);
+    EXPECT_EQ(later.psf.fit.centroid_offset, alone.psf.fit.centroid_offset);
     EXPECT_EQ(later.scale_initial, alone.scale_initial);
-    EXPECT_EQ(later.scale_intensity, alone.scale_intensity);
-    EXPECT_EQ(later.intensity_ci_low, alone.intensity_ci_low);
-    EXPECT_EQ(later.intensity_ci_high, alone.intensity_ci_high);
-    EXPECT_EQ(later.candidate_losses, alone.candidate_losses);
+    EXPECT_EQ(later.intensity.scale, alone.intensity.scale);
+    EXPECT_EQ(later.intensity.ci_low, alone.intensity.ci_low);
+    EXPECT_EQ(later.intensity.ci_high, alone.intensity.ci_high);
+    EXPECT_EQ(later.intensity.candidate_losses,
+              alone.intensity.candidate_losses);
     EXPECT_EQ(later.scale, alone.scale);
     EXPECT_EQ(later.scale_ci_low, alone.scale_ci_low);
     EXPECT_EQ(later.scale_ci_high, alone.scale_ci_high);
@@ -487,7 +489,7 @@ TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
       SixPositions(Lens(50, 2.8), Lens(35, 2), 50);
   DPScaleOptions plain = SmallFrameOptions();
   DPScaleOptions checked = plain;
-  checked.psf_self_calibration = DPScaleOptions::SelfCalibration::kCheck;
+  checked.self_calibration.mode = SelfCalibrationOptions::Mode::kCheck;
 
   SplitProfileParams sharp;
   sharp.split_exponent = 0.3;
@@ -501,8 +503,8 @@ TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
               disk_rejection.factor_low,
               disk_rejection.factor_high);
   EXPECT_FALSE(rejected.result.success);
-  EXPECT_TRUE(rejected.result.psf_rejected);
-  EXPECT_FALSE(rejected.result.psf_self_calibrated);
+  EXPECT_TRUE(rejected.result.psf.rejected);
+  EXPECT_FALSE(rejected.result.psf.self_calibrated);
   EXPECT_EQ(rejected.result.refusal.code,
             ScaleRefusal::kTranslatingDiskRejected);
   EXPECT_FALSE(disk_rejection.fit_summary.empty());
@@ -518,9 +520,9 @@ TEST(DPScaleEstimator, ExplicitTranslatingDiskIsChecked) {
   ASSERT_TRUE(kept.result.success) << Why(kept.result);
   ASSERT_TRUE(given.result.success) << Why(given.result);
   std::printf("translating disk, checked: %s\n",
-              kept.result.psf_status.c_str());
-  EXPECT_FALSE(kept.result.psf_rejected);
-  EXPECT_NE(kept.result.psf_status.find("agree with the translating disk"),
+              kept.result.psf.status.c_str());
+  EXPECT_FALSE(kept.result.psf.rejected);
+  EXPECT_NE(kept.result.psf.status.find("agree with the translating disk"),
             std::string::npos);
   EXPECT_DOUBLE_EQ(kept.result.scale_initial, given.result.scale_initial);
   EXPECT_LT(std::abs(kept.result.scale / scale - 1), 0.03);
@@ -555,8 +557,8 @@ TEST(DPScaleEstimator, MultiApertureImprovesOnSingleApertures) {
   DPScaleOptions options = SmallFrameOptions();
   options.linear.num_selected_views = 9;
   // Fewer candidates than the paper's 100 keep this four-run test fast.
-  options.intensity.num_candidates = 50;
-  options.intensity.num_refine_candidates = 12;
+  options.intensity.search.num_candidates = 50;
+  options.intensity.search.num_refine_candidates = 12;
   const RunOutput joint = RunPipeline(views, options);
   ASSERT_TRUE(joint.result.success) << Why(joint.result);
   Print("multi-aperture", joint.result, scale);
@@ -718,7 +720,7 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
   const double scale = 0.5;
   auto psf = std::make_shared<TranslatingDiskPsf>();
   DPScaleOptions options = SmallFrameOptions();
-  options.intensity_refinement = false;
+  options.intensity.enabled = false;
   DPScaleEstimator estimator(options, psf);
   for (int i = 0; i < 2; ++i) {
     CaptureSpec spec;
@@ -746,8 +748,8 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
   const DPScaleResult r = estimator.Estimate();
   ASSERT_TRUE(r.success) << Why(r);
   EXPECT_NEAR(r.scale / scale, 1.0, 0.05);
-  EXPECT_EQ(r.intensity_status, "disabled; linear estimate kept");
-  EXPECT_FALSE(r.intensity_used);
+  EXPECT_EQ(r.intensity.status, "disabled; linear estimate kept");
+  EXPECT_FALSE(r.intensity.used);
   EXPECT_EQ(r.scale, r.scale_initial);
 }
 
@@ -759,10 +761,10 @@ TEST(DPScaleEstimator, SparseDepthPointsWork) {
 TEST(DPScaleEstimator, ReducedFramesGiveTheSameResult) {
   const double scale = 0.5;
   DPScaleOptions options = SmallFrameOptions();
-  options.resize_factor = 0.5;
-  options.patch_size = 25;
-  options.stride = 10;
-  options.max_radius_px = 5;
+  options.geometry.resize_factor = 0.5;
+  options.geometry.patch_size = 25;
+  options.geometry.stride = 10;
+  options.geometry.max_radius_px = 5;
   std::vector<DPView> views =
       RenderAll(SixPositions(Lens(50, 2.8), Lens(50, 2.8), /*seed=*/70), scale);
   views.resize(4);
@@ -921,7 +923,7 @@ TEST(SearchChosenPatches, InPartsAsInOneSearch) {
                     SixPositions(Lens(50, 4), Lens(50, 4), 40)[0],
                     0.0731);
   DPScaleOptions options;
-  options.resize_factor = 1;
+  options.geometry.resize_factor = 1;
   const DPPsfField field =
       DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
   BlurEstimationOptions blur = options.blur;
@@ -981,13 +983,13 @@ TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
   specs.resize(4);
   const std::vector<DPView> views = RenderAll(specs, scale);
   DPScaleOptions options;
-  options.resize_factor = 1;
-  options.min_auto_radius_px = 5;
+  options.geometry.resize_factor = 1;
+  options.geometry.min_auto_radius_px = 5;
   options.linear.num_bootstrap = 100;
-  options.intensity_refinement = false;
+  options.intensity.enabled = false;
 
   DPScaleOptions fixed = options;
-  fixed.max_search_bound_growths = 0;
+  fixed.geometry.max_search_bound_growths = 0;
   const RunOutput clipped = RunPipeline(views, fixed);
   for (const DPViewSummary& s : clipped.summaries) {
     EXPECT_DOUBLE_EQ(s.max_radius_px, 5) << s.name;
@@ -1032,7 +1034,7 @@ TEST(DPScaleEstimator, AutomaticSearchBoundGrowsToTheViewsBlur) {
   EXPECT_GE(r.scale_ci_high, scale);
 
   DPScaleOptions explicit_bound = options;
-  explicit_bound.max_radius_px = 5;
+  explicit_bound.geometry.max_radius_px = 5;
   DPScaleEstimator estimator(explicit_bound,
                              std::make_shared<TranslatingDiskPsf>());
   const DPViewSummary s = estimator.AddView(views[0]);

@@ -267,8 +267,8 @@ void DPScaleController::FinalEstimate(EstimateCaches* caches,
     LOG(INFO) << "  the estimate of the last checkpoint ("
               << run->visited.size() << " views)";
   }
-  run->timings.linear = run->result.seconds_linear;
-  run->timings.intensity = run->result.seconds_intensity;
+  run->timings.linear = run->result.seconds.linear;
+  run->timings.intensity = run->result.seconds.intensity;
 }
 
 nlohmann::json ViewBudgetReport(const ScaleRun& run,
@@ -547,11 +547,11 @@ void LogResult(const DPScaleResult& result) {
   const std::string psf_status = PsfStatusText(result);
   if (!psf_status.empty()) {
     LOG(INFO) << "DP PSF: " << psf_status << " ("
-              << Seconds(result.seconds_psf_fit) << ")";
+              << Seconds(result.seconds.psf_fit) << ")";
   }
   const std::string focus_check = FocusCheckText(result);
   if (!focus_check.empty()) {
-    if (result.focus_agrees) {
+    if (result.cues.focus_agrees) {
       LOG(INFO) << "Recorded focus: " << focus_check;
     } else {
       LOG(WARNING) << "Recorded focus: " << focus_check;
@@ -576,13 +576,13 @@ void LogResult(const DPScaleResult& result) {
 }
 
 // What the run does with the profile before the scale, for the log.
-const char* SelfCalibrationNote(DPScaleOptions::SelfCalibration mode) {
+const char* SelfCalibrationNote(SelfCalibrationOptions::Mode mode) {
   switch (mode) {
-    case DPScaleOptions::SelfCalibration::kFit:
+    case SelfCalibrationOptions::Mode::kFit:
       return ", self-calibrated from the data before the scale";
-    case DPScaleOptions::SelfCalibration::kCheck:
+    case SelfCalibrationOptions::Mode::kCheck:
       return ", checked against the data before the scale";
-    case DPScaleOptions::SelfCalibration::kOff:
+    case SelfCalibrationOptions::Mode::kOff:
       break;
   }
   return "";
@@ -593,8 +593,8 @@ std::string ScaleLine(const DPScaleResult& result) {
   std::ostringstream line;
   line << "Scale " << result.scale << " metres per model unit (95 % interval ["
        << result.scale_ci_low << ", " << result.scale_ci_high << "], from the "
-       << (result.scale_source.empty() ? std::string("DP data")
-                                       : result.scale_source)
+       << (result.cues.source.empty() ? std::string("DP data")
+                                      : result.cues.source)
        << ")";
   return line.str();
 }
@@ -740,7 +740,7 @@ PsfChoice ApplyProfile(const ScaleRunOptions& options,
                      profile.source + ": " + failure);
   }
   LOG(INFO) << "DP PSF: " << profile.source << " (" << psf.field.Name()
-            << SelfCalibrationNote(core_options->psf_self_calibration) << ")";
+            << SelfCalibrationNote(core_options->self_calibration.mode) << ")";
   return psf;
 }
 
@@ -781,7 +781,7 @@ void LogEstimate(const DPScaleResult& result, const RunTimings& timings) {
   LOG(INFO) << "Linear estimate s* = " << result.scale_initial
             << ", final s = " << result.scale << " (95% interval "
             << result.scale_ci_low << " .. " << result.scale_ci_high
-            << "; intensity stage: " << result.intensity_status << ")";
+            << "; intensity stage: " << result.intensity.status << ")";
   LOG(INFO) << "Timings: read " << Seconds(timings.read) << " ("
             << Seconds(timings.read_wait) << " not overlapped), blur "
             << Seconds(timings.blur) << ", linear " << Seconds(timings.linear)

@@ -16,13 +16,13 @@ namespace fs = std::filesystem;
 namespace dpsfm {
 
 void PsfChoice::ApplyTo(DPScaleOptions* core) const {
-  core->psf_self_calibration = self_calibration;
+  core->self_calibration.mode = self_calibration;
   if (profile_relative_uncertainty > 0) {
-    core->profile_relative_uncertainty = profile_relative_uncertainty;
+    core->interval.profile_relative_uncertainty = profile_relative_uncertainty;
   }
-  core->min_auto_radius_px =
-      std::max(core->min_auto_radius_px, reference_radius_px);
-  core->profile_covered_radius_px = covered_radius_px;
+  core->geometry.min_auto_radius_px =
+      std::max(core->geometry.min_auto_radius_px, reference_radius_px);
+  core->geometry.profile_covered_radius_px = covered_radius_px;
 }
 
 PsfChoice MakePsfField(const std::string& psf_model,
@@ -36,10 +36,10 @@ PsfChoice MakePsfField(const std::string& psf_model,
           psf_model + ")");
     }
     // An explicit translating disk is checked by the same fit, never
-    // replaced (DPScaleOptions::SelfCalibration::kCheck).
+    // replaced (SelfCalibrationOptions::Mode::kCheck).
     choice.self_calibration = psf_model == "auto"
-                                  ? DPScaleOptions::SelfCalibration::kFit
-                                  : DPScaleOptions::SelfCalibration::kCheck;
+                                  ? SelfCalibrationOptions::Mode::kFit
+                                  : SelfCalibrationOptions::Mode::kCheck;
     choice.field = DPPsfField::Uniform(std::make_shared<TranslatingDiskPsf>());
     return choice;
   }
@@ -50,7 +50,7 @@ PsfChoice MakePsfField(const std::string& psf_model,
           "--DPScaleEstimator.psf_path (a profile written by colmap "
           "dp_psf_calibrator, or measured kernels)");
     }
-    choice.self_calibration = DPScaleOptions::SelfCalibration::kOff;
+    choice.self_calibration = SelfCalibrationOptions::Mode::kOff;
     const PsfProfileFile profile = ReadPsfProfile(psf_path);
     CheckProfileLight(profile, psf_path);
     choice.path = psf_path;

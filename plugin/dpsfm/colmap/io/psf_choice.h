@@ -21,8 +21,8 @@ struct PsfChoice {
   DPPsfField field;
   // translating_disk: checked against the data (kCheck); auto: the
   // translating disk self-calibrated from the data (kFit); calibrated: kOff.
-  DPScaleOptions::SelfCalibration self_calibration =
-      DPScaleOptions::SelfCalibration::kFit;
+  SelfCalibrationOptions::Mode self_calibration =
+      SelfCalibrationOptions::Mode::kFit;
   // A profile file's own relative uncertainty (0: none given).
   double profile_relative_uncertainty = 0;
   // The blur a measured-kernel profile was measured at: it bounds the

@@ -83,7 +83,7 @@ struct PsfProfileFile {
   // For the profile library (may be empty).
   std::string camera, lens;
   // Relative 95 % uncertainty of the profile's strength (the calibration's
-  // interval): the scale inherits it (DPScaleOptions::
+  // interval): the scale inherits it (ScaleIntervalOptions::
   // profile_relative_uncertainty). 0 = not given.
   double uncertainty = 0;
   // The light the profile was measured in: "linear" (dp_psf_calibrator

@@ -68,13 +68,13 @@ struct LossCurveData {
 // on that), finite points only.
 Curve SortedCurve(const DPScaleResult& result) {
   Curve curve;
-  const size_t n =
-      std::min(result.candidate_scales.size(), result.candidate_losses.size());
+  const size_t n = std::min(result.intensity.candidate_scales.size(),
+                            result.intensity.candidate_losses.size());
   for (size_t i = 0; i < n; ++i) {
-    if (Finite(result.candidate_scales[i]) &&
-        Finite(result.candidate_losses[i])) {
-      curve.emplace_back(result.candidate_scales[i],
-                         result.candidate_losses[i]);
+    if (Finite(result.intensity.candidate_scales[i]) &&
+        Finite(result.intensity.candidate_losses[i])) {
+      curve.emplace_back(result.intensity.candidate_scales[i],
+                         result.intensity.candidate_losses[i]);
     }
   }
   std::sort(curve.begin(), curve.end());
@@ -104,8 +104,8 @@ std::vector<CueBar> CueBars(const DPScaleResult& result) {
     return ", 95 % interval [" + FormatValue(low) + ", " + FormatValue(high) +
            "]";
   };
-  if (CueShown(result.dp_cue)) {
-    const ScaleCue& c = result.dp_cue;
+  if (CueShown(result.cues.dp)) {
+    const ScaleCue& c = result.cues.dp;
     bars.push_back(
         {"DP data: s = " + FormatValue(c.scale) + interval(c.ci_low, c.ci_high),
          c.scale,
@@ -113,8 +113,8 @@ std::vector<CueBar> CueBars(const DPScaleResult& result) {
          c.ci_high,
          kDpCueColour});
   }
-  if (CueShown(result.focus_cue)) {
-    const ScaleCue& c = result.focus_cue;
+  if (CueShown(result.cues.focus)) {
+    const ScaleCue& c = result.cues.focus;
     std::string label = "recorded focus: s = " + FormatValue(c.scale) +
                         interval(c.ci_low, c.ci_high);
     if (c.num_views > 0) {
@@ -127,8 +127,8 @@ std::vector<CueBar> CueBars(const DPScaleResult& result) {
       Finite(result.scale_ci_high)) {
     std::string label = "answer: s = " + FormatValue(result.scale) +
                         interval(result.scale_ci_low, result.scale_ci_high);
-    if (!result.scale_source.empty()) {
-      label += " (from " + result.scale_source + ")";
+    if (!result.cues.source.empty()) {
+      label += " (from " + result.cues.source + ")";
     }
     bars.push_back({label,
                     result.scale,
@@ -146,14 +146,14 @@ void SetFlags(const DPScaleResult& result, LossCurveData* data) {
                   Finite(result.scale_ci_high) &&
                   result.scale_ci_high >= result.scale_ci_low;
   data->have_linear = Finite(result.scale_initial) && result.scale_initial != 0;
-  data->have_minimum = data->have_curve && Finite(result.scale_intensity) &&
-                       result.scale_intensity != 0;
+  data->have_minimum = data->have_curve && Finite(result.intensity.scale) &&
+                       result.intensity.scale != 0;
   data->have_intensity_ci = data->have_minimum &&
-                            Finite(result.intensity_ci_low) &&
-                            Finite(result.intensity_ci_high) &&
-                            result.intensity_ci_high >= result.intensity_ci_low;
+                            Finite(result.intensity.ci_low) &&
+                            Finite(result.intensity.ci_high) &&
+                            result.intensity.ci_high >= result.intensity.ci_low;
   data->show_cues = !data->have_curve &&
-                    (CueShown(result.dp_cue) || CueShown(result.focus_cue));
+                    (CueShown(result.cues.dp) || CueShown(result.cues.focus));
 }
 
 // Scales and losses to show, padded; sets have_x.
@@ -170,7 +170,7 @@ void SetRanges(const DPScaleResult& result, LossCurveData* data) {
     x_range.Add(result.scale_ci_low);
     x_range.Add(result.scale_ci_high);
   }
-  if (data->have_minimum) x_range.Add(result.scale_intensity);
+  if (data->have_minimum) x_range.Add(result.intensity.scale);
   if (data->show_cues) {
     for (const CueBar& bar : CueBars(result)) {
       x_range.Add(bar.ci_low);
@@ -212,7 +212,7 @@ LossCurveData PrepareLossCurve(const DPScaleResult& result) {
   SetFlags(result, &data);
   SetRanges(result, &data);
   if (data.have_minimum) {
-    data.minimum_loss = CurveHeightAt(data.curve, result.scale_intensity);
+    data.minimum_loss = CurveHeightAt(data.curve, result.intensity.scale);
   }
   data.axes.area = cv::Rect(105, kAxesTop, 860, 530 - kAxesTop);
   return data;
@@ -220,14 +220,14 @@ LossCurveData PrepareLossCurve(const DPScaleResult& result) {
 
 // The cues' names in words ("the DP data and the recorded focus").
 std::string CueNames(const DPScaleResult& result) {
-  const bool dp = CueShown(result.dp_cue), focus = CueShown(result.focus_cue);
+  const bool dp = CueShown(result.cues.dp), focus = CueShown(result.cues.focus);
   if (dp && focus) return "the DP data and the recorded focus";
   return dp ? "the DP data" : (focus ? "the recorded focus" : "");
 }
 
 std::string TitleOf(const DPScaleResult& result, const LossCurveData& data) {
   if (data.show_cues) {
-    const bool both = CueShown(result.dp_cue) && CueShown(result.focus_cue);
+    const bool both = CueShown(result.cues.dp) && CueShown(result.cues.focus);
     std::string title = result.success
                             ? (both ? "The answer from two cues: "
                                     : "The answer from one cue: ")
@@ -236,8 +236,8 @@ std::string TitleOf(const DPScaleResult& result, const LossCurveData& data) {
     return title + CueNames(result) + " (no intensity loss curve)";
   }
   std::string title = "Intensity loss over candidate scales";
-  if (!result.intensity_loss.empty()) {
-    title += " (loss: " + result.intensity_loss + ")";
+  if (!result.intensity.loss.empty()) {
+    title += " (loss: " + result.intensity.loss + ")";
   }
   return title;
 }
@@ -246,18 +246,18 @@ std::string TitleOf(const DPScaleResult& result, const LossCurveData& data) {
 // first, because the answer they form replaces what the stages gave.
 std::string AnswerSource(const DPScaleResult& result,
                          const LossCurveData& data) {
-  if (result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue) {
-    return result.cue_agreement == CueAgreement::kAgree
+  if (result.cues.combined && result.cues.agreement != CueAgreement::kOneCue) {
+    return result.cues.agreement == CueAgreement::kAgree
                ? " (DP data and recorded focus combined; they agree)"
                : " (DP data and recorded focus combined; they disagree)";
   }
-  if (result.scale_from_recorded_focus) return " (from the recorded focus)";
-  if (result.intensity_used) return " (intensity stage adopted)";
+  if (result.cues.scale_from_recorded_focus)
+    return " (from the recorded focus)";
+  if (result.intensity.used) return " (intensity stage adopted)";
   if (data.have_linear && result.scale == result.scale_initial) {
     return " (linear estimate kept)";
   }
-  if (!result.scale_source.empty())
-    return " (from " + result.scale_source + ")";
+  if (!result.cues.source.empty()) return " (from " + result.cues.source + ")";
   return "";
 }
 
@@ -267,8 +267,8 @@ std::string SubtitleOf(const DPScaleResult& result, const LossCurveData& data) {
     // Each cue with its interval, then what they gave.
     std::vector<std::string> cues;
     for (const auto& [name, cue] :
-         {std::make_pair("DP data", &result.dp_cue),
-          std::make_pair("recorded focus", &result.focus_cue)}) {
+         {std::make_pair("DP data", &result.cues.dp),
+          std::make_pair("recorded focus", &result.cues.focus)}) {
       if (!CueShown(*cue)) continue;
       cues.push_back(std::string(name) + " s = " + FormatValue(cue->scale) +
                      " [" + FormatValue(cue->ci_low) + ", " +
@@ -285,7 +285,7 @@ std::string SubtitleOf(const DPScaleResult& result, const LossCurveData& data) {
       }
       subtitle << AnswerSource(result, data);
     } else {
-      if (cues.size() > 1 && result.cue_agreement == CueAgreement::kDisagree) {
+      if (cues.size() > 1 && result.cues.agreement == CueAgreement::kDisagree) {
         subtitle << " (they disagree)";
       }
       subtitle << "; no scale reported";
@@ -406,10 +406,10 @@ void DrawMinimum(cv::Mat& canvas,
                  const LossCurveData& data) {
   cv::Mat roi = data.axes.Roi(canvas);
   const cv::Point2d m =
-      data.axes.ToLocal(result.scale_intensity, data.minimum_loss);
+      data.axes.ToLocal(result.intensity.scale, data.minimum_loss);
   if (data.have_intensity_ci) {
-    const double a = data.axes.ToLocal(result.intensity_ci_low, 0).x;
-    const double b = data.axes.ToLocal(result.intensity_ci_high, 0).x;
+    const double a = data.axes.ToLocal(result.intensity.ci_low, 0).x;
+    const double b = data.axes.ToLocal(result.intensity.ci_high, 0).x;
     DrawSegment(roi, {a, m.y}, {b, m.y}, kMinimumColour, 2);
     DrawSegment(roi, {a, m.y - 7}, {a, m.y + 7}, kMinimumColour, 2);
     DrawSegment(roi, {b, m.y - 7}, {b, m.y + 7}, kMinimumColour, 2);
@@ -422,9 +422,9 @@ void DrawNoCurve(cv::Mat& canvas,
                  const DPScaleResult& result,
                  const LossCurveData& data) {
   std::string message = "No intensity loss curve: ";
-  message += result.intensity_status.empty()
+  message += result.intensity.status.empty()
                  ? std::string("the intensity stage was skipped")
-                 : result.intensity_status;
+                 : result.intensity.status;
   if (!data.have_x) message += " (and no scale to show)";
   const cv::Rect& area = data.axes.area;
   const cv::Rect box(
@@ -445,7 +445,7 @@ std::vector<LegendEntry> LossCurveLegendEntries(const DPScaleResult& result,
   }
   if (data.have_minimum) {
     entries.push_back(
-        {"loss minimum s = " + FormatValue(result.scale_intensity) +
+        {"loss minimum s = " + FormatValue(result.intensity.scale) +
              (data.have_intensity_ci ? " (bar: its interval)" : ""),
          kMinimumColour,
          Glyph::kDiamond});
@@ -489,7 +489,7 @@ cv::Rect LegendPlace(const DPScaleResult& result,
       if (candidate.contains(data.axes.ToPixel(p.first, p.second))) ++count;
     }
     if (data.have_minimum && candidate.contains(data.axes.ToPixel(
-                                 result.scale_intensity, data.minimum_loss))) {
+                                 result.intensity.scale, data.minimum_loss))) {
       count += 1000;
     }
     if (count < best_count) {
@@ -511,14 +511,14 @@ void DrawLossCurveLegend(cv::Mat& canvas,
 
 // Status of the intensity stage, in words, under the plot.
 std::string StatusText(const DPScaleResult& result, const LossCurveData& data) {
-  std::string status = result.intensity_used
+  std::string status = result.intensity.used
                            ? "Intensity stage (adopted): "
                            : "Intensity stage (not adopted): ";
-  status += result.intensity_status.empty() ? std::string("no status")
-                                            : result.intensity_status;
-  if (data.have_minimum && Finite(result.intensity_bootstrap_support)) {
+  status += result.intensity.status.empty() ? std::string("no status")
+                                            : result.intensity.status;
+  if (data.have_minimum && Finite(result.intensity.bootstrap_support)) {
     status += " (bootstrap support " +
-              plot::Format("%.0f", 100 * result.intensity_bootstrap_support) +
+              plot::Format("%.0f", 100 * result.intensity.bootstrap_support) +
               " %)";
   }
   if (data.show_cues) {

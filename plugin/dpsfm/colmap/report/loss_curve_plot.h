@@ -15,7 +15,7 @@ namespace dpsfm {
 // linear estimate s* (dashed line), the final scale (solid line) with its
 // confidence interval (shaded band) and the intensity stage's status.
 // Without a curve (stage skipped or failed) the cues that decided are shown
-// instead (DPScaleResult::dp_cue, focus_cue): each valid cue's scale and 95 %
+// instead (ScaleCuesResult::dp, focus): each valid cue's scale and 95 %
 // interval and the answer with its interval as horizontal bars on the scale
 // axis, numbers as the report's cues, scale and scale_ci_low/high; with no
 // cue either, a panel that says there is no curve. About 1000x700. No data

@@ -672,23 +672,23 @@ std::vector<std::string> RefusalAccount(const DPScaleRefusal& refusal) {
 }
 
 std::string CombinationText(const DPScaleResult& result) {
-  if (!result.dp_data_alone) return result.combination;
-  return result.focus_cue.valid
+  if (!result.cues.dp_data_alone) return result.cues.combination;
+  return result.cues.focus.valid
              ? "the DP data alone (the recorded focus is evidence only: "
                "pin_to_recorded_focus 0)"
              : "the DP data alone (no recorded focus)";
 }
 
 std::string FocusCheckText(const DPScaleResult& result) {
-  if (result.focus_check.empty()) return "";
+  if (result.cues.focus_check.empty()) return "";
   const std::string how = CombinationText(result);
-  return how.empty() ? result.focus_check
-                     : result.focus_check + ". The answer: " + how;
+  return how.empty() ? result.cues.focus_check
+                     : result.cues.focus_check + ". The answer: " + how;
 }
 
 std::string PsfStatusText(const DPScaleResult& result) {
-  return result.psf_rejected ? TranslatingDiskRejectionText(result.refusal.disk)
-                             : result.psf_status;
+  return result.psf.rejected ? TranslatingDiskRejectionText(result.refusal.disk)
+                             : result.psf.status;
 }
 
 }  // namespace dpsfm

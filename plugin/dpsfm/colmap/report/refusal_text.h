@@ -33,7 +33,7 @@ std::string RefusalLine(const DPScaleRefusal& refusal);
 std::vector<std::string> RefusalAccount(const DPScaleRefusal& refusal);
 
 // What happened to the DP PSF (the log's "DP PSF:" line, the report's
-// psf.status): the core's psf_status, or, for a translating disk the data
+// psf.status): the core's psf.status, or, for a translating disk the data
 // reject, TranslatingDiskRejectionText (the account's first line).
 std::string PsfStatusText(const DPScaleResult& result);
 

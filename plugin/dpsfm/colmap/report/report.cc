@@ -36,28 +36,28 @@ namespace {
 // "intensity": the intensity stage's status, answer and loss curve.
 nlohmann::json IntensitySection(const DPScaleResult& result) {
   nlohmann::json intensity;
-  intensity["used"] = result.intensity_used;
-  intensity["status"] = result.intensity_status;
+  intensity["used"] = result.intensity.used;
+  intensity["status"] = result.intensity.status;
   // A stage that did not run has no scale and no interval (null, never 0):
   // its status says why.
-  const bool ran = result.scale_intensity > 0;
+  const bool ran = result.intensity.scale > 0;
   intensity["ran"] = ran;
-  intensity["scale"] = ran ? Number(result.scale_intensity) : nullptr;
+  intensity["scale"] = ran ? Number(result.intensity.scale) : nullptr;
   intensity["ci"] =
-      ran && result.intensity_ci_high > 0
-          ? Interval(result.intensity_ci_low, result.intensity_ci_high)
+      ran && result.intensity.ci_high > 0
+          ? Interval(result.intensity.ci_low, result.intensity.ci_high)
           : nullptr;
-  intensity["loss"] = result.intensity_loss;
-  intensity["failed_evaluations"] = result.intensity_failed_evaluations;
+  intensity["loss"] = result.intensity.loss;
+  intensity["failed_evaluations"] = result.intensity.failed_evaluations;
   intensity["node_statistics"] = {
-      {"reused", result.intensity_nodes_reused},
-      {"computed", result.intensity_nodes_computed}};
+      {"reused", result.intensity.nodes_reused},
+      {"computed", result.intensity.nodes_computed}};
   nlohmann::json curve = nlohmann::json::array();
-  for (size_t i = 0;
-       i < result.candidate_scales.size() && i < result.candidate_losses.size();
+  for (size_t i = 0; i < result.intensity.candidate_scales.size() &&
+                     i < result.intensity.candidate_losses.size();
        ++i) {
-    curve.push_back({Number(result.candidate_scales[i]),
-                     Number(result.candidate_losses[i])});
+    curve.push_back({Number(result.intensity.candidate_scales[i]),
+                     Number(result.intensity.candidate_losses[i])});
   }
   intensity["loss_curve"] = curve;
   return intensity;
@@ -97,24 +97,24 @@ nlohmann::json ProfileFit(const SplitProfileFit& fit) {
 // "psf": the DP PSF profile the stages used and what self-calibration found.
 nlohmann::json PsfSection(const DPScaleResult& result) {
   nlohmann::json psf;
-  psf["model"] = result.psf_model;
-  psf["self_calibrated"] = result.psf_self_calibrated;
+  psf["model"] = result.psf.model;
+  psf["self_calibrated"] = result.psf.self_calibrated;
   const std::string status = PsfStatusText(result);
   psf["status"] = status;
   // Self-calibration's fit, or null with why when none ran (a given
   // profile is used as it is).
   psf["fit"] = nullptr;
-  psf["fit_status"] = result.psf_fit_ran
+  psf["fit_status"] = result.psf.fit_ran
                           ? "ran"
                           : "not run: the profile was given "
                             "(--DPScaleEstimator.psf_model calibrated)";
-  if (!status.empty() && result.psf_fit_ran) {
-    psf["fit"] = ProfileFit(result.psf_fit);
-    psf["fit"]["patch_searches"] = {{"reused", result.psf_fit_searches_reused},
-                                    {"run", result.psf_fit_searches_run}};
+  if (!status.empty() && result.psf.fit_ran) {
+    psf["fit"] = ProfileFit(result.psf.fit);
+    psf["fit"]["patch_searches"] = {{"reused", result.psf.fit_searches_reused},
+                                    {"run", result.psf.fit_searches_run}};
     // A profile that changes across the frame: each column band's fit.
     nlohmann::json bands = nlohmann::json::array();
-    for (const SplitProfileFit& band : result.psf_band_fits) {
+    for (const SplitProfileFit& band : result.psf.band_fits) {
       bands.push_back(
           {{"translating_disk_kept", band.translating_disk},
            {"split_exponent", Number(band.params.split_exponent)},
@@ -129,8 +129,8 @@ nlohmann::json PsfSection(const DPScaleResult& result) {
     }
     psf["fit"]["bands"] = bands;
   }
-  psf["scale_factors_allowed_by_profile"] = Interval(
-      result.profile_scale_factor_low, result.profile_scale_factor_high);
+  psf["scale_factors_allowed_by_profile"] =
+      Interval(result.psf.scale_factor_low, result.psf.scale_factor_high);
   return psf;
 }
 
@@ -149,30 +149,30 @@ void AddScaleSources(const DPScaleResult& result, nlohmann::json* report) {
   const std::string focus_check = FocusCheckText(result);
   if (!focus_check.empty()) {
     r["focus_check"] = {
-        {"scale_from_recorded_focus", Number(result.focus_scale)},
-        {"ratio", Number(result.focus_scale_ratio)},
-        {"agrees", result.focus_agrees},
+        {"scale_from_recorded_focus", Number(result.cues.focus_scale)},
+        {"ratio", Number(result.cues.focus_scale_ratio)},
+        {"agrees", result.cues.focus_agrees},
         {"status", focus_check}};
   }
   r["scale_source"] =
-      result.scale_from_cues && result.cue_agreement != CueAgreement::kOneCue
+      result.cues.combined && result.cues.agreement != CueAgreement::kOneCue
           ? "dual_pixel+recorded_focus"
-          : (result.scale_from_recorded_focus ? "recorded_focus"
-                                              : "dual_pixel");
-  if (result.scale_from_cues) {
-    r["pinned_profile_strength"] = Number(result.pinned_profile_strength);
+          : (result.cues.scale_from_recorded_focus ? "recorded_focus"
+                                                   : "dual_pixel");
+  if (result.cues.combined) {
+    r["pinned_profile_strength"] = Number(result.cues.pinned_profile_strength);
   }
   r["cues"] = {
-      {"dual_pixel", CueJson(result.dp_cue)},
-      {"recorded_focus", CueJson(result.focus_cue)},
+      {"dual_pixel", CueJson(result.cues.dp)},
+      {"recorded_focus", CueJson(result.cues.focus)},
       {"agreement",
-       result.cue_agreement == CueAgreement::kAgree
+       result.cues.agreement == CueAgreement::kAgree
            ? "agree"
-           : (result.cue_agreement == CueAgreement::kDisagree ? "disagree"
-                                                              : "one cue")},
+           : (result.cues.agreement == CueAgreement::kDisagree ? "disagree"
+                                                               : "one cue")},
       {"how", CombinationText(result)}};
-  if (result.focus_cue.valid) {
-    r["cues"]["recorded_focus"]["views"] = result.focus_cue.num_views;
+  if (result.cues.focus.valid) {
+    r["cues"]["recorded_focus"]["views"] = result.cues.focus.num_views;
   }
   r["lens_geometry_uncertainty"] = Number(result.lens_geometry_uncertainty);
 }
@@ -350,7 +350,7 @@ nlohmann::json MakeReport(const DPScaleResult& result,
                        {"read_wait", timings.read_wait},
                        {"blur", timings.blur},
                        {"linear", timings.linear},
-                       {"psf_fit", result.seconds_psf_fit},
+                       {"psf_fit", result.seconds.psf_fit},
                        {"intensity", timings.intensity},
                        {"rescale", timings.rescale},
                        {"total", timings.total}};

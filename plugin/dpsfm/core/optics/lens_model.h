@@ -24,7 +24,7 @@ struct DPLensData {
   double pixel_pitch_um = 0;
   // The focus distance the camera or the user recorded, from the
   // focal-plane mark (sensor plane), in mm; NaN = not recorded. Evidence
-  // only: the estimate checks itself against it (DPScaleResult::
+  // only: the estimate checks itself against it (ScaleCuesResult::
   // focus_check), it never replaces the fitted focus.
   double recorded_focus_mm = std::numeric_limits<double>::quiet_NaN();
   // The relative half-width of the window the record itself gives (Canon's

@@ -49,19 +49,19 @@ std::string IntensityVerdict(const IntensitySearchResult& intensity,
   } else if (search.num_bootstrap == 0) {
     status << "no bootstrap (num_bootstrap 0), so no interval; linear "
               "estimate kept";
-  } else if (width > options.max_intensity_ci_relative_width) {
+  } else if (width > options.intensity.max_ci_relative_width) {
     status << "loss curve too flat ("
            << std::lround(100 * search.confidence_level) << " % interval "
            << std::fixed << std::setprecision(1) << width * 100
            << " % of the scale); linear estimate kept";
   } else if (intensity.bootstrap_support <
-             options.min_intensity_bootstrap_support) {
+             options.intensity.min_bootstrap_support) {
     status << "minimum not stable under resampling (support "
            << intensity.bootstrap_support << "); linear estimate kept";
   } else if (!IntervalContains(intensity.scale,
                                intensity.scale_ci_low,
                                intensity.scale_ci_high,
-                               options.scale_systematic_uncertainty,
+                               options.interval.scale_systematic_uncertainty,
                                linear_scale)) {
     // Both stages read the same patches; if they disagree beyond the
     // intensity stage's own interval (plus the systematic term), one of
@@ -92,16 +92,16 @@ void DPScaleEstimator::IntensityStage(
     DPScaleResult* result) const {
   const std::shared_ptr<const DPPsfModel> psf = field.cells[0];
   const bool banded = field.cells.size() > 1;
-  result->intensity_loss = IntensityLossName(options_.intensity.loss);
-  if (result->scale_from_cues) {
+  result->intensity.loss = IntensityLossName(options_.intensity.search.loss);
+  if (result->cues.combined) {
     // The DP data alone left the scale open: the intensity stage reads the
     // same profile, the very thing that is uncertain here.
-    result->intensity_status =
+    result->intensity.status =
         "skipped: the answer combines the DP data with the recorded focus "
         "(the DP data alone are wider than the limit), and this stage would "
         "read the same profile whose uncertainty widened them";
-  } else if (!options_.intensity_refinement) {
-    result->intensity_status = "disabled; linear estimate kept";
+  } else if (!options_.intensity.enabled) {
+    result->intensity.status = "disabled; linear estimate kept";
   } else {
     std::vector<IntensityView> iviews;
     std::vector<IntensityPatch> ipatches;
@@ -127,18 +127,18 @@ void DPScaleEstimator::IntensityStage(
         ipatches.push_back(ip);
       }
     }
-    IntensitySearchOptions search = options_.intensity;
+    IntensitySearchOptions search = options_.intensity.search;
     search.seed = options_.seed;
     search.num_threads = options_.num_threads;
     // Clamp radii to the blur search's bound of each view (the crops' border
     // supports exactly that).
     double max_r = 0;
     for (int i : linear.selected_views) {
-      max_r = std::max(
-          max_r,
-          views_[i]->summary.max_radius_px *
-              (result->psf_self_calibrated ? options_.psf_fit_radius_factor
-                                           : 1.0));
+      max_r = std::max(max_r,
+                       views_[i]->summary.max_radius_px *
+                           (result->psf.self_calibrated
+                                ? options_.self_calibration.radius_factor
+                                : 1.0));
     }
     search.max_radius_px = max_r;
     IntensitySearchResult intensity;
@@ -149,22 +149,22 @@ void DPScaleEstimator::IntensityStage(
       intensity.success = false;
       intensity.failure_reason = e.what();
     }
-    result->candidate_scales = intensity.candidate_scales;
-    result->candidate_losses = intensity.candidate_losses;
-    result->intensity_failed_evaluations = intensity.num_failed_evaluations;
-    result->intensity_nodes_reused = intensity.num_nodes_reused;
-    result->intensity_nodes_computed = intensity.num_nodes_computed;
+    result->intensity.candidate_scales = intensity.candidate_scales;
+    result->intensity.candidate_losses = intensity.candidate_losses;
+    result->intensity.failed_evaluations = intensity.num_failed_evaluations;
+    result->intensity.nodes_reused = intensity.num_nodes_reused;
+    result->intensity.nodes_computed = intensity.num_nodes_computed;
     bool adopt = false;
-    result->intensity_status =
+    result->intensity.status =
         IntensityVerdict(intensity, search, options_, linear.scale, &adopt);
     if (intensity.success) {
-      result->scale_intensity = intensity.scale;
-      result->intensity_ci_low = intensity.scale_ci_low;
-      result->intensity_ci_high = intensity.scale_ci_high;
-      result->intensity_bootstrap_support = intensity.bootstrap_support;
+      result->intensity.scale = intensity.scale;
+      result->intensity.ci_low = intensity.scale_ci_low;
+      result->intensity.ci_high = intensity.scale_ci_high;
+      result->intensity.bootstrap_support = intensity.bootstrap_support;
     }
     if (adopt) {
-      result->intensity_used = true;
+      result->intensity.used = true;
       result->scale = intensity.scale;
       result->scale_ci_low = intensity.scale_ci_low;
       result->scale_ci_high = intensity.scale_ci_high;

@@ -42,7 +42,7 @@ void WidenByConsistentOffsets(const SplitProfileFit& fit,
 }
 
 // Scale factors the self-calibrated profile leaves open (see
-// DPScaleResult::profile_scale_factor_low): per cell of the field, the
+// DPPsfResult::scale_factor_low): per cell of the field, the
 // consistent centroid offsets over the one used (the translating disk's
 // when it was kept); the widest over the cells.
 void ProfileScaleFactorsOf(const std::vector<SplitProfileFit>& fits,
@@ -75,7 +75,8 @@ DPScaleEstimator::StoredGroups DPScaleEstimator::GroupStoredCrops() const {
 
 std::vector<ProfilePatch> DPScaleEstimator::ProfileFitPatches(
     const std::vector<StoredRef>& group, int min_patches) const {
-  // The flat ones (see max_psf_fit_depth_spread), evenly over the views.
+  // The flat ones (see SelfCalibrationOptions::max_depth_spread), evenly
+  // over the views.
   std::vector<StoredRef> flat;
   std::vector<std::pair<double, size_t>> by_spread;
   for (size_t k = 0; k < group.size(); ++k) {
@@ -83,7 +84,8 @@ std::vector<ProfilePatch> DPScaleEstimator::ProfileFitPatches(
     const ViewData& v = *views_[ref.view];
     const double spread = v.samples[v.stored[ref.stored].sample].depth_spread;
     by_spread.emplace_back(spread, k);
-    if (spread <= options_.max_psf_fit_depth_spread) flat.push_back(ref);
+    if (spread <= options_.self_calibration.max_depth_spread)
+      flat.push_back(ref);
   }
   const size_t enough = 2 * static_cast<size_t>(min_patches);
   if (flat.size() < enough) {
@@ -97,10 +99,10 @@ std::vector<ProfilePatch> DPScaleEstimator::ProfileFitPatches(
           return a.view != b.view ? a.view < b.view : a.stored < b.stored;
         });
   }
-  const size_t step =
-      std::max<size_t>(1,
-                       (flat.size() + options_.max_psf_fit_patches - 1) /
-                           options_.max_psf_fit_patches);
+  const size_t step = std::max<size_t>(
+      1,
+      (flat.size() + options_.self_calibration.max_patches - 1) /
+          options_.self_calibration.max_patches);
   std::vector<ProfilePatch> patches;
   for (size_t k = 0; k < flat.size(); k += step) {
     const StoredCrop& st = views_[flat[k].view]->stored[flat[k].stored];
@@ -124,7 +126,8 @@ int DPScaleEstimator::ReestimateStoredPatches(
   int failed = 0;
   for (const auto& g : groups) {
     BlurEstimationOptions blur = options_.blur;
-    blur.max_radius_px = options_.psf_fit_radius_factor * g.first.second;
+    blur.max_radius_px =
+        options_.self_calibration.radius_factor * g.first.second;
     std::vector<std::unique_ptr<PatchBlurEstimator>> estimators;
     for (const auto& band : fitted) {
       estimators.emplace_back(
@@ -182,15 +185,16 @@ void DPScaleEstimator::CalibrateProfile(
     }
   }
   if (largest == nullptr) {
-    result->psf_status =
+    result->psf.status =
         "self-calibration could not determine the DP profile (no stored "
         "patch to fit it to: no view had usable texture and depth); " +
         psf_->Name() + " kept";
     return;
   }
-  SplitProfileFitOptions fit_options = options_.psf_fit;
+  SplitProfileFitOptions fit_options = options_.self_calibration.fit;
   fit_options.blur = options_.blur;
-  fit_options.blur.max_radius_px = options_.psf_fit_radius_factor * bound;
+  fit_options.blur.max_radius_px =
+      options_.self_calibration.radius_factor * bound;
   fit_options.num_threads = options_.num_threads;
   fit_options.seed = options_.seed;
   const std::vector<ProfilePatch> patches =
@@ -198,7 +202,7 @@ void DPScaleEstimator::CalibrateProfile(
   SplitProfileCalibration calibration;
   try {
     calibration = CalibrateSplitProfile(patches,
-                                        options_.psf_fit_bands,
+                                        options_.self_calibration.bands,
                                         fit_options,
                                         0.02,
                                         /*bands_when_frame_fits=*/false,
@@ -206,11 +210,10 @@ void DPScaleEstimator::CalibrateProfile(
   } catch (const CheckFailure& e) {
     calibration.summary = e.what();  // said in the status below
   }
-  result->psf_fit = calibration.frame;
-  result->psf_fit_searches_reused = calibration.searches_reused;
-  result->psf_fit_searches_run = calibration.searches_run;
-  if (options_.psf_self_calibration ==
-      DPScaleOptions::SelfCalibration::kCheck) {
+  result->psf.fit = calibration.frame;
+  result->psf.fit_searches_reused = calibration.searches_reused;
+  result->psf.fit_searches_run = calibration.searches_run;
+  if (options_.self_calibration.mode == SelfCalibrationOptions::Mode::kCheck) {
     CheckTranslatingDisk(calibration, result);
     return;
   }
@@ -220,19 +223,19 @@ void DPScaleEstimator::CalibrateProfile(
   // may keep the translating disk).
   std::vector<std::shared_ptr<const DPPsfModel>> fitted;
   if (calibration.banded) {
-    result->psf_band_fits = calibration.bands;
+    result->psf.band_fits = calibration.bands;
     for (const SplitProfileFit& band : calibration.bands) {
       fitted.push_back(ProfileOf(band));
     }
   } else if (!fit.determined) {
     status << "self-calibration could not determine the DP profile ("
            << calibration.summary << "); " << psf_->Name() << " kept";
-    result->psf_status = status.str();
+    result->psf.status = status.str();
     return;
   } else if (fit.translating_disk) {
     status << "self-calibration kept the translating disk (" << fit.reason
            << ")";
-    result->psf_status = status.str();
+    result->psf.status = status.str();
     return;
   } else {
     fitted.push_back(ProfileOf(fit));
@@ -260,8 +263,8 @@ void DPScaleEstimator::CalibrateProfile(
   if (failures > 0) {
     status << " (" << failures << " could not be searched and were left out)";
   }
-  result->psf_status = status.str();
-  result->psf_self_calibrated = true;
+  result->psf.status = status.str();
+  result->psf.self_calibrated = true;
   *field = fitted_field;
 }
 
@@ -270,14 +273,14 @@ void DPScaleEstimator::CheckTranslatingDisk(
   const SplitProfileFit& fit = calibration.frame;
   if (!calibration.banded && !fit.determined) {
     // The scale carries the offsets the data allow (ProfileScaleFactors).
-    result->psf_status =
+    result->psf.status =
         "self-calibration could not check the translating "
         "disk (" +
         calibration.summary + ")";
     return;
   }
   if (!calibration.banded && fit.translating_disk) {
-    result->psf_status =
+    result->psf.status =
         "the data agree with the translating disk (" + fit.reason + ")";
     return;
   }
@@ -295,7 +298,7 @@ void DPScaleEstimator::CheckTranslatingDisk(
     WidenByConsistentOffsets(
         f, f.translating_disk_centroid_offset, &low, &high);
   }
-  result->psf_rejected = true;
+  result->psf.rejected = true;
   result->refusal.disk.fit_summary =
       calibration.banded ? calibration.summary : fit.reason;
   result->refusal.disk.factor_low = low;
@@ -306,11 +309,11 @@ void DPScaleEstimator::ProfileScaleFactors(const DPPsfField& field,
                                            const DPScaleResult& result,
                                            double* low,
                                            double* high) const {
-  if (!result.psf_band_fits.empty() && field.cells.size() > 1) {
-    ProfileScaleFactorsOf(result.psf_band_fits, true, low, high);
+  if (!result.psf.band_fits.empty() && field.cells.size() > 1) {
+    ProfileScaleFactorsOf(result.psf.band_fits, true, low, high);
   } else {
     ProfileScaleFactorsOf(
-        {result.psf_fit}, result.psf_self_calibrated, low, high);
+        {result.psf.fit}, result.psf.self_calibrated, low, high);
   }
 }
 

@@ -24,7 +24,7 @@ ScaleCue DPScaleEstimator::DPCue(const LinearEstimate& linear) const {
   cue.scale = linear.scale;
   cue.ci_low = linear.scale_ci_low;
   cue.ci_high = linear.scale_ci_high;
-  cue.valid = linear.num_rows >= options_.min_total_patches &&
+  cue.valid = linear.num_rows >= options_.interval.min_total_patches &&
               linear.scale > 0 && cue.ci_low > 0 &&
               std::isfinite(cue.ci_high) && cue.ci_high >= cue.ci_low;
   return cue;
@@ -87,10 +87,11 @@ ScaleCue DPScaleEstimator::RecordedFocusCue(const LinearEstimate& linear,
   // quadrature with the bootstrap's halves.
   const double bracket = Percentile(brackets, 0.5);
   const double sys =
-      scale * std::sqrt(std::pow(options_.recorded_focus_tolerance, 2) +
-                        bracket * bracket +
-                        std::pow(options_.scale_systematic_uncertainty, 2) +
-                        lens_geometry * lens_geometry);
+      scale *
+      std::sqrt(std::pow(options_.interval.recorded_focus_tolerance, 2) +
+                bracket * bracket +
+                std::pow(options_.interval.scale_systematic_uncertainty, 2) +
+                lens_geometry * lens_geometry);
   cue.scale = scale;
   cue.ci_low = scale - std::hypot(scale - lo, sys);
   cue.ci_high = scale + std::hypot(hi - scale, sys);
@@ -111,39 +112,40 @@ bool DPScaleEstimator::AdoptCombinedCues(const LinearEstimate& linear,
                                          DPScaleResult* result,
                                          CueRefusal* refusal) const {
   const CombinedScale combined =
-      CombineScaleCues(result->dp_cue, result->focus_cue);
+      CombineScaleCues(result->cues.dp, result->cues.focus);
   const double width = (combined.ci_high - combined.ci_low) / combined.scale;
-  result->cue_agreement = combined.agreement;
+  result->cues.agreement = combined.agreement;
   std::ostringstream s;
   s << std::setprecision(4);
-  if (!(width <= options_.max_scale_ci_relative_width) ||
+  if (!(width <= options_.interval.max_scale_ci_relative_width) ||
       !(combined.ci_low > 0)) {
     refusal->cause = combined.agreement == CueAgreement::kDisagree
                          ? CueRefusalCause::kDisagree
                          : CueRefusalCause::kTooWide;
-    refusal->dp = result->dp_cue;
-    refusal->focus = result->focus_cue;
+    refusal->dp = result->cues.dp;
+    refusal->focus = result->cues.focus;
     refusal->width = width;
-    refusal->limit = options_.max_scale_ci_relative_width;
+    refusal->limit = options_.interval.max_scale_ci_relative_width;
     refusal->calibrated =
-        options_.psf_self_calibration == DPScaleOptions::SelfCalibration::kOff;
+        options_.self_calibration.mode == SelfCalibrationOptions::Mode::kOff;
     refusal->how = combined.how;
     return false;
   }
-  result->scale_from_cues = true;
-  result->scale_from_recorded_focus =
+  result->cues.combined = true;
+  result->cues.scale_from_recorded_focus =
       combined.agreement == CueAgreement::kOneCue;
-  result->pinned_profile_strength = result->focus_cue.scale / linear.scale;
+  result->cues.pinned_profile_strength =
+      result->cues.focus.scale / linear.scale;
   result->scale = combined.scale;
   result->scale_ci_low = combined.ci_low;
   result->scale_ci_high = combined.ci_high;
-  result->scale_source = combined.source;
-  result->combination = combined.how;
+  result->cues.source = combined.source;
+  result->cues.combination = combined.how;
   s << "the scale comes from " << combined.source << ": " << combined.how
     << "; the recorded focus pins the profile's strength at "
-    << std::setprecision(2) << result->pinned_profile_strength
+    << std::setprecision(2) << result->cues.pinned_profile_strength
     << " x the one used";
-  result->psf_status += (result->psf_status.empty() ? "" : "; ") + s.str();
+  result->psf.status += (result->psf.status.empty() ? "" : "; ") + s.str();
   return true;
 }
 
@@ -152,7 +154,7 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
   // the DP profile; a recorded focus distance (converted to the thin lens's
   // object distance) then gives the scale without any PSF.
   std::vector<double> scales;
-  result->focus_scale = kNaN;
+  result->cues.focus_scale = kNaN;
   for (size_t i = 0; i < result->views.size(); ++i) {
     DPViewResult& out = result->views[i];
     const DPLensData& lens = views_[i]->lens;
@@ -171,38 +173,41 @@ void DPScaleEstimator::CheckAgainstRecordedFocus(DPScaleResult* result) const {
     }
   }
   if (scales.empty()) return;
-  result->focus_scale = Percentile(scales, 0.5);
-  result->focus_scale_ratio = result->dp_cue.scale / result->focus_scale;
+  result->cues.focus_scale = Percentile(scales, 0.5);
+  result->cues.focus_scale_ratio =
+      result->cues.dp.scale / result->cues.focus_scale;
   std::ostringstream s;
   s << std::setprecision(4) << "the recorded focus distances of "
-    << scales.size() << " used view(s) give a scale of " << result->focus_scale;
-  if (result->focus_cue.valid) {
-    s << " in [" << result->focus_cue.ci_low << ", "
-      << result->focus_cue.ci_high << "] (profile-free)";
+    << scales.size() << " used view(s) give a scale of "
+    << result->cues.focus_scale;
+  if (result->cues.focus.valid) {
+    s << " in [" << result->cues.focus.ci_low << ", "
+      << result->cues.focus.ci_high << "] (profile-free)";
   }
-  if (result->dp_cue.valid) {
-    s << "; the DP data alone give " << result->dp_cue.scale << " in ["
-      << result->dp_cue.ci_low << ", " << result->dp_cue.ci_high << "], "
+  if (result->cues.dp.valid) {
+    s << "; the DP data alone give " << result->cues.dp.scale << " in ["
+      << result->cues.dp.ci_low << ", " << result->cues.dp.ci_high << "], "
       << std::showpos << std::fixed << std::setprecision(1)
-      << 100 * (result->focus_scale_ratio - 1) << std::noshowpos << " % off it";
-    result->focus_agrees =
-        result->focus_cue.valid &&
-        CombineScaleCues(result->dp_cue, result->focus_cue).agreement ==
+      << 100 * (result->cues.focus_scale_ratio - 1) << std::noshowpos
+      << " % off it";
+    result->cues.focus_agrees =
+        result->cues.focus.valid &&
+        CombineScaleCues(result->cues.dp, result->cues.focus).agreement ==
             CueAgreement::kAgree;
-    if (result->focus_agrees) {
+    if (result->cues.focus_agrees) {
       s << ": they agree (core/scale/scale_cues.h)";
     } else {
       s << ": they DISAGREE (core/scale/scale_cues.h); a DP profile "
-        << std::setprecision(2) << result->focus_scale_ratio
+        << std::setprecision(2) << result->cues.focus_scale_ratio
         << " x as strong as the one used would reconcile them";
     }
   } else {
-    result->focus_agrees = true;
+    result->cues.focus_agrees = true;
     s << "; the DP data alone leave the scale open";
   }
   // How the answer was formed follows in the COLMAP layer's words
   // (colmap/report/refusal_text: FocusCheckText).
-  result->focus_check = s.str();
+  result->cues.focus_check = s.str();
 }
 
 }  // namespace dpsfm

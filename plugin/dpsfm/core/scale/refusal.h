@@ -33,7 +33,7 @@ struct PatchAccount {
   int at_search_bound = 0;
   double max_radius_px = 0;
   // The blur a measured profile's calibration covered
-  // (DPScaleOptions::profile_covered_radius_px; 0: none).
+  // (PatchGeometryOptions::profile_covered_radius_px; 0: none).
   double profile_covered_radius_px = 0;
 
   // At least half the patches had texture too weak for the noise: the
@@ -93,7 +93,7 @@ enum class OpenScaleCause {
 
 struct OpenScale {
   OpenScaleCause cause = OpenScaleCause::kNone;
-  // kTooFewPatches: rows of the joint solve and DPScaleOptions'
+  // kTooFewPatches: rows of the joint solve and ScaleIntervalOptions::
   // min_total_patches.
   int num_rows = 0;
   int min_total_patches = 0;
@@ -101,18 +101,17 @@ struct OpenScale {
   std::string interval_status;
   // The linear stage's scale and interval (with every systematic term and
   // the profile's factors), the interval's width relative to the scale, and
-  // DPScaleOptions' max_scale_ci_relative_width.
+  // ScaleIntervalOptions::max_scale_ci_relative_width.
   double scale = 0, ci_low = 0, ci_high = 0;
   double width = 0, limit = 0;
-  // kCalibratedProfile: DPScaleOptions' profile_relative_uncertainty, and
-  // whether a recorded focus already joins the DP data (then recording one
-  // is not the advice).
+  // kCalibratedProfile: ScaleIntervalOptions::profile_relative_uncertainty,
+  // and whether a recorded focus already joins the DP data (then recording
+  // one is not the advice).
   double profile_relative_uncertainty = 0;
   bool focus_recorded = false;
   // kUnknownProfile: the self-calibration's reason (may be ""), and, when a
   // fitted profile replaced the given one, the relative uncertainty of its
-  // strength beyond the fit (DPScaleOptions'
-  // self_calibration_shape_uncertainty).
+  // strength beyond the fit (SelfCalibrationOptions::shape_uncertainty).
   std::string fit_reason;
   bool self_calibrated = false;
   double shape_uncertainty = 0;
@@ -165,7 +164,7 @@ struct DPScaleRefusal {
   PatchAccount patches;
   // kLinearStageFailed with a self-calibrated profile: how many times
   // larger than the profile used reads them the profiles the data allow
-  // would read the blur (1 / DPScaleResult::profile_scale_factor_low; +inf
+  // would read the blur (1 / DPPsfResult::scale_factor_low; +inf
   // when they are not bounded; 1 with a given profile). A view's blur range
   // under T_p is then "too little blur" only when this is near 1.
   double blur_read_factor = 1;

@@ -35,7 +35,7 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-bool DPScaleOptions::Check(std::string* failure) const {
+bool PatchGeometryOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(patch_size, 0);
   DPSFM_CHECK_OPTION_GE(stride, 0);
   DPSFM_CHECK_OPTION_GE(max_radius_px, 0);
@@ -47,6 +47,10 @@ bool DPScaleOptions::Check(std::string* failure) const {
   // 0 is automatic.
   DPSFM_CHECK_OPTION_VALUE(resize_factor >= 0 && resize_factor <= 1,
                            resize_factor);
+  return true;
+}
+
+bool PatchSelectionOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_VALUE(top_patch_fraction > 0 && top_patch_fraction <= 1,
                            top_patch_fraction);
   DPSFM_CHECK_OPTION_GE(min_patches_per_view, 0);
@@ -61,31 +65,50 @@ bool DPScaleOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GE(min_texture_snr, 0);
   DPSFM_CHECK_OPTION_GE(max_relative_residual, 0);
   DPSFM_CHECK_OPTION_GE(relative_residual_factor, 0);
-  DPSFM_CHECK_OPTION_GT(max_intensity_ci_relative_width, 0);
+  return true;
+}
+
+bool IntensityStageOptions::Check(std::string* failure) const {
+  DPSFM_CHECK_OPTION_GT(max_ci_relative_width, 0);
+  DPSFM_CHECK_OPTION_VALUE(
+      min_bootstrap_support >= 0 && min_bootstrap_support <= 1,
+      min_bootstrap_support);
+  DPSFM_CHECK_NESTED_OPTIONS(search);
+  return true;
+}
+
+bool ScaleIntervalOptions::Check(std::string* failure) const {
   DPSFM_CHECK_OPTION_GT(max_scale_ci_relative_width, 0);
   DPSFM_CHECK_OPTION_GE(recorded_focus_tolerance, 0);
-  DPSFM_CHECK_OPTION_VALUE(self_calibration_shape_uncertainty >= 0 &&
-                               self_calibration_shape_uncertainty < 1,
-                           self_calibration_shape_uncertainty);
   DPSFM_CHECK_OPTION_GE(min_total_patches, 0);
   DPSFM_CHECK_OPTION_GE(scale_systematic_uncertainty, 0);
   DPSFM_CHECK_OPTION_GE(lens_geometry_uncertainty, 0);
   DPSFM_CHECK_OPTION_VALUE(
       profile_relative_uncertainty >= 0 && profile_relative_uncertainty < 1,
       profile_relative_uncertainty);
-  DPSFM_CHECK_OPTION_VALUE(min_intensity_bootstrap_support >= 0 &&
-                               min_intensity_bootstrap_support <= 1,
-                           min_intensity_bootstrap_support);
-  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
-  DPSFM_CHECK_OPTION_GE(max_psf_fit_patches, 1);
-  DPSFM_CHECK_OPTION_VALUE(
-      psf_fit_radius_factor >= 1 && psf_fit_radius_factor <= 4,
-      psf_fit_radius_factor);
-  DPSFM_CHECK_OPTION_GE(psf_fit_bands, 1);
-  DPSFM_CHECK_OPTION_GE(max_psf_fit_depth_spread, 0);
-  if (psf_self_calibration != SelfCalibration::kOff) {
-    DPSFM_CHECK_NESTED_OPTIONS(psf_fit);
+  return true;
+}
+
+bool SelfCalibrationOptions::Check(std::string* failure) const {
+  DPSFM_CHECK_OPTION_VALUE(shape_uncertainty >= 0 && shape_uncertainty < 1,
+                           shape_uncertainty);
+  DPSFM_CHECK_OPTION_GE(max_patches, 1);
+  DPSFM_CHECK_OPTION_VALUE(radius_factor >= 1 && radius_factor <= 4,
+                           radius_factor);
+  DPSFM_CHECK_OPTION_GE(bands, 1);
+  DPSFM_CHECK_OPTION_GE(max_depth_spread, 0);
+  if (mode != Mode::kOff) {
+    DPSFM_CHECK_NESTED_OPTIONS(fit);
   }
+  return true;
+}
+
+bool DPScaleOptions::Check(std::string* failure) const {
+  DPSFM_CHECK_NESTED_OPTIONS(geometry);
+  DPSFM_CHECK_NESTED_OPTIONS(patches);
+  DPSFM_CHECK_NESTED_OPTIONS(interval);
+  DPSFM_CHECK_OPTION_VALUE(num_threads == -1 || num_threads > 0, num_threads);
+  DPSFM_CHECK_NESTED_OPTIONS(self_calibration);
   DPSFM_CHECK_NESTED_OPTIONS(blur);
   DPSFM_CHECK_NESTED_OPTIONS(linear);
   DPSFM_CHECK_NESTED_OPTIONS(intensity);
@@ -102,8 +125,8 @@ DPScaleEstimator::DPScaleEstimator(const DPScaleOptions& options,
   DPSFM_CHECK_OPTIONS(options_, "DPScaleOptions");
   field_.CheckValid();
   DPSFM_CHECK(field_.cells.size() == 1 ||
-              options_.psf_self_calibration ==
-                  DPScaleOptions::SelfCalibration::kOff)
+              options_.self_calibration.mode ==
+                  SelfCalibrationOptions::Mode::kOff)
       << "self-calibration fits one profile for the whole frame";
   psf_ = field_.cells[0];
   blur_estimators_.reset(
@@ -213,7 +236,7 @@ bool DPScaleEstimator::LinearStage(
     result->refusal.error = e.what();
     return false;
   }
-  result->seconds_linear = SecondsSince(start);
+  result->seconds.linear = SecondsSince(start);
   return true;
 }
 
@@ -270,14 +293,15 @@ PatchAccount DPScaleEstimator::AccountForPatches() const {
                       v->summary.max_radius_px});
   }
   PatchAccount account = AccountPatches(counts);
-  account.profile_covered_radius_px = options_.profile_covered_radius_px;
+  account.profile_covered_radius_px =
+      options_.geometry.profile_covered_radius_px;
   return account;
 }
 
 double DPScaleEstimator::LensGeometryTerm(
     const LinearEstimate& linear,
     const std::vector<std::vector<PatchSample>>& samples) const {
-  if (!(options_.lens_geometry_uncertainty > 0)) return 0;
+  if (!(options_.interval.lens_geometry_uncertainty > 0)) return 0;
   std::vector<double> ratios;
   for (int i : linear.selected_views) {
     for (const PatchSample& p : samples[i]) {
@@ -288,7 +312,7 @@ double DPScaleEstimator::LensGeometryTerm(
     }
   }
   if (ratios.empty()) return 0;
-  return options_.lens_geometry_uncertainty * Percentile(ratios, 0.5);
+  return options_.interval.lens_geometry_uncertainty * Percentile(ratios, 0.5);
 }
 
 SearchBoundAccount DPScaleEstimator::AccountForSearchBound() const {
@@ -304,9 +328,9 @@ SearchBoundAccount DPScaleEstimator::AccountForSearchBound() const {
   }
   b.limits = b.patches_searched > 0 &&
              !(b.patches_beyond_bound <
-               options_.search_bound_share * b.patches_searched);
+               options_.geometry.search_bound_share * b.patches_searched);
   b.larger_radius_px = std::ceil(LargerSearchBound(b.max_radius_px));
-  b.profile_covered_radius_px = options_.profile_covered_radius_px;
+  b.profile_covered_radius_px = options_.geometry.profile_covered_radius_px;
   return b;
 }
 
@@ -316,7 +340,7 @@ void DPScaleEstimator::AccountForExtrapolation(
     SearchBoundAccount* bound) const {
   SearchBoundAccount& b = *bound;
   if (!(b.profile_covered_radius_px > 0) ||
-      options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
+      options_.self_calibration.mode != SelfCalibrationOptions::Mode::kOff) {
     return;
   }
   std::vector<double> beyond;  // ln(|r| / covered) of those beyond
@@ -332,32 +356,32 @@ void DPScaleEstimator::AccountForExtrapolation(
   }
   b.samples_beyond_coverage = static_cast<int>(beyond.size());
   if (beyond.empty()) return;
-  b.extrapolation_uncertainty = options_.profile_relative_uncertainty *
+  b.extrapolation_uncertainty = options_.interval.profile_relative_uncertainty *
                                 beyond.size() / b.samples *
                                 Percentile(beyond, 0.5);
 }
 
 void DPScaleEstimator::SetProfileScaleFactors(const DPPsfField& field,
                                               DPScaleResult* result) const {
-  if (options_.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
+  if (options_.self_calibration.mode != SelfCalibrationOptions::Mode::kOff) {
     ProfileScaleFactors(field,
                         *result,
-                        &result->profile_scale_factor_low,
-                        &result->profile_scale_factor_high);
-    if (result->psf_self_calibrated) {
+                        &result->psf.scale_factor_low,
+                        &result->psf.scale_factor_high);
+    if (result->psf.self_calibrated) {
       // A fitted profile's shape: another kernel pair can satisfy the
       // cross-view identity as well as the family member that was fitted.
-      const double u = options_.self_calibration_shape_uncertainty;
-      result->profile_scale_factor_low *= 1 - u;
-      result->profile_scale_factor_high *= 1 + u;
+      const double u = options_.self_calibration.shape_uncertainty;
+      result->psf.scale_factor_low *= 1 - u;
+      result->psf.scale_factor_high *= 1 + u;
     }
   } else {
     // A measured profile extended beyond the blur it covered
     // (AccountForSearchBound) is less certain there.
-    const double u = std::hypot(options_.profile_relative_uncertainty,
+    const double u = std::hypot(options_.interval.profile_relative_uncertainty,
                                 result->search_bound.extrapolation_uncertainty);
-    result->profile_scale_factor_low = 1 - u;
-    result->profile_scale_factor_high = 1 + u;
+    result->psf.scale_factor_low = 1 - u;
+    result->psf.scale_factor_high = 1 + u;
   }
 }
 
@@ -368,35 +392,36 @@ OpenScale DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
                                           const DPScaleResult& result) const {
   OpenScale open;
   open.num_rows = linear.num_rows;
-  open.min_total_patches = options_.min_total_patches;
+  open.min_total_patches = options_.interval.min_total_patches;
   open.interval_status = linear.interval_status;
   open.scale = linear.scale;
   open.ci_low = linear.scale_ci_low;
   open.ci_high = linear.scale_ci_high;
   open.width = (linear.scale_ci_high - linear.scale_ci_low) / linear.scale;
-  open.limit = options_.max_scale_ci_relative_width;
-  open.profile_relative_uncertainty = options_.profile_relative_uncertainty;
-  open.focus_recorded = result.focus_cue.valid;
-  open.fit_reason = result.psf_fit.reason;
-  open.self_calibrated = result.psf_self_calibrated;
-  open.shape_uncertainty = options_.self_calibration_shape_uncertainty;
+  open.limit = options_.interval.max_scale_ci_relative_width;
+  open.profile_relative_uncertainty =
+      options_.interval.profile_relative_uncertainty;
+  open.focus_recorded = result.cues.focus.valid;
+  open.fit_reason = result.psf.fit.reason;
+  open.self_calibrated = result.psf.self_calibrated;
+  open.shape_uncertainty = options_.self_calibration.shape_uncertainty;
   const double width = open.width;
   const double limit = open.limit;
   const bool no_interval = !std::isfinite(statistical_width);
   // The profile is what leaves the scale open: on its own, or on top of an
   // interval that would have been narrow enough.
   const double profile_width =
-      result.profile_scale_factor_high - result.profile_scale_factor_low;
+      result.psf.scale_factor_high - result.psf.scale_factor_low;
   const bool profile_open =
       !no_interval && !(width <= limit) &&
       (!(profile_width <= limit) ||
        (statistical_ci_high - statistical_ci_low) / linear.scale <= limit);
-  if (linear.num_rows < options_.min_total_patches) {
+  if (linear.num_rows < options_.interval.min_total_patches) {
     open.cause = OpenScaleCause::kTooFewPatches;
   } else if (no_interval) {
     open.cause = OpenScaleCause::kNoInterval;
-  } else if (profile_open && options_.psf_self_calibration ==
-                                 DPScaleOptions::SelfCalibration::kOff) {
+  } else if (profile_open && options_.self_calibration.mode ==
+                                 SelfCalibrationOptions::Mode::kOff) {
     open.cause = OpenScaleCause::kCalibratedProfile;
   } else if (profile_open) {
     open.cause = OpenScaleCause::kUnknownProfile;
@@ -407,16 +432,16 @@ OpenScale DPScaleEstimator::LinearRefusal(const LinearEstimate& linear,
 }
 
 bool DPScaleEstimator::RecordedFocusJoins(const DPScaleResult& result) const {
-  return options_.pin_to_recorded_focus && result.focus_cue.valid;
+  return options_.interval.pin_to_recorded_focus && result.cues.focus.valid;
 }
 
 bool DPScaleEstimator::JoinRecordedFocus(const LinearEstimate& linear,
                                          DPScaleResult* result) const {
   // The DP data answered on their own; the recorded focus joins them.
-  result->dp_cue.valid = true;
-  result->dp_cue.scale = result->scale;
-  result->dp_cue.ci_low = result->scale_ci_low;
-  result->dp_cue.ci_high = result->scale_ci_high;
+  result->cues.dp.valid = true;
+  result->cues.dp.scale = result->scale;
+  result->cues.dp.ci_low = result->scale_ci_low;
+  result->cues.dp.ci_high = result->scale_ci_high;
   if (RecordedFocusJoins(*result)) {
     if (!AdoptCombinedCues(linear, result, &result->refusal.cues)) {
       result->refusal.code = ScaleRefusal::kCuesNotCombined;
@@ -424,8 +449,8 @@ bool DPScaleEstimator::JoinRecordedFocus(const LinearEstimate& linear,
     }
     return true;
   }
-  result->scale_source = "DP data";
-  result->dp_data_alone = true;
+  result->cues.source = "DP data";
+  result->cues.dp_data_alone = true;
   return true;
 }
 
@@ -455,15 +480,15 @@ void DPScaleEstimator::SelfCalibrate(
     std::vector<std::vector<PatchSample>>* samples,
     DPPsfField* field,
     DPScaleResult* result) const {
-  if (options_.psf_self_calibration == DPScaleOptions::SelfCalibration::kOff ||
+  if (options_.self_calibration.mode == SelfCalibrationOptions::Mode::kOff ||
       field_.cells.size() != 1) {
     return;
   }
   const auto fit_start = std::chrono::steady_clock::now();
   CalibrateProfile(
       samples, field, caches != nullptr ? &caches->profile : nullptr, result);
-  result->psf_fit_ran = true;
-  result->seconds_psf_fit = SecondsSince(fit_start);
+  result->psf.fit_ran = true;
+  result->seconds.psf_fit = SecondsSince(fit_start);
 }
 
 void DPScaleEstimator::RefuseLinearFailure(const LinearEstimate& linear,
@@ -473,11 +498,11 @@ void DPScaleEstimator::RefuseLinearFailure(const LinearEstimate& linear,
   result->refusal.code = ScaleRefusal::kLinearStageFailed;
   result->refusal.linear_failure = linear.failure;
   result->refusal.patches = account;
-  if (result->psf_fit_ran) {
+  if (result->psf.fit_ran) {
     // Whether the blur the views show is small, or only read small by a
     // profile the data leave open.
     SetProfileScaleFactors(field, result);
-    const double low = result->profile_scale_factor_low;
+    const double low = result->psf.scale_factor_low;
     result->refusal.blur_read_factor =
         low > 0 ? 1 / low : std::numeric_limits<double>::infinity();
   }
@@ -501,10 +526,10 @@ DPScaleEstimator::IntervalTerms DPScaleEstimator::WidenLinearInterval(
   AccountForExtrapolation(*linear, samples, &result->search_bound);
   SetProfileScaleFactors(field, result);
   IntervalTerms terms;
-  terms.systematic = options_.scale_systematic_uncertainty;
+  terms.systematic = options_.interval.scale_systematic_uncertainty;
   terms.lens_geometry = lens_geometry;
-  terms.profile_low = result->profile_scale_factor_low;
-  terms.profile_high = result->profile_scale_factor_high;
+  terms.profile_low = result->psf.scale_factor_low;
+  terms.profile_high = result->psf.scale_factor_high;
   statistical->width =
       (linear->scale_ci_high - linear->scale_ci_low) / linear->scale;
   terms.Widen(linear->scale, &linear->scale_ci_low, &linear->scale_ci_high);
@@ -520,9 +545,9 @@ bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
                                         DPScaleResult* result) const {
   // The recorded-focus cue (profile-free); used in the answer when
   // pin_to_recorded_focus allows it, reported as evidence either way.
-  result->focus_cue =
+  result->cues.focus =
       RecordedFocusCue(linear, result->lens_geometry_uncertainty);
-  result->dp_cue = DPCue(linear);
+  result->cues.dp = DPCue(linear);
   // What the linear stage found, kept in the result (and the report) even
   // when the interval check below refuses it.
   result->scale_initial = linear.scale;
@@ -542,15 +567,15 @@ bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
       result->refusal.code = ScaleRefusal::kScaleOpen;
       result->refusal.open = open;
       result->refusal.cues = cues;
-      result->refusal.recorded_focus_missing = options_.pin_to_recorded_focus &&
-                                               !result->focus_cue.valid &&
-                                               RecordedFocusMissing(linear);
+      result->refusal.recorded_focus_missing =
+          options_.interval.pin_to_recorded_focus &&
+          !result->cues.focus.valid && RecordedFocusMissing(linear);
       result->refusal.patches = account;
       return false;
     }
   }
   result->linear_median_abs_residual_px = linear.median_abs_residual_px;
-  if (!result->scale_from_cues) {
+  if (!result->cues.combined) {
     result->scale = linear.scale;
     result->scale_ci_low = linear.scale_ci_low;
     result->scale_ci_high = linear.scale_ci_high;
@@ -561,7 +586,7 @@ bool DPScaleEstimator::AdoptLinearStage(const LinearEstimate& linear,
 
 DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
   DPScaleResult result;
-  for (const auto& v : views_) result.seconds_blur += v->summary.seconds;
+  for (const auto& v : views_) result.seconds.blur += v->summary.seconds;
   result.search_bound = AccountForSearchBound();
   if (views_.empty()) {
     result.refusal.code = ScaleRefusal::kNoViews;
@@ -573,8 +598,8 @@ DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
   for (const auto& v : views_) samples.push_back(v->samples);
   DPPsfField field = field_;
   SelfCalibrate(caches, &samples, &field, &result);
-  result.psf_model = field.Name();
-  if (result.psf_rejected) {
+  result.psf.model = field.Name();
+  if (result.psf.rejected) {
     result.refusal.code = ScaleRefusal::kTranslatingDiskRejected;
     return result;
   }
@@ -600,8 +625,8 @@ DPScaleResult DPScaleEstimator::Estimate(EstimateCaches* caches) const {
                  terms,
                  caches != nullptr ? &caches->intensity : nullptr,
                  &result);
-  result.seconds_intensity = SecondsSince(start_intensity);
-  if (!result.scale_from_cues && !JoinRecordedFocus(linear, &result)) {
+  result.seconds.intensity = SecondsSince(start_intensity);
+  if (!result.cues.combined && !JoinRecordedFocus(linear, &result)) {
     return result;
   }
   // Focus distances and predicted blur under the final scale.

@@ -58,16 +58,16 @@ struct DPView {
   cv::Mat depth;
   // Sparse mode (used when `depth` is empty): the same patch grid as the
   // dense mode; a patch takes the median depth of the points inside it and
-  // needs DPScaleOptions::min_depth_points_per_patch of them, so patches sit
-  // where the points are and spread as they do.
+  // needs PatchSelectionOptions::min_depth_points_per_patch of them, so patches
+  // sit where the points are and spread as they do.
   std::vector<DepthPoint> depth_points;
 };
 
-struct DPScaleOptions {
-  // --- Patch geometry, in pixels of the working frame (the DP frame resized
-  // by resize_factor). 0 = automatic from DefaultPatchGeometry. An explicit
-  // max_radius_px sets how far the blur search reaches (and turns its
-  // growth off), not the patches: they are the automatic bound's.
+// Patch geometry, in pixels of the working frame (the DP frame resized by
+// resize_factor). 0 = automatic from DefaultPatchGeometry. An explicit
+// max_radius_px sets how far the blur search reaches (and turns its growth
+// off), not the patches: they are the automatic bound's.
+struct PatchGeometryOptions {
   int patch_size = 0;
   int stride = 0;
   double max_radius_px = 0;
@@ -96,10 +96,12 @@ struct DPScaleOptions {
   // search_bound.extrapolation_uncertainty).
   double profile_covered_radius_px = 0;
 
-  // Per-patch blur search (max_radius_px is taken from the geometry).
-  BlurEstimationOptions blur;
+  bool Check(std::string* failure = nullptr) const;
+};
 
-  // --- Patches.
+// Which patches a view keeps: their depth and texture, the blur search's
+// share, the top T_c selection, and the crops kept for the later stages.
+struct PatchSelectionOptions {
   // T_c: fraction of a view's valid patches kept, by confidence.
   double top_patch_fraction = 0.1;
   // Keep at least this many per view when available (a view needs
@@ -154,24 +156,29 @@ struct DPScaleOptions {
   double max_relative_residual = 0.002;
   double relative_residual_factor = 10;
 
-  // --- Linear stage (T_p, N_v, IRLS, bootstrap). Its seed and num_threads
-  // are replaced by the fields below.
-  LinearEstimatorOptions linear;
+  bool Check(std::string* failure = nullptr) const;
+};
 
-  // --- Intensity stage (candidates, T_s, refine pass, loss, bootstrap).
-  // Its seed and num_threads are replaced by the fields below, and its
-  // max_radius_px by the patch geometry's (the crops' border supports
-  // exactly that).
-  bool intensity_refinement = true;
-  IntensitySearchOptions intensity;
+// The intensity stage (candidates, T_s, refine pass, loss, bootstrap).
+struct IntensityStageOptions {
+  bool enabled = true;
+  // The search. Its seed and num_threads are replaced by DPScaleOptions',
+  // and its max_radius_px by the patch geometry's (the crops' border
+  // supports exactly that).
+  IntensitySearchOptions search;
   // The intensity scale replaces the linear one only if its bootstrap
   // interval is narrower than this fraction of the scale, its minimum is
   // inside the searched range, and at least this share of bootstrap
   // resamples agree with it; otherwise the linear scale is kept and the
   // result says why (the stage never makes things worse silently).
-  double max_intensity_ci_relative_width = 0.3;
-  double min_intensity_bootstrap_support = 0.5;
+  double max_ci_relative_width = 0.3;
+  double min_bootstrap_support = 0.5;
 
+  bool Check(std::string* failure = nullptr) const;
+};
+
+// When a scale is reported, and the terms of its interval.
+struct ScaleIntervalOptions {
   // Refusal: a scale is reported only if its 95 % interval (the linear
   // stage's bootstrap, the systematic term and the DP profile's own
   // uncertainty) is narrower than this fraction of it and the joint solve
@@ -214,34 +221,38 @@ struct DPScaleOptions {
   // (the report's focus_check), and such runs refuse.
   bool pin_to_recorded_focus = true;
 
-  // DP PSF self-calibration: before the linear stage, fit the split
-  // profile to the stored patches of all views, for the whole frame and for
-  // psf_fit_bands column bands (CalibrateSplitProfile).
+  bool Check(std::string* failure = nullptr) const;
+};
+
+// DP PSF self-calibration: before the linear stage, fit the split profile
+// to the stored patches of all views, for the whole frame and for `bands`
+// column bands (CalibrateSplitProfile).
+struct SelfCalibrationOptions {
   // - kFit (the `auto` profile, issue 7): when the data determine a profile
   //   other than the translating disk, the stored patches' blur is searched
   //   again with it (each band's where the profile changes across the
   //   frame) and both stages use those patches and profiles; otherwise the
   //   given PSF is kept and the result says why.
   // - kCheck (the translating disk, chosen explicitly by the user): the fit
-  // only checks the given disk and never
-  //   replaces it. When the data determine another profile the run refuses
-  //   (the paper's disk is not this sensor's: the R6 II's real scenes read
-  //   2.2-2.8x off under it with narrow intervals, docs/psf-profiles.md);
-  //   when they cannot determine one, the scale carries the range of
-  //   profiles they allow, as under kFit. A model chosen without evidence
-  //   from this camera is checked, not trusted.
+  //   only checks the given disk and never replaces it. When the data
+  //   determine another profile the run refuses (the paper's disk is not
+  //   this sensor's: the R6 II's real scenes read 2.2-2.8x off under it
+  //   with narrow intervals, docs/psf-profiles.md); when they cannot
+  //   determine one, the scale carries the range of profiles they allow, as
+  //   under kFit. A model chosen without evidence from this camera is
+  //   checked, not trusted.
   // - kOff: the profile is given (calibrated) and taken as it is.
-  enum class SelfCalibration { kOff, kFit, kCheck };
-  SelfCalibration psf_self_calibration = SelfCalibration::kOff;
-  SplitProfileFitOptions psf_fit;
+  enum class Mode { kOff, kFit, kCheck };
+  Mode mode = Mode::kOff;
+  SplitProfileFitOptions fit;
   // At most this many patches feed the fit (evenly over the views).
-  int max_psf_fit_patches = 400;
+  int max_patches = 400;
   // The fit uses patches on surfaces nearly parallel to the sensor (depth
-  // spread inside at most this), or the flattest 2 x psf_fit.min_patches
-  // if fewer: a blur gradient inside a patch is fitted better by a softer
+  // spread inside at most this), or the flattest 2 x fit.min_patches if
+  // fewer: a blur gradient inside a patch is fitted better by a softer
   // split and biased the fit (a translating-disk scene of slanted planes at
   // 85 mm read 7 % small with all patches).
-  double max_psf_fit_depth_spread = 0.02;
+  double max_depth_spread = 0.02;
   // Self-calibration searches blur up to this multiple of the blur stage's
   // bound, and the stored crops carry the border for it: the translating
   // disk reads a softer true split's blur up to ~1.5x small, so the true
@@ -249,8 +260,8 @@ struct DPScaleOptions {
   // bound as it was, the true profile lost those patches and the fit was
   // pulled back towards the translating disk: generated soft-split scenes
   // fitted p ~1.1 instead of 2.2).
-  double psf_fit_radius_factor = 2;
-  int psf_fit_bands = 3;
+  double radius_factor = 2;
+  int bands = 3;
   // Relative (95 %) uncertainty of a self-calibrated profile's strength
   // beyond its fit, applied when a fitted profile replaces the translating
   // disk: the cross-view identity G_l * H_r = G_r * H_l holds for any pair
@@ -258,7 +269,24 @@ struct DPScaleOptions {
   // a sensor outside the family perfectly at the wrong strength (an
   // apodized soft split: residual 0, centroid offset 0.164 R for 0.132 R,
   // scale 18 % off; psf_profile_bench). 0 trusts the family.
-  double self_calibration_shape_uncertainty = 0.2;
+  double shape_uncertainty = 0.2;
+
+  bool Check(std::string* failure = nullptr) const;
+};
+
+// DPScaleEstimator's options, by the stage or question they concern; Check()
+// checks each group with its own Check().
+struct DPScaleOptions {
+  PatchGeometryOptions geometry;
+  // Per-patch blur search (max_radius_px is taken from the geometry).
+  BlurEstimationOptions blur;
+  PatchSelectionOptions patches;
+  // Linear stage (T_p, N_v, IRLS, bootstrap). Its seed and num_threads are
+  // replaced by the fields below.
+  LinearEstimatorOptions linear;
+  IntensityStageOptions intensity;
+  ScaleIntervalOptions interval;
+  SelfCalibrationOptions self_calibration;
 
   // OpenMP threads for blur estimation, the linear stage's bootstrap and
   // the intensity search; -1 = all.
@@ -283,7 +311,7 @@ struct DPViewSummary {
   int patches_with_depth = 0;
   int patches_searched = 0;  // blur search run (see blur_search_factor)
   // The search bound the geometry gave, how often it grew
-  // (DPScaleOptions::search_bound_share), and the searched patches at the
+  // (PatchGeometryOptions::search_bound_share), and the searched patches at the
   // final bound (max_radius_px) by what their loss curves say
   // (BlurEvidence): beyond the bound, and undetermined (within the patch's
   // noise; left out).
@@ -343,8 +371,8 @@ struct DPViewResult {
 };
 
 // The blur-search bound as the views ended with it
-// (DPScaleOptions::search_bound_share), and how far a measured profile was
-// extended beyond the blur its calibration covered.
+// (PatchGeometryOptions::search_bound_share), and how far a measured profile
+// was extended beyond the blur its calibration covered.
 struct SearchBoundAccount {
   double initial_max_radius_px = 0;  // the largest bound the geometry gave
   double max_radius_px = 0;          // the largest bound searched
@@ -358,8 +386,8 @@ struct SearchBoundAccount {
   bool limits = false;
   // The bound that would search farther (LargerSearchBound, whole px).
   double larger_radius_px = 0;
-  // DPScaleOptions::profile_covered_radius_px, the selected patches of the
-  // used views beyond it, of all of them, and the relative (95 %) term the
+  // PatchGeometryOptions::profile_covered_radius_px, the selected patches of
+  // the used views beyond it, of all of them, and the relative (95 %) term the
   // extrapolation adds to the profile's uncertainty (in quadrature): the
   // profile's uncertainty times the share beyond times the median
   // ln(|r| / covered) of those beyond (0 when none are).
@@ -369,6 +397,90 @@ struct SearchBoundAccount {
   double extrapolation_uncertainty = 0;
 };
 
+// The intensity stage: whether its scale was adopted, and why (not).
+struct IntensityStageResult {
+  bool used = false;
+  std::string status;
+  double scale = 0;  // the search's minimiser (even if not used)
+  double ci_low = 0, ci_high = 0;
+  // Share of bootstrap resamples whose minimum lies within one first-pass
+  // step of `scale`.
+  double bootstrap_support = 0;
+  std::string loss;
+  // Patch loss evaluations of the search that threw and counted as nothing.
+  int failed_evaluations = 0;
+  // Its node statistics taken from an earlier Estimate's (the view
+  // budget's checkpoints) and computed.
+  int nodes_reused = 0, nodes_computed = 0;
+  // Intensity loss curve for the report plot.
+  std::vector<double> candidate_scales, candidate_losses;
+};
+
+// The DP PSF the stages used, what self-calibration did, and how far the
+// profiles the data allow move the scale.
+struct DPPsfResult {
+  // The DP PSF the stages used (DPPsfModel::Name()), and what
+  // self-calibration did ("" when it was off).
+  std::string model;
+  std::string status;
+  bool self_calibrated = false;  // a fitted profile replaced the given one
+  // SelfCalibrationOptions::Mode::kCheck: the data determined another
+  // profile than the given translating disk (the run refuses: refusal.disk;
+  // status is then "", the refusal's wording stands for it).
+  bool rejected = false;
+  // Whether self-calibration fitted a profile (`fit` holds its fit).
+  bool fit_ran = false;
+  // The whole frame's fit (and, for a profile changing across the frame,
+  // the bands' fits, left to right, when they were used).
+  SplitProfileFit fit;
+  std::vector<SplitProfileFit> band_fits;
+  // Its patch searches read from an earlier Estimate's (the view budget's
+  // checkpoints) and run.
+  int fit_searches_reused = 0, fit_searches_run = 0;
+  // The factors by which the profiles the data allow move the scale
+  // against the one used (self-calibration: the fits' consistent centroid
+  // offsets over the one used; 1 when the profile was given). The reported
+  // intervals include them; 0 / inf = not bounded.
+  double scale_factor_low = 1, scale_factor_high = 1;
+};
+
+// The two cues (core/scale/scale_cues.h), how the answer was formed from
+// them, and the recorded focus distances as evidence.
+struct ScaleCuesResult {
+  // `dp` is the DP data's own estimate and interval (valid = false when
+  // they give none), `focus` the recorded focus's.
+  ScaleCue dp, focus;
+  CueAgreement agreement = CueAgreement::kOneCue;
+  bool combined = false;  // the answer came through CombineScaleCues
+  std::string source;     // "DP data", "recorded focus", or both
+  // How the cues formed the answer (CombinedScale::how); "" when the DP
+  // data answered alone (dp_data_alone: the COLMAP layer words it, naming
+  // the option that keeps the recorded focus out).
+  std::string combination;
+  bool dp_data_alone = false;
+  // The scale (and interval) came from the recorded focus distances, the
+  // profile having left it open (ScaleIntervalOptions::
+  // pin_to_recorded_focus); the profile strength that reconciles the DP
+  // data with it, relative to the one used.
+  bool scale_from_recorded_focus = false;
+  double pinned_profile_strength = 0;
+  // Focus distances as evidence: the median scale the recorded focus
+  // distances imply (NaN without any), the DP data's scale over it,
+  // whether they agree within the interval and ScaleIntervalOptions::
+  // recorded_focus_tolerance, and a sentence for people.
+  double focus_scale = 0;
+  double focus_scale_ratio = 0;
+  bool focus_agrees = true;
+  std::string focus_check;
+};
+
+// Wall time of each stage (s).
+struct StageSeconds {
+  double blur = 0, psf_fit = 0, linear = 0, intensity = 0;
+};
+
+// What Estimate found: the answer (or the refusal) at the top, and each
+// stage's account in its own group.
 struct DPScaleResult {
   bool success = false;
   // Why not (refusal.h; colmap/report/refusal_text words it).
@@ -377,82 +489,19 @@ struct DPScaleResult {
   double scale_initial = 0;  // linear-stage s*
   double scale_ci_low = 0, scale_ci_high = 0;  // of `scale`
   double scale_initial_ci_low = 0, scale_initial_ci_high = 0;
-  // Intensity stage: whether its scale was adopted, and why (not).
-  bool intensity_used = false;
-  std::string intensity_status;
-  double scale_intensity = 0;  // the search's minimiser (even if not used)
-  double intensity_ci_low = 0, intensity_ci_high = 0;
-  // Share of bootstrap resamples whose minimum lies within one first-pass
-  // step of scale_intensity.
-  double intensity_bootstrap_support = 0;
-  std::string intensity_loss;
-  // Patch loss evaluations of the search that threw and counted as nothing.
-  int intensity_failed_evaluations = 0;
-  // Its node statistics taken from an earlier Estimate's (the view
-  // budget's checkpoints) and computed.
-  int intensity_nodes_reused = 0, intensity_nodes_computed = 0;
-  std::vector<DPViewResult> views;
-  std::vector<PatchSample> patches;
-  // Intensity loss curve for the report plot.
-  std::vector<double> candidate_scales, candidate_losses;
   int num_patches = 0;  // patches in the final solve
   int num_views_used = 0;
   double linear_median_abs_residual_px = 0;
-  double seconds_blur = 0, seconds_linear = 0, seconds_intensity = 0;
-  // The DP PSF the stages used (DPPsfModel::Name()), and what
-  // self-calibration did ("" when it was off).
-  std::string psf_model;
-  std::string psf_status;
-  bool psf_self_calibrated = false;  // a fitted profile replaced the given one
-  // SelfCalibration::kCheck: the data determined another profile than the
-  // given translating disk (the run refuses: refusal.disk; psf_status is
-  // then "", the refusal's wording stands for it).
-  bool psf_rejected = false;
-  // The whole frame's fit (and, for a profile changing across the frame,
-  // the bands' fits, left to right, when they were used).
-  SplitProfileFit psf_fit;
-  std::vector<SplitProfileFit> psf_band_fits;
-  double seconds_psf_fit = 0;
-  // Whether self-calibration fitted a profile (psf_fit holds its fit).
-  bool psf_fit_ran = false;
-  // Its patch searches read from an earlier Estimate's (the view budget's
-  // checkpoints) and run.
-  int psf_fit_searches_reused = 0, psf_fit_searches_run = 0;
-  // The factors by which the profiles the data allow move the scale
-  // against the one used (self-calibration: the fits' consistent centroid
-  // offsets over the one used; 1 when the profile was given). The reported
-  // intervals include them; 0 / inf = not bounded.
-  double profile_scale_factor_low = 1, profile_scale_factor_high = 1;
-  // Focus distances as evidence: the median scale the recorded focus
-  // distances imply (NaN without any), its ratio to `scale`, whether they
-  // agree within the interval and DPScaleOptions::recorded_focus_tolerance,
-  // and a sentence for people.
-  double focus_scale = 0;
-  double focus_scale_ratio = 0;
-  // The scale (and interval) came from the recorded focus distances, the
-  // profile having left it open (DPScaleOptions::pin_to_recorded_focus);
-  // the profile strength that reconciles the DP data with it, relative to
-  // the one used.
-  bool scale_from_recorded_focus = false;
-  double pinned_profile_strength = 0;
-  // The two cues (core/scale/scale_cues.h) and how the answer was formed from
-  // them: dp_cue is the DP data's own estimate and interval (valid = false
-  // when they give none), focus_cue the recorded focus's.
-  ScaleCue dp_cue, focus_cue;
-  CueAgreement cue_agreement = CueAgreement::kOneCue;
-  bool scale_from_cues = false;  // the answer came through CombineScaleCues
-  std::string scale_source;      // "DP data", "recorded focus", or both
-  // How the cues formed the answer (CombinedScale::how); "" when the DP
-  // data answered alone (dp_data_alone: the COLMAP layer words it, naming
-  // the option that keeps the recorded focus out).
-  std::string combination;
-  bool dp_data_alone = false;
-  bool focus_agrees = true;
-  std::string focus_check;
   // The relative systematic term of the lens geometry (see
-  // DPScaleOptions::lens_geometry_uncertainty).
+  // ScaleIntervalOptions::lens_geometry_uncertainty).
   double lens_geometry_uncertainty = 0;
+  std::vector<DPViewResult> views;
+  std::vector<PatchSample> patches;
+  IntensityStageResult intensity;
+  DPPsfResult psf;
+  ScaleCuesResult cues;
   SearchBoundAccount search_bound;
+  StageSeconds seconds;
 };
 
 // What one run's estimates keep for the next: the view budget's checkpoints
@@ -534,7 +583,7 @@ class DPScaleEstimator {
   // Where the patches went, summed over views (refusal.h).
   PatchAccount AccountForPatches() const;
   // The lens geometry's relative systematic term (see
-  // DPScaleOptions::lens_geometry_uncertainty): f / z at the selected
+  // ScaleIntervalOptions::lens_geometry_uncertainty): f / z at the selected
   // patches' median distance, times the option.
   double LensGeometryTerm(
       const LinearEstimate& linear,
@@ -548,7 +597,7 @@ class DPScaleEstimator {
       const LinearEstimate& linear,
       const std::vector<std::vector<PatchSample>>& samples,
       SearchBoundAccount* bound) const;
-  // result->profile_scale_factor_low/high: what the profile leaves open.
+  // result->psf.scale_factor_low/high: what the profile leaves open.
   void SetProfileScaleFactors(const DPPsfField& field,
                               DPScaleResult* result) const;
   // The refusal of a linear stage that found no scale, with how far the
@@ -581,8 +630,8 @@ class DPScaleEstimator {
                           double statistical_ci_low,
                           double statistical_ci_high,
                           const DPScaleResult& result) const;
-  // Whether the recorded-focus cue joins the answer: pin_to_recorded_focus
-  // and a valid cue in `result`.
+  // Whether the recorded-focus cue joins the answer:
+  // interval.pin_to_recorded_focus and a valid cue in `result`.
   bool RecordedFocusJoins(const DPScaleResult& result) const;
   // After the DP data answered on their own: their cue, and the recorded
   // focus's joining it (RecordedFocusJoins); false (the refusal set) when
@@ -592,7 +641,7 @@ class DPScaleEstimator {
   // Focus distances and predicted blur radii under the final scale.
   void PredictUnderFinalScale(DPScaleResult* result) const;
   // The intensity stage (intensity_stage.cc): refines the linear scale on the
-  // selected views' stored crops; fills the result's intensity fields and,
+  // selected views' stored crops; fills result->intensity and,
   // when its estimate is used, the scale and its interval (widened by
   // `terms`).
   void IntensityStage(const LinearEstimate& linear,
@@ -610,7 +659,7 @@ class DPScaleEstimator {
                         ProfileSearchCache* cache,
                         DPScaleResult* result) const;
   // SelfCalibration::kCheck: what the fit says of the given translating
-  // disk (agrees, cannot tell, or rejects it: psf_rejected).
+  // disk (agrees, cannot tell, or rejects it: DPPsfResult::rejected).
   void CheckTranslatingDisk(const SplitProfileCalibration& calibration,
                             DPScaleResult* result) const;
   // A stored crop: its view and its index among the view's stored crops.
@@ -620,9 +669,9 @@ class DPScaleEstimator {
   // Stored crops by geometry (crop size, radius bound).
   using StoredGroups = std::map<std::pair<int, double>, std::vector<StoredRef>>;
   StoredGroups GroupStoredCrops() const;
-  // The group's flat crops (max_psf_fit_depth_spread; the flattest
+  // The group's flat crops (self_calibration.max_depth_spread; the flattest
   // 2 min_patches when too few are flat), evenly over the views, at most
-  // max_psf_fit_patches.
+  // self_calibration.max_patches.
   std::vector<ProfilePatch> ProfileFitPatches(
       const std::vector<StoredRef>& group, int min_patches) const;
   // Searches every stored crop again with its cell's fitted profile; the
@@ -633,27 +682,27 @@ class DPScaleEstimator {
       const std::vector<std::shared_ptr<const DPPsfModel>>& fitted,
       std::vector<std::vector<PatchSample>>* samples,
       int* failures) const;
-  // Fills the focus_* fields of the result (recorded focus as evidence).
+  // Fills the focus_* fields of result->cues (recorded focus as evidence).
   void CheckAgainstRecordedFocus(DPScaleResult* result) const;
   // The DP data's cue from the linear stage (invalid with too few patches
   // or no finite positive interval).
   ScaleCue DPCue(const LinearEstimate& linear) const;
   // The recorded focus's cue: the used views' recorded focus distances over
   // their fitted focal planes g' (median), with the bootstrap's interval
-  // widened by the record's tolerance and bracket (DPScaleOptions::
+  // widened by the record's tolerance and bracket (ScaleIntervalOptions::
   // recorded_focus_tolerance); invalid without a recorded focus.
   ScaleCue RecordedFocusCue(const LinearEstimate& linear,
                             double lens_geometry) const;
   // No selected view recorded a focus distance (which would give the scale
   // without the DP profile).
   bool RecordedFocusMissing(const LinearEstimate& linear) const;
-  // Forms the answer from result->dp_cue and result->focus_cue
+  // Forms the answer from result->cues.dp and result->cues.focus
   // (CombineScaleCues) and returns true, or says why not in *refusal (too
   // wide, or the cues disagree).
   bool AdoptCombinedCues(const LinearEstimate& linear,
                          DPScaleResult* result,
                          CueRefusal* refusal) const;
-  // See DPScaleResult::profile_scale_factor_low.
+  // See DPPsfResult::scale_factor_low.
   void ProfileScaleFactors(const DPPsfField& field,
                            const DPScaleResult& result,
                            double* low,

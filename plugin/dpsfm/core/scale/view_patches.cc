@@ -37,18 +37,20 @@ void CheckViewInput(const DPView& view) {
 PatchGeometry ViewPatchGeometry(const cv::Size& frame_size,
                                 const DPScaleOptions& options) {
   PatchGeometry geometry =
-      options.resize_factor > 0
-          ? DefaultPatchGeometry(frame_size, options.resize_factor)
+      options.geometry.resize_factor > 0
+          ? DefaultPatchGeometry(frame_size, options.geometry.resize_factor)
           : DefaultPatchGeometry(frame_size);
   // An explicit bound keeps the patches the automatic one starts with: it
   // sets how far the search reaches, not which patches there are.
-  if (geometry.max_radius_px < options.min_auto_radius_px) {
-    geometry = PatchGeometryForRadius(options.min_auto_radius_px,
+  if (geometry.max_radius_px < options.geometry.min_auto_radius_px) {
+    geometry = PatchGeometryForRadius(options.geometry.min_auto_radius_px,
                                       geometry.resize_factor);
   }
-  if (options.patch_size > 0) geometry.patch_size = options.patch_size;
-  if (options.stride > 0) geometry.stride = options.stride;
-  if (options.max_radius_px > 0) geometry.max_radius_px = options.max_radius_px;
+  if (options.geometry.patch_size > 0)
+    geometry.patch_size = options.geometry.patch_size;
+  if (options.geometry.stride > 0) geometry.stride = options.geometry.stride;
+  if (options.geometry.max_radius_px > 0)
+    geometry.max_radius_px = options.geometry.max_radius_px;
   return geometry;
 }
 
@@ -134,9 +136,9 @@ std::vector<PatchCandidate> PatchesWithDepth(const DPView& view,
   std::vector<PatchCandidate> candidates = MakePatchGrid(
       working.left.size(), geometry.patch_size, geometry.stride, border);
   PatchDepthOptions depth_options;
-  depth_options.min_coverage = options.min_depth_coverage;
-  depth_options.min_points = options.min_depth_points_per_patch;
-  depth_options.max_relative_spread = options.max_relative_depth_spread;
+  depth_options.min_coverage = options.patches.min_depth_coverage;
+  depth_options.min_points = options.patches.min_depth_points_per_patch;
+  depth_options.max_relative_spread = options.patches.max_relative_depth_spread;
   depth_options.num_threads = options.num_threads;
   MeasurePatchDepths(view.depth,
                      view.depth_points,
@@ -188,15 +190,15 @@ ViewBlurSearch ChooseViewSearch(const WorkingView& working,
                                  working.gray_right,
                                  candidates,
                                  border,
-                                 options.min_texture_snr,
+                                 options.patches.min_texture_snr,
                                  options.num_threads,
                                  &out.estimates);
   }
   SearchShareOptions share;
-  share.blur_search_factor = options.blur_search_factor;
-  share.top_patch_fraction = options.top_patch_fraction;
-  share.min_patches_per_view = options.min_patches_per_view;
-  share.depth_strata = options.depth_strata;
+  share.blur_search_factor = options.patches.blur_search_factor;
+  share.top_patch_fraction = options.patches.top_patch_fraction;
+  share.min_patches_per_view = options.patches.min_patches_per_view;
+  share.depth_strata = options.patches.depth_strata;
   out.chosen = ChooseSearchedPatches(out.screened, num, share, &out.estimates);
   out.searched.assign(num, 0);
   return out;
@@ -276,8 +278,8 @@ double LargerSearchBound(double bound_px) {
 }
 
 bool SearchBoundMayGrow(int growths, const DPScaleOptions& options) {
-  return options.max_radius_px <= 0 &&
-         growths < options.max_search_bound_growths;
+  return options.geometry.max_radius_px <= 0 &&
+         growths < options.geometry.max_search_bound_growths;
 }
 
 bool SearchBoundReached(int num_searched,
@@ -285,7 +287,7 @@ bool SearchBoundReached(int num_searched,
                         int growths,
                         const DPScaleOptions& options) {
   return SearchBoundMayGrow(growths, options) && num_searched > 0 &&
-         !(num_at_bound < options.search_bound_share * num_searched);
+         !(num_at_bound < options.geometry.search_bound_share * num_searched);
 }
 
 double SearchBoundCap(double bound_px) {
@@ -323,7 +325,7 @@ double EarlyGrownSearchBound(int num_searched,
   if (!SearchBoundReached(num_searched, num_beyond_bound, growths, options)) {
     return 0;
   }
-  const double p = options.search_bound_share;
+  const double p = options.geometry.search_bound_share;
   const double standard_error = std::sqrt(p * (1 - p) / num_searched);
   if (num_beyond_bound < (p + 2 * standard_error) * num_searched) return 0;
   return GrownSearchBound(geometry, working_size, field, blur);
@@ -342,15 +344,15 @@ std::vector<PatchSample> ViewSamples(
   const double residual_threshold =
       ViewResidualThreshold(candidates,
                             search.estimates,
-                            options.max_relative_residual,
-                            options.relative_residual_factor);
+                            options.patches.max_relative_residual,
+                            options.patches.relative_residual_factor);
   const int p = geometry.patch_size;
   std::vector<PatchSample> samples;
   for (size_t k = 0; k < candidates.size(); ++k) {
     const PatchCandidate& c = candidates[k];
     const PatchBlurEstimate& e = search.estimates[k];
-    const std::string reject =
-        PatchRejection(c, e, options.min_texture_snr, residual_threshold);
+    const std::string reject = PatchRejection(
+        c, e, options.patches.min_texture_snr, residual_threshold);
     if (!reject.empty()) {
       (*rejections)[reject]++;
       continue;
@@ -390,14 +392,14 @@ std::vector<int> SelectTopSamples(const std::vector<PatchSample>& samples,
   const double keep_fraction =
       search.num_searched > 0
           ? std::min(1.0,
-                     options.top_patch_fraction * search.screened.index.size() /
-                         search.num_searched)
-          : options.top_patch_fraction;
+                     options.patches.top_patch_fraction *
+                         search.screened.index.size() / search.num_searched)
+          : options.patches.top_patch_fraction;
   return SelectTopFractionStratified(confidence,
                                      inverse_depth,
                                      keep_fraction,
-                                     options.min_patches_per_view,
-                                     options.depth_strata);
+                                     options.patches.min_patches_per_view,
+                                     options.patches.depth_strata);
 }
 
 std::vector<StoredCrop> StoreBestCrops(
@@ -416,11 +418,11 @@ std::vector<StoredCrop> StoreBestCrops(
         return samples[a].confidence > samples[b].confidence;
       });
   int store_border = border;
-  if (options.psf_self_calibration != DPScaleOptions::SelfCalibration::kOff) {
+  if (options.self_calibration.mode != SelfCalibrationOptions::Mode::kOff) {
     for (const auto& psf : field.cells) {
       store_border = std::max(
           store_border,
-          psf->KernelRadius(options.psf_fit_radius_factor *
+          psf->KernelRadius(options.self_calibration.radius_factor *
                             DPKernelGridBound(geometry.max_radius_px,
                                               options.blur.grid_step_px)));
     }
@@ -428,8 +430,8 @@ std::vector<StoredCrop> StoreBestCrops(
   const int crop = geometry.patch_size + 2 * border;
   const int cap = MaxStoredCrops(crop,
                                  working.left.channels(),
-                                 options.max_stored_patches_per_view,
-                                 options.max_stored_megabytes_per_view);
+                                 options.patches.max_stored_patches_per_view,
+                                 options.patches.max_stored_megabytes_per_view);
   if (static_cast<int>(by_confidence.size()) > cap) by_confidence.resize(cap);
   std::vector<std::pair<int, cv::Rect>> to_store;
   for (int i : by_confidence) {

@@ -167,14 +167,14 @@ int PatchesAtSearchBound(const ViewBlurSearch& search);
 double LargerSearchBound(double bound_px);
 
 // Whether a view's search bound may still grow: an automatic bound
-// (DPScaleOptions::max_radius_px 0) grown fewer than
-// DPScaleOptions::max_search_bound_growths times.
+// (PatchGeometryOptions::max_radius_px 0) grown fewer than
+// PatchGeometryOptions::max_search_bound_growths times.
 bool SearchBoundMayGrow(int growths, const DPScaleOptions& options);
 
 // Whether a view's search bound is to grow: only an automatic bound
-// (DPScaleOptions::max_radius_px 0), when at least
-// DPScaleOptions::search_bound_share of the searched patches sit at it, at
-// most DPScaleOptions::max_search_bound_growths times.
+// (PatchGeometryOptions::max_radius_px 0), when at least
+// PatchGeometryOptions::search_bound_share of the searched patches sit at
+// it, at most PatchGeometryOptions::max_search_bound_growths times.
 bool SearchBoundReached(int num_searched,
                         int num_at_bound,
                         int growths,
@@ -236,7 +236,8 @@ std::vector<int> SelectTopSamples(const std::vector<PatchSample>& samples,
 
 // Step 6: crops of the best selected patches (best first, within the
 // memory budget) for the intensity stage and self-calibration. With
-// self-calibration their border supports blur up to psf_fit_radius_factor x
+// self-calibration their border supports blur up to
+// SelfCalibrationOptions::radius_factor x
 // the search bound; the budget is for crops with the blur stage's border.
 std::vector<StoredCrop> StoreBestCrops(
     const WorkingView& working,
