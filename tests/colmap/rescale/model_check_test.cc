@@ -1115,6 +1115,15 @@ class ChangedColmapModel : public ModelCheckTest {
     return "";
   }
 
+  void PrintOutcomes() const {
+    std::printf(
+        "%d changed files refused (%d by the rescale too), %d accepted and "
+        "read by COLMAP\n",
+        refused_,
+        rescale_refused_,
+        accepted_);
+  }
+
   void Problem(const std::string& what) {
     if (++problems_ <= 10) ADD_FAILURE() << what;
   }
@@ -1162,12 +1171,7 @@ TEST_F(ChangedColmapModel, EveryByteOfTheBinaryFiles) {
     Try(dir, path, original + '\0', name + " with a byte more");
     WriteTextFile(path, original);
   }
-  std::printf(
-      "%d changed files refused (%d by the rescale too), %d accepted and "
-      "read by COLMAP\n",
-      refused_,
-      rescale_refused_,
-      accepted_);
+  PrintOutcomes();
   EXPECT_EQ(problems_, 0);
   EXPECT_GT(refused_, 1000);
   EXPECT_GT(rescale_refused_, 1000);
@@ -1215,12 +1219,7 @@ TEST_F(ChangedColmapModel, EveryFieldOfTheTextFiles) {
     }
     WriteTextFile(path, original);
   }
-  std::printf(
-      "%d changed files refused (%d by the rescale too), %d accepted and "
-      "read by COLMAP\n",
-      refused_,
-      rescale_refused_,
-      accepted_);
+  PrintOutcomes();
   EXPECT_EQ(problems_, 0);
   EXPECT_GT(refused_, 100);
   EXPECT_GT(rescale_refused_, 100);
